@@ -1,0 +1,35 @@
+# Two commands set everything up on a fresh machine (Python 3.11, pip, make):
+#   make run   -- all paper scenarios, reports into results/
+#   make test  -- ruff + pytest
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+DEVSTAMP := $(VENV)/.installed-dev
+
+.PHONY: run test bench lint clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+
+$(STAMP): pyproject.toml | $(BIN)/python
+	$(BIN)/pip install --quiet -e ".[dask]"
+	touch $@
+
+$(DEVSTAMP): pyproject.toml | $(BIN)/python
+	$(BIN)/pip install --quiet -e ".[dev,dask]"
+	touch $@ $(STAMP)
+
+run: $(STAMP)
+	$(BIN)/sse-cosim batch scenarios/ --out results/
+
+test: $(DEVSTAMP)
+	$(BIN)/ruff check sse_cosim tests benchmarks
+	$(BIN)/python -m pytest -q
+
+bench: $(STAMP)
+	$(BIN)/sse-cosim bench --out results/
+
+clean:
+	rm -rf $(VENV) sumo_net/build
