@@ -2,6 +2,119 @@
 
 from __future__ import annotations
 
-from sse_cosim.cli.main import cli
+from pathlib import Path
 
-__all__ = ["cli"]
+import click
+
+from sse_cosim.cli.main import cli
+from sse_cosim.errors import UserError
+
+OUT_HELP = "Output folder (created if missing)."
+WORKERS_HELP = "Worker processes (default: the number of cores)."
+
+
+def _writable_folder(path: Path, option: str) -> Path:
+    """``path`` created if needed; a one-line error if it cannot be written."""
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = path / ".sse-cosim-write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as exc:
+        raise UserError(str(path), option, f"cannot write there ({exc.strerror})",
+                        "choose a folder you can write to") from None
+    return path
+
+
+@cli.command()
+@click.argument("scenario", type=click.Path(path_type=Path, dir_okay=False))
+@click.option("--out", "out_dir", type=click.Path(path_type=Path, file_okay=False),
+              default=None, help="Output folder (default: runs/<scenario name>).")
+@click.option("--scene-at", "scene_times", type=float, multiple=True,
+              help="Also draw the scene at this time (s); repeatable. The first shared "
+                   "fusion is always drawn.")
+@click.option("--set", "overrides", multiple=True, metavar="PATH=VALUE",
+              help="Override a scenario field, e.g. --set sensors.bus_front.range_m=40.")
+def run(scenario: Path, out_dir: Path | None, scene_times: tuple[float, ...],
+        overrides: tuple[str, ...]) -> None:
+    """Run one SCENARIO file in SUMO and write its folder.
+
+    The folder holds trace.csv (one row per step), sets.jsonl (every local and fused
+    position set), summary.json (speeds, detections, set sizes, violations), scenario.json
+    (the resolved scenario) and plots (speed, set areas, scenes).
+    """
+    from sse_cosim.runner.run import run_scenario_file
+    from sse_cosim.runner.parameters import parse_assignment
+
+    out_dir = _writable_folder(out_dir or Path("runs") / scenario.stem, "--out")
+    values = dict(parse_assignment(text, "--set") for text in overrides)
+    summary = run_scenario_file(scenario, out_dir, values, scene_times=scene_times)
+    _echo_summary(summary, out_dir)
+
+
+@cli.command()
+@click.argument("paths", nargs=-1, type=click.Path(path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(path_type=Path, file_okay=False),
+              default=Path("results"), show_default=True, help=OUT_HELP)
+@click.option("--workers", type=click.IntRange(min=1), default=None, help=WORKERS_HELP)
+@click.option("--executor", type=click.Choice(["local", "dask"]), default="local",
+              show_default=True, help="Where runs execute.")
+@click.option("--scheduler", default=None, help="Dask scheduler address (tcp://host:port).")
+@click.option("--resume", is_flag=True, help="Skip scenarios whose run folder is complete.")
+@click.option("--scene-at", "scene_times", type=float, multiple=True,
+              help="Also draw every scene at this time (s); repeatable.")
+def batch(paths: tuple[Path, ...], out_dir: Path, workers: int | None, executor: str,
+          scheduler: str | None, resume: bool, scene_times: tuple[float, ...]) -> None:
+    """Run every scenario under PATHS (default: scenarios/) and write the paper's tables.
+
+    Each run goes to OUT/runs/<file name>/; then OUT gets table1.csv and table1.md (average
+    speeds beside the paper's Table I), fig7_set_sizes.csv/png (set sizes at the first
+    shared fusion beside the paper's Fig. 7) and speed_profiles.png (Fig. 6).
+    """
+    from sse_cosim.reporting.paper import read_run_folders, write_paper_report
+    from sse_cosim.runner.batch import RUNS_FOLDER, run_batch
+
+    _check_scheduler(executor, scheduler)
+    out_dir = _writable_folder(out_dir, "--out")
+    outcomes = run_batch(list(paths) or [Path("scenarios")], out_dir, workers, executor,
+                         scheduler, resume, scene_times)
+    runs = read_run_folders([out_dir / RUNS_FOLDER / o.key for o in outcomes if o.ok])
+    written = write_paper_report(out_dir, runs)
+    _echo_outcomes(outcomes, written)
+
+
+def _check_scheduler(executor: str, scheduler: str | None) -> None:
+    if scheduler and executor != "dask":
+        raise UserError("command line", "--scheduler", "is only used with --executor dask",
+                        "add --executor dask or drop --scheduler")
+
+
+def _echo_summary(summary: dict, out_dir: Path) -> None:
+    click.echo(
+        f"{summary['scenario']}: average speed {summary['average_speed_mps']:.2f} m/s, "
+        f"containment violations {summary['containment_violations']}, "
+        f"collisions {summary['collisions']} -> {out_dir}"
+    )
+
+
+def _echo_outcomes(outcomes, written) -> None:
+    for outcome in outcomes:
+        if outcome.ok:
+            s = outcome.summary
+            click.echo(f"  {outcome.key:<24} {s['average_speed_mps']:6.2f} m/s  "
+                       f"violations {s['containment_violations']}  collisions {s['collisions']}")
+        else:
+            click.echo(f"  {outcome.key:<24} FAILED: {outcome.error}")
+    for path in written:
+        click.echo(f"wrote {path}")
+    failed = [o.key for o in outcomes if not o.ok]
+    if failed:
+        raise click.ClickException(f"{len(failed)} run(s) failed: {', '.join(failed)}")
+
+
+@cli.command()
+def fields() -> None:
+    """List every scenario field with its default and meaning (Markdown table)."""
+    from sse_cosim.scenario.fields import fields_markdown
+
+    click.echo(fields_markdown(), nl=False)

@@ -1,0 +1,181 @@
+"""Reading scenario files: TOML, ``extends`` inheritance, dotted overrides, one-line errors.
+
+A scenario file may name one or more parent files with ``extends = "parent.toml"`` (or a
+list); parents are merged first, tables merge key by key, any other value is replaced.
+Paths inside a file (``network.sources_dir``) are relative to the file that sets them.
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from sse_cosim.errors import UserError
+from sse_cosim.scenario.model import Scenario
+
+EXTENDS_KEY = "extends"
+RELATIVE_PATH_FIELDS = (("network", "sources_dir"),)
+
+
+def load_scenario(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scenario:
+    """Read, merge and validate the scenario at ``path``, then apply dotted ``overrides``."""
+    data = load_scenario_data(path)
+    if overrides:
+        data = apply_overrides(data, overrides, source=str(path))
+    return validate_scenario(data, source=str(path))
+
+
+def load_scenario_data(path: str | Path) -> dict[str, Any]:
+    """The merged, unvalidated content of a scenario file and its parents."""
+    return _load_merged(Path(path), chain=())
+
+
+def validate_scenario(data: Mapping[str, Any], source: str) -> Scenario:
+    """Validate merged scenario data; a problem becomes a one-line :class:`UserError`."""
+    try:
+        return Scenario.model_validate(data)
+    except ValidationError as exc:
+        raise _user_error(exc, source) from None
+
+
+def apply_overrides(
+    data: Mapping[str, Any], overrides: Mapping[str, Any], source: str
+) -> dict[str, Any]:
+    """A copy of ``data`` with each dotted path (``sensors.bus_front.range_m``) set to a value.
+
+    The path must name a field that the schema knows: every part but the last must exist
+    in ``data`` or be a field of the schema's model at that place.
+    """
+    result = copy.deepcopy(dict(data))
+    for dotted, value in overrides.items():
+        _check_path(dotted, source)
+        node: dict[str, Any] = result
+        parts = dotted.split(".")
+        for depth, part in enumerate(parts[:-1]):
+            child = node.get(part)
+            if child is None:
+                if not _schema_has_table(parts[: depth + 1]):
+                    raise UserError(
+                        source, dotted, f"there is no table {'.'.join(parts[: depth + 1])!r}",
+                        "check the path against the scenario file (see README: scenario fields)",
+                    )
+                child = node[part] = {}
+            if not isinstance(child, dict):
+                raise UserError(
+                    source, dotted, f"{'.'.join(parts[: depth + 1])!r} is a value, not a table",
+                    "check the path against the scenario file",
+                )
+            node = child
+        node[parts[-1]] = value
+    return result
+
+
+def _check_path(dotted: str, source: str) -> None:
+    if not dotted or any(not part for part in dotted.split(".")):
+        raise UserError(source, dotted or "(empty)", "is not a dotted path",
+                        "write it as table.field, e.g. sensors.bus_front.range_m")
+
+
+def _schema_has_table(parts: list[str]) -> bool:
+    """Whether the schema has a table at ``parts`` (dict-valued fields accept any key)."""
+    model: Any = Scenario
+    for part in parts:
+        if model is dict:
+            model = _DICT_VALUE
+            continue
+        fields = getattr(model, "model_fields", None)
+        if fields is None or part not in fields:
+            return False
+        annotation = fields[part].annotation
+        origin = getattr(annotation, "__origin__", None)
+        model = dict if origin is dict else annotation
+    return model is dict or hasattr(model, "model_fields")
+
+
+_DICT_VALUE = object()
+
+
+def _load_merged(path: Path, chain: tuple[Path, ...]) -> dict[str, Any]:
+    path = path.resolve()
+    if path in chain:
+        cycle = " -> ".join(p.name for p in (*chain, path))
+        raise UserError(str(path), EXTENDS_KEY, f"files extend each other in a cycle ({cycle})",
+                        "remove one of the extends")
+    raw = _read_toml(path)
+    parents = raw.pop(EXTENDS_KEY, [])
+    if isinstance(parents, str):
+        parents = [parents]
+    if not isinstance(parents, list) or not all(isinstance(p, str) for p in parents):
+        raise UserError(str(path), EXTENDS_KEY, "must be a file name or a list of file names",
+                        'write extends = "base.toml"')
+    _absolutize_paths(raw, path.parent)
+    merged: dict[str, Any] = {}
+    for parent in parents:
+        parent_path = path.parent / parent
+        if not parent_path.is_file():
+            raise UserError(str(path), EXTENDS_KEY, f"parent file {parent!r} not found",
+                            f"create it or fix the name (looked in {path.parent})")
+        merged = deep_merge(merged, _load_merged(parent_path, (*chain, path)))
+    return deep_merge(merged, raw)
+
+
+def _read_toml(path: Path) -> dict[str, Any]:
+    if not path.is_file():
+        raise UserError(str(path), "", "scenario file not found", "check the path")
+    try:
+        with path.open("rb") as fh:
+            return tomllib.load(fh)
+    except tomllib.TOMLDecodeError as exc:
+        raise UserError(str(path), "syntax", str(exc), "fix the TOML syntax at that place") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise UserError(str(path), "", f"cannot be read ({exc})", "check the file") from None
+
+
+def _absolutize_paths(raw: dict[str, Any], base: Path) -> None:
+    for table, key in RELATIVE_PATH_FIELDS:
+        section = raw.get(table)
+        if isinstance(section, dict) and isinstance(section.get(key), str):
+            section[key] = str((base / section[key]).resolve())
+
+
+def deep_merge(base: Mapping[str, Any], override: Mapping[str, Any]) -> dict[str, Any]:
+    """Tables merge key by key (recursively); any other value in ``override`` replaces."""
+    result = copy.deepcopy(dict(base))
+    for key, value in override.items():
+        if isinstance(value, Mapping) and isinstance(result.get(key), Mapping):
+            result[key] = deep_merge(result[key], value)
+        else:
+            result[key] = copy.deepcopy(value)
+    return result
+
+
+_FIXES = {
+    "extra_forbidden": "remove it or fix its spelling (see README: scenario fields)",
+    "missing": "add this field",
+    "greater_than": "use a larger value",
+    "greater_than_equal": "use a larger value",
+    "less_than": "use a smaller value",
+    "less_than_equal": "use a smaller value",
+    "literal_error": "use one of the values named",
+    "too_short": "give at least one entry",
+}
+
+
+def _user_error(exc: ValidationError, source: str) -> UserError:
+    """The first validation problem as a one-line error naming file, field and fix."""
+    err = exc.errors(include_url=False)[0]
+    field = ".".join(str(part) for part in err["loc"])
+    message = str(err["msg"]).removeprefix("Value error, ")
+    if err["type"] == "value_error" and ": " in message and not field:
+        field, message = message.split(": ", 1)
+    fix = _FIXES.get(err["type"], "")
+    if "input" in err and err["type"] not in ("missing", "extra_forbidden", "value_error"):
+        message += f" (got {err['input']!r})"
+    if len(exc.errors()) > 1:
+        fix = f"{fix}; {len(exc.errors()) - 1} more problem(s) after this one".lstrip("; ")
+    return UserError(source, field, message, fix)

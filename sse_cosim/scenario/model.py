@@ -1,0 +1,233 @@
+"""The scenario schema: every field a scenario file may set, with its unit and default.
+
+Coordinates are SUMO network coordinates in metres (x east, y north). Angles called
+``heading_deg`` / ``yaw_deg`` are mathematical: counter-clockwise from east (+x), unlike
+SUMO's navigational angle (clockwise from north); the world adapter converts.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from sse_cosim.sets import available_fusion_methods, available_gain_methods
+from sse_cosim.sets.reduction import REDUCTION_METHODS
+
+PositiveFloat = Annotated[float, Field(gt=0)]
+NonNegativeFloat = Annotated[float, Field(ge=0)]
+BUS_NODE = "bus"
+CAR_NODE = "car"
+
+
+class StrictModel(BaseModel):
+    """Base model: unknown keys are errors, values are checked on assignment too."""
+
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False)
+
+
+class Simulation(StrictModel):
+    duration_s: PositiveFloat = Field(30.0, description="Simulated time in seconds.")
+    step_length_s: PositiveFloat = Field(0.1, le=1.0, description="SUMO step length in seconds.")
+    seed: int = Field(1, ge=0, description="Seed of SUMO and of every random draw (noise, V2X).")
+
+
+class Network(StrictModel):
+    sources_dir: str = Field(
+        "../sumo_net",
+        description="Folder of the plain-XML network sources, relative to the file that sets it.",
+    )
+
+
+class Bus(StrictModel):
+    route_edges: list[str] = Field(["WC", "CE"], min_length=1, description="Edge ids, in order.")
+    depart_pos_m: NonNegativeFloat = Field(0.0, description="Front position on the first edge (m).")
+    nominal_speed_mps: PositiveFloat = Field(20.0, description="Nominal speed (m/s), Table I: 20.")
+    length_m: PositiveFloat = Field(12.0, description="Bus length (m).")
+    width_m: PositiveFloat = Field(2.55, description="Bus width (m).")
+    accel_mps2: PositiveFloat = Field(1.5, description="Maximum acceleration (m/s^2).")
+    comfortable_decel_mps2: PositiveFloat = Field(
+        3.0, description="Deceleration used between speed levels (m/s^2)."
+    )
+    emergency_decel_mps2: PositiveFloat = Field(
+        7.0, description="Deceleration of an emergency brake (m/s^2)."
+    )
+
+
+class Truck(StrictModel):
+    present: bool = Field(True, description="Whether the parked truck is in the scene.")
+    edge: str = Field("WC", description="Edge it is parked on (the bus's side).")
+    lane_index: int = Field(1, ge=0, description="Lane index on that edge (1 = parking strip).")
+    end_pos_m: NonNegativeFloat = Field(
+        194.0, description="Position of its front along the edge (m): a few metres before the crossing."
+    )
+    length_m: PositiveFloat = Field(10.0, description="Truck length (m).")
+    width_m: PositiveFloat = Field(2.5, description="Truck width (m).")
+
+
+class ConnectedCar(StrictModel):
+    present: bool = Field(False, description="Whether the oncoming connected car drives by.")
+    route_edges: list[str] = Field(["EC", "CW"], min_length=1, description="Edge ids, in order.")
+    lane_index: int = Field(2, ge=0, description="Driving lane index on its edges.")
+    depart_s: NonNegativeFloat = Field(0.0, description="Departure time (s).")
+    depart_pos_m: NonNegativeFloat = Field(0.0, description="Front position on the first edge (m).")
+    speed_mps: PositiveFloat = Field(10.0, description="Constant speed (m/s).")
+    length_m: PositiveFloat = Field(4.5, description="Car length (m).")
+    width_m: PositiveFloat = Field(1.8, description="Car width (m).")
+
+
+class Pedestrian(StrictModel):
+    present: bool = Field(True, description="Whether the pedestrian is in the scene.")
+    start_edge: str = Field("WC", description="Edge whose sidewalk it starts on.")
+    start_pos_m: NonNegativeFloat = Field(
+        186.0, description="Start position along that edge (m), behind the truck."
+    )
+    end_edge: str = Field("CW", description="Edge whose sidewalk it walks to (across the zebra).")
+    end_pos_m: NonNegativeFloat = Field(196.0, description="Arrival position along that edge (m).")
+    walking_speed_mps: PositiveFloat = Field(1.2, le=3.0, description="Walking speed (m/s).")
+    steps_onto_crossing_s: NonNegativeFloat = Field(
+        9.0, description="Time at which it reaches the crossing (s); its departure is derived."
+    )
+    radius_m: PositiveFloat = Field(0.3, description="Body radius used for collisions (m).")
+
+
+class SensorMount(StrictModel):
+    forward_m: float = Field(
+        0.0, description="Offset along the carrier's heading from its reference point (m); "
+        "a vehicle's reference point is its front bumper's centre, a unit's its position."
+    )
+    left_m: float = Field(0.0, description="Offset to the carrier's left (m).")
+    yaw_deg: float = Field(0.0, description="Boresight relative to the carrier's heading (deg, CCW).")
+
+
+class Sensor(StrictModel):
+    node: str = Field(description="Carrier: 'bus', 'car' or a road-side unit id.")
+    mount: SensorMount = Field(default_factory=SensorMount)
+    fov_deg: float = Field(90.0, gt=0, le=360, description="Opening angle of the sector (deg).")
+    range_m: PositiveFloat = Field(60.0, description="Range of the sector (m).")
+    noise_bound_m: tuple[PositiveFloat, PositiveFloat] = Field(
+        (0.5, 0.5), description="Noise bounds r (m) along the sensor's forward and lateral axes."
+    )
+    noise: Literal["uniform", "worst-case"] = Field(
+        "uniform", description="Uniform within the bound, or on the bound (worst case)."
+    )
+
+
+class RoadSideUnit(StrictModel):
+    x_m: float = Field(description="Position x (m, network coordinates).")
+    y_m: float = Field(description="Position y (m, network coordinates).")
+    heading_deg: float = Field(0.0, description="Heading (deg, CCW from east).")
+
+
+class V2X(StrictModel):
+    range_m: PositiveFloat = Field(300.0, description="Communication range to the bus (m).")
+    latency_steps: int = Field(1, ge=0, le=100, description="Delivery delay (simulation steps).")
+    drop_probability: float = Field(0.0, ge=0, lt=1, description="Probability a message is lost.")
+
+
+class Estimator(StrictModel):
+    state_model: Literal["position", "constant-velocity"] = Field(
+        "position", description="Pedestrian state: 2-D position, or 4-D position and velocity."
+    )
+    max_pedestrian_speed_mps: PositiveFloat = Field(
+        2.5, description="Speed bound (m/s): the process noise |dx|, |dy| <= bound * step length."
+    )
+    max_velocity_change_mps: PositiveFloat = Field(
+        5.0, description="Bound on a velocity component's change per step (m/s), constant-velocity only."
+    )
+    gain_method: str = Field("volume", description="Proposition 1 gain method (sets.gains).")
+    fusion_method: str = Field("strips", description="Proposition 2 fusion method (sets.fusion).")
+    reduction_method: str = Field("girard", description="Order reduction method (sets.reduction).")
+    max_generators: int = Field(8, ge=2, le=64, description="Generators kept after reduction.")
+
+    @field_validator("gain_method")
+    @classmethod
+    def _known_gain(cls, value: str) -> str:
+        return _one_of(value, available_gain_methods())
+
+    @field_validator("fusion_method")
+    @classmethod
+    def _known_fusion(cls, value: str) -> str:
+        return _one_of(value, available_fusion_methods())
+
+    @field_validator("reduction_method")
+    @classmethod
+    def _known_reduction(cls, value: str) -> str:
+        return _one_of(value, sorted(REDUCTION_METHODS))
+
+
+class Controller(StrictModel):
+    cautious_factor: float = Field(0.7, gt=0, le=1, description="Cautious speed / nominal.")
+    slow_factor: float = Field(0.5, gt=0, le=1, description="Slow speed / nominal.")
+    very_slow_factor: float = Field(0.2, gt=0, le=1, description="Very slow speed / nominal.")
+    crossing_horizon_m: PositiveFloat = Field(
+        60.0, description="The crossing counts as 'ahead' within this distance of the bus front (m)."
+    )
+    interest_radius_m: PositiveFloat = Field(
+        15.0, description="Sidewalk and crossing within this distance of the crossing matter (m)."
+    )
+    occlusion_threshold_m2: NonNegativeFloat = Field(
+        0.5, description="Unresolved occluded area of interest above which the bus slows (m^2)."
+    )
+    path_margin_m: NonNegativeFloat = Field(
+        1.5, description="Lateral margin around the bus's swept path for 'near the path' (m)."
+    )
+    reaction_time_s: NonNegativeFloat = Field(
+        0.3, description="Delay added to the braking distance (s)."
+    )
+    stopping_margin_m: NonNegativeFloat = Field(
+        2.0, description="Extra distance kept to a pedestrian set when stopping (m)."
+    )
+
+    @model_validator(mode="after")
+    def _ordered_levels(self) -> Controller:
+        if not self.very_slow_factor <= self.slow_factor <= self.cautious_factor:
+            raise ValueError(
+                "speed factors must satisfy very_slow_factor <= slow_factor <= cautious_factor"
+            )
+        return self
+
+
+class Scenario(StrictModel):
+    """One scenario: the scene, its sensors, the estimator and the controller."""
+
+    name: str = Field(min_length=1, description="Short name used in reports (e.g. 'S1').")
+    description: str = Field("", description="One sentence for reports.")
+    simulation: Simulation = Field(default_factory=Simulation)
+    network: Network = Field(default_factory=Network)
+    bus: Bus = Field(default_factory=Bus)
+    truck: Truck = Field(default_factory=Truck)
+    car: ConnectedCar = Field(default_factory=ConnectedCar)
+    pedestrian: Pedestrian = Field(default_factory=Pedestrian)
+    rsus: dict[str, RoadSideUnit] = Field(default_factory=dict, description="Road-side units by id.")
+    sensors: dict[str, Sensor] = Field(default_factory=dict, description="Sensors by name.")
+    v2x: V2X = Field(default_factory=V2X)
+    estimator: Estimator = Field(default_factory=Estimator)
+    controller: Controller = Field(default_factory=Controller)
+
+    @model_validator(mode="after")
+    def _sensors_on_existing_nodes(self) -> Scenario:
+        nodes = self.node_ids()
+        for name, sensor in self.sensors.items():
+            if sensor.node not in nodes:
+                raise ValueError(
+                    f"sensors.{name}.node: no node {sensor.node!r}; "
+                    f"use one of {', '.join(nodes)}"
+                )
+        if BUS_NODE in self.rsus or CAR_NODE in self.rsus:
+            raise ValueError("rsus: the ids 'bus' and 'car' are reserved for the vehicles")
+        return self
+
+    def node_ids(self) -> list[str]:
+        """Nodes that can carry sensors: the bus, the car (if present) and the units."""
+        return [BUS_NODE, *([CAR_NODE] if self.car.present else []), *self.rsus]
+
+    def sensors_of(self, node: str) -> dict[str, Sensor]:
+        """The sensors carried by ``node``, by name."""
+        return {name: s for name, s in self.sensors.items() if s.node == node}
+
+
+def _one_of(value: str, allowed: list[str]) -> str:
+    if value not in allowed:
+        raise ValueError(f"unknown method {value!r}; use one of {', '.join(allowed)}")
+    return value

@@ -1,0 +1,102 @@
+"""Scenario files: inheritance, overrides, and one-line errors naming file, field and fix."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from sse_cosim.errors import UserError
+from sse_cosim.scenario.loader import apply_overrides, deep_merge, load_scenario, load_scenario_data
+
+SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+PAPER_FILES = sorted(p for p in SCENARIOS.glob("s[123]_*.toml"))
+
+
+def test_six_paper_scenarios_exist_and_validate():
+    assert [p.stem for p in PAPER_FILES] == [
+        "s1_no_pedestrian", "s1_pedestrian", "s2_no_pedestrian", "s2_pedestrian",
+        "s3_no_pedestrian", "s3_pedestrian",
+    ]
+    for path in PAPER_FILES:
+        scenario = load_scenario(path)
+        assert scenario.name == path.stem[:2].upper()
+        assert scenario.pedestrian.present == ("no_pedestrian" not in path.stem)
+
+
+def test_scenarios_differ_only_in_what_their_files_say():
+    s1, s2, s3 = (load_scenario(SCENARIOS / f"s{i}_pedestrian.toml") for i in (1, 2, 3))
+    assert s1.node_ids() == ["bus"]
+    assert s2.node_ids() == ["bus", "car"]
+    assert s3.node_ids() == ["bus", "rsu1", "rsu2"]
+    assert s1.bus == s2.bus == s3.bus
+    assert s1.sensors["bus_front"] == s3.sensors["bus_front"]
+
+
+def test_relative_network_folder_is_resolved_from_the_file_that_sets_it():
+    scenario = load_scenario(SCENARIOS / "s1_pedestrian.toml")
+    assert Path(scenario.network.sources_dir) == (SCENARIOS.parent / "sumo_net").resolve()
+
+
+def test_deep_merge_merges_tables_and_replaces_values():
+    merged = deep_merge({"a": {"x": 1, "y": 2}, "b": [1]}, {"a": {"y": 3}, "b": [2]})
+    assert merged == {"a": {"x": 1, "y": 3}, "b": [2]}
+
+
+def test_overrides_set_dotted_fields():
+    data = load_scenario_data(SCENARIOS / "s2_pedestrian.toml")
+    data = apply_overrides(data, {"sensors.car_front.noise_bound_m": [2.0, 0.5],
+                                  "v2x.latency_steps": 3}, source="test")
+    scenario = load_scenario(SCENARIOS / "s2_pedestrian.toml",
+                             {"sensors.car_front.noise_bound_m": [2.0, 0.5]})
+    assert scenario.sensors["car_front"].noise_bound_m == (2.0, 0.5)
+    assert data["v2x"]["latency_steps"] == 3
+
+
+def _write(tmp_path: Path, text: str, name: str = "bad.toml") -> Path:
+    (tmp_path / "base.toml").write_text('name = "B"\n[sensors.front]\nnode = "bus"\n')
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("text", "field", "words"),
+    [
+        ('name = "x"\n[bus\n', "syntax", "TOML"),
+        ('extends = "base.toml"\n[bus]\nnominal_speed = 3\n', "bus.nominal_speed", "spelling"),
+        ('extends = "base.toml"\n[bus]\nnominal_speed_mps = "fast"\n', "bus.nominal_speed_mps",
+         "number"),
+        ('extends = "base.toml"\n[sensors.front]\nnoise_bound_m = [0.0, 1.0]\n',
+         "sensors.front.noise_bound_m.0", "greater than 0"),
+        ('extends = "base.toml"\n[sensors.front]\nfov_deg = 400\n', "sensors.front.fov_deg",
+         "360"),
+        ('extends = "base.toml"\n[sensors.front]\nrange_m = 0\n', "sensors.front.range_m",
+         "greater than 0"),
+        ('extends = "base.toml"\n[sensors.side]\nnode = "drone"\n', "sensors.side.node",
+         "drone"),
+        ('extends = "base.toml"\n[estimator]\ngain_method = "magic"\n',
+         "estimator.gain_method", "frobenius"),
+        ('extends = "missing.toml"\n', "extends", "not found"),
+        ('extends = "bad.toml"\n', "extends", "cycle"),
+    ],
+)
+def test_bad_files_give_one_line_errors(tmp_path, text, field, words):
+    path = _write(tmp_path, text)
+    with pytest.raises(UserError) as info:
+        load_scenario(path)
+    message = info.value.one_line()
+    assert "\n" not in message
+    assert str(path.name) in message
+    assert field in message
+    assert words in message
+
+
+def test_override_of_an_unknown_table_is_an_error():
+    with pytest.raises(UserError, match="no table 'sensor'"):
+        load_scenario(SCENARIOS / "s1_pedestrian.toml", {"sensor.bus_front.range_m": 3})
+
+
+def test_override_of_an_unknown_field_is_an_error():
+    with pytest.raises(UserError, match="bus.top_speed"):
+        load_scenario(SCENARIOS / "s1_pedestrian.toml", {"bus.top_speed": 3})
