@@ -1,0 +1,349 @@
+"""The scenario's actors as SUMO demand: checks against the network, the pedestrian's plan, the
+route file. Pure Python (sumolib); no SUMO process is needed.
+
+Ids: the bus is ``bus``, the parked truck ``truck``, the connected car ``car``, the pedestrian
+``pedestrian``. Every type has ``speedDev="0"`` and ``sigma="0"`` (no random speed factors, no
+dawdling), so one seed gives one run.
+
+The pedestrian walks an explicit path: its start sidewalk, the walking area, the zebra, the
+walking area on the far side, its end sidewalk. (Left to SUMO's router, a pedestrian whose
+end lies far down the opposite sidewalk would rather cross at the dead end of the road.) It
+departs so that it reaches the zebra at ``pedestrian.steps_onto_crossing_s``: the walking
+distance to the zebra is the rest of its start sidewalk plus the walking area's length, both
+from the network. When that departure would lie before t=0 the pedestrian departs at t=0 and
+reaches the zebra later than configured; :class:`PedestrianPlan` says when (``late``).
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import sumolib
+
+from sse_cosim.errors import UserError
+from sse_cosim.files import write_text_atomic
+from sse_cosim.scenario.model import Scenario
+from sse_cosim.world.roadmap import PARKED_VCLASS, RoadMap
+
+BUS_ID = "bus"
+TRUCK_ID = "truck"
+CAR_ID = "car"
+PEDESTRIAN_ID = "pedestrian"
+ROLES = {BUS_ID: "bus", TRUCK_ID: "truck", CAR_ID: "car"}
+PARKED_DURATION_S = 1.0e7  # "for ever": the truck's stop outlasts any run
+ROUTE_FILE_NAME = "scenario.rou.xml"
+
+
+@dataclass(frozen=True)
+class PedestrianPlan:
+    """When and where the pedestrian walks.
+
+    ``path`` lists the edges it walks (sidewalks, walking areas, the crossing);
+    ``distance_to_crossing_m`` the walk from its start to the zebra; ``depart_s`` its
+    departure; ``crossing_time_s`` when it steps onto the zebra (= the configured time unless
+    ``late``: then it departs at t=0 and arrives ``crossing_time_s`` instead).
+    """
+
+    path: tuple[str, ...]
+    distance_to_crossing_m: float
+    depart_s: float
+    crossing_time_s: float
+    configured_crossing_time_s: float
+
+    @property
+    def late(self) -> bool:
+        return self.crossing_time_s > self.configured_crossing_time_s + 1e-9
+
+
+@dataclass(frozen=True)
+class ActorPlan:
+    """Everything the route file needs beyond the scenario."""
+
+    bus_lane_index: int
+    pedestrian: PedestrianPlan | None
+
+
+def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: str) -> ActorPlan:
+    """Check the actors against the network (UserError naming ``source`` and the field) and plan
+    the bus's lane and the pedestrian's walk."""
+    net = _read_net(net_path)
+    dt = scenario.simulation.step_length_s
+    bus = scenario.bus
+    _check_route(net, bus.route_edges, "bus", "bus.route_edges", source)
+    _check_pos(net, bus.route_edges[0], bus.depart_pos_m, "bus.depart_pos_m", source)
+    bus_lane = _vehicle_lane(net, bus.route_edges[0], "bus", "bus.route_edges", source)
+    if scenario.truck.present:
+        _check_truck(net, scenario, source)
+    if scenario.car.present:
+        car = scenario.car
+        _check_route(net, car.route_edges, "passenger", "car.route_edges", source)
+        _check_pos(net, car.route_edges[0], car.depart_pos_m, "car.depart_pos_m", source)
+        _check_lane(net, car.route_edges[0], car.lane_index, "passenger", "car.lane_index", source)
+    plan = None
+    if scenario.pedestrian.present:
+        plan = _plan_pedestrian(net, scenario, roadmap, dt, source)
+    return ActorPlan(bus_lane_index=bus_lane, pedestrian=plan)
+
+
+def write_route_file(scenario: Scenario, plan: ActorPlan, path: Path) -> Path:
+    """The SUMO route file with the scenario's types, vehicles and pedestrian."""
+    bus, truck, car, ped = scenario.bus, scenario.truck, scenario.car, scenario.pedestrian
+    types = [
+        _element("vType", id="bus", vClass="bus", guiShape="bus", length=bus.length_m,
+                 width=bus.width_m, accel=bus.accel_mps2, decel=bus.comfortable_decel_mps2,
+                 emergencyDecel=bus.emergency_decel_mps2,
+                 apparentDecel=bus.comfortable_decel_mps2, maxSpeed=bus.nominal_speed_mps,
+                 speedFactor=1, speedDev=0, sigma=0),
+    ]
+    entries: list[tuple[float, int, str]] = [(0.0, 0, (
+        f'    <vehicle id="{BUS_ID}" type="bus" depart="0" departLane="{plan.bus_lane_index}" '
+        f'departPos="{_num(bus.depart_pos_m)}" departSpeed="{_num(bus.nominal_speed_mps)}">\n'
+        f'        <route edges={quoteattr(" ".join(bus.route_edges))}/>\n'
+        f"    </vehicle>"))]
+    if truck.present:
+        types.append(_element("vType", id="truck", vClass=PARKED_VCLASS, guiShape="truck",
+                              length=truck.length_m, width=truck.width_m, speedFactor=1,
+                              speedDev=0, sigma=0))
+        entries.append((0.0, 1, (
+            f'    <vehicle id="{TRUCK_ID}" type="truck" depart="0" '
+            f'departLane="{truck.lane_index}" departPos="{_num(truck.end_pos_m)}" '
+            f'departSpeed="0">\n'
+            f"        <route edges={quoteattr(truck.edge)}/>\n"
+            f'        <stop lane={quoteattr(f"{truck.edge}_{truck.lane_index}")} '
+            f'endPos="{_num(truck.end_pos_m)}" duration="{_num(PARKED_DURATION_S)}"/>\n'
+            f"    </vehicle>")))
+    if car.present:
+        types.append(_element("vType", id="car", vClass="passenger", guiShape="passenger",
+                              length=car.length_m, width=car.width_m, maxSpeed=car.speed_mps,
+                              speedFactor=1, speedDev=0, sigma=0))
+        entries.append((car.depart_s, 2, (
+            f'    <vehicle id="{CAR_ID}" type="car" depart="{_num(car.depart_s)}" '
+            f'departLane="{car.lane_index}" departPos="{_num(car.depart_pos_m)}" '
+            f'departSpeed="{_num(car.speed_mps)}">\n'
+            f'        <route edges={quoteattr(" ".join(car.route_edges))}/>\n'
+            f"    </vehicle>")))
+    if ped.present and plan.pedestrian is not None:
+        size = 2.0 * ped.radius_m
+        types.append(_element("vType", id="pedestrian", vClass="pedestrian",
+                              length=size, width=size, desiredMaxSpeed=ped.walking_speed_mps,
+                              maxSpeed=ped.walking_speed_mps, speedFactor=1, speedDev=0))
+        p = plan.pedestrian
+        entries.append((p.depart_s, 3, (
+            f'    <person id="{PEDESTRIAN_ID}" type="pedestrian" depart="{_num(p.depart_s)}" '
+            f'departPos="{_num(ped.start_pos_m)}">\n'
+            f'        <walk edges={quoteattr(" ".join(p.path))} '
+            f'arrivalPos="{_num(ped.end_pos_m)}"/>\n'
+            f"    </person>")))
+    entries.sort(key=lambda e: (e[0], e[1]))
+    text = "\n".join([
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f"<!-- Generated by sse_cosim.world from scenario {scenario.name!r}; do not edit. -->",
+        '<routes xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" '
+        'xsi:noNamespaceSchemaLocation="http://sumo.dlr.de/xsd/routes_file.xsd">',
+        *types,
+        *(e[2] for e in entries),
+        "</routes>",
+        "",
+    ])
+    return write_text_atomic(path, text)
+
+
+# --- checks -------------------------------------------------------------------------------
+
+
+def _read_net(net_path: Path) -> sumolib.net.Net:
+    return sumolib.net.readNet(str(net_path), withInternal=True, withPedestrianConnections=True)
+
+
+def _edge(net: sumolib.net.Net, edge_id: str, field: str, source: str) -> sumolib.net.edge.Edge:
+    if not net.hasEdge(edge_id) or net.getEdge(edge_id).getFunction():
+        names = ", ".join(sorted(e.getID() for e in net.getEdges(withInternal=False)))
+        raise UserError(source, field, f"the network has no edge {edge_id!r}",
+                        f"use one of {names}")
+    return net.getEdge(edge_id)
+
+
+def _check_pos(net: sumolib.net.Net, edge_id: str, pos: float, field: str, source: str) -> None:
+    length = net.getEdge(edge_id).getLength()
+    if pos > length:
+        raise UserError(source, field, f"{pos:g} m lies beyond the end of edge {edge_id!r} "
+                        f"({length:g} m long)", f"use a position between 0 and {length:g}")
+
+
+def _check_route(net: sumolib.net.Net, edges: list[str], vclass: str, field: str,
+                 source: str) -> None:
+    for edge_id in edges:
+        edge = _edge(net, edge_id, field, source)
+        if not edge.allows(vclass):
+            raise UserError(source, field, f"edge {edge_id!r} has no lane for vClass {vclass}",
+                            "route the vehicle over driving lanes")
+    for a, b in itertools.pairwise(edges):
+        conns = net.getEdge(a).getOutgoing().get(net.getEdge(b), [])
+        if not any(c.getFromLane().allows(vclass) and c.getToLane().allows(vclass) for c in conns):
+            raise UserError(source, field, f"edge {b!r} does not follow edge {a!r} for a "
+                            f"{vclass}", "list consecutive, connected edges")
+
+
+def _vehicle_lane(net: sumolib.net.Net, edge_id: str, vclass: str, field: str, source: str) -> int:
+    lanes = [lane.getIndex() for lane in net.getEdge(edge_id).getLanes() if lane.allows(vclass)]
+    if not lanes:
+        raise UserError(source, field, f"edge {edge_id!r} has no lane for vClass {vclass}",
+                        "route the vehicle over driving lanes")
+    return max(lanes)
+
+
+def _check_lane(net: sumolib.net.Net, edge_id: str, index: int, vclass: str, field: str,
+                source: str) -> None:
+    lanes = net.getEdge(edge_id).getLanes()
+    if index >= len(lanes):
+        raise UserError(source, field, f"edge {edge_id!r} has no lane {index} "
+                        f"(lanes 0..{len(lanes) - 1})", "use an existing lane index")
+    if not lanes[index].allows(vclass):
+        allowed = [lane.getIndex() for lane in lanes if lane.allows(vclass)]
+        raise UserError(source, field, f"lane {index} of edge {edge_id!r} does not admit "
+                        f"vClass {vclass}", f"use lane {', '.join(map(str, allowed)) or '-'}")
+
+
+def _check_truck(net: sumolib.net.Net, scenario: Scenario, source: str) -> None:
+    truck = scenario.truck
+    edge = _edge(net, truck.edge, "truck.edge", source)
+    lanes = edge.getLanes()
+    if truck.lane_index >= len(lanes):
+        raise UserError(source, "truck.lane_index", f"edge {truck.edge!r} has no lane "
+                        f"{truck.lane_index} (lanes 0..{len(lanes) - 1})",
+                        "use the parking strip's index (1)")
+    if not lanes[truck.lane_index].allows(PARKED_VCLASS):
+        strips = [ln.getIndex() for ln in lanes if ln.allows(PARKED_VCLASS)]
+        raise UserError(source, "truck.lane_index", f"lane {truck.lane_index} of edge "
+                        f"{truck.edge!r} is not a parking strip",
+                        f"park the truck on lane {', '.join(map(str, strips)) or '-'}")
+    length = lanes[truck.lane_index].getLength()
+    if not truck.length_m <= truck.end_pos_m <= length:
+        raise UserError(source, "truck.end_pos_m", f"{truck.end_pos_m:g} m does not fit a "
+                        f"{truck.length_m:g} m truck on edge {truck.edge!r} ({length:g} m long)",
+                        f"use a front position between {truck.length_m:g} and {length:g}")
+
+
+# --- the pedestrian -----------------------------------------------------------------------
+
+
+def _sidewalk(net: sumolib.net.Net, edge_id: str, field: str, source: str) -> None:
+    edge = _edge(net, edge_id, field, source)
+    if not any(lane.allows("pedestrian") for lane in edge.getLanes()):
+        raise UserError(source, field, f"edge {edge_id!r} has no sidewalk",
+                        "start and end the pedestrian on an edge with a sidewalk")
+
+
+def _plan_pedestrian(net: sumolib.net.Net, scenario: Scenario, roadmap: RoadMap, dt: float,
+                     source: str) -> PedestrianPlan:
+    ped = scenario.pedestrian
+    _sidewalk(net, ped.start_edge, "pedestrian.start_edge", source)
+    _sidewalk(net, ped.end_edge, "pedestrian.end_edge", source)
+    _check_pos(net, ped.start_edge, ped.start_pos_m, "pedestrian.start_pos_m", source)
+    _check_pos(net, ped.end_edge, ped.end_pos_m, "pedestrian.end_pos_m", source)
+    path = pedestrian_path(net, ped.start_edge, ped.end_edge, roadmap.crossing_id)
+    if path is None:
+        raise UserError(source, "pedestrian.end_edge", f"no walk from {ped.start_edge!r} over "
+                        f"the zebra to {ped.end_edge!r}",
+                        "end the pedestrian on a sidewalk across the road from its start")
+    distance = distance_to_crossing(net, path, ped.start_pos_m)
+    walk_s = distance / ped.walking_speed_mps
+    wanted = ped.steps_onto_crossing_s
+    depart = max(0.0, round((wanted - walk_s) / dt) * dt)
+    return PedestrianPlan(
+        path=tuple(path),
+        distance_to_crossing_m=distance,
+        depart_s=round(depart, 6),
+        crossing_time_s=max(wanted, depart + walk_s),
+        configured_crossing_time_s=wanted,
+    )
+
+
+def pedestrian_path(net: sumolib.net.Net, start: str, end: str, crossing: str) -> list[str] | None:
+    """The shortest pedestrian path from edge ``start`` over the crossing to edge ``end``.
+
+    Walking areas and crossings can be walked either way, so the pedestrian graph is
+    undirected; the path reaches one walking area of the crossing without using the crossing,
+    crosses, and goes on from the other one.
+    """
+    graph = _pedestrian_graph(net)
+    ends = [e for e in graph.get(crossing, {}) if net.getEdge(e).getFunction() == "walkingarea"]
+    best: tuple[float, list[str]] | None = None
+    for a, b in ((ends[0], ends[1]), (ends[1], ends[0])) if len(ends) == 2 else ():
+        first = _shortest(graph, start, a, avoid=crossing)
+        second = _shortest(graph, b, end, avoid=crossing)
+        if first is None or second is None:
+            continue
+        cost = first[0] + second[0]
+        if best is None or cost < best[0]:
+            best = (cost, [*first[1], crossing, *second[1]])
+    return None if best is None else best[1]
+
+
+def distance_to_crossing(net: sumolib.net.Net, path: list[str] | tuple[str, ...],
+                         start_pos: float) -> float:
+    """Walking distance (m) from ``start_pos`` on ``path[0]`` to the start of the crossing."""
+    first = net.getEdge(path[0])
+    nxt = net.getEdge(path[1])
+    forward = _touches(nxt, first.getToNode())
+    distance = (first.getLength() - start_pos) if forward else start_pos
+    for edge_id in path[1:]:
+        edge = net.getEdge(edge_id)
+        if edge.getFunction() == "crossing":
+            return distance
+        distance += edge.getLength()
+    raise ValueError("the path has no crossing")
+
+
+def _touches(edge: sumolib.net.edge.Edge, node: sumolib.net.node.Node) -> bool:
+    return node in (edge.getFromNode(), edge.getToNode())
+
+
+def _pedestrian_graph(net: sumolib.net.Net) -> dict[str, dict[str, float]]:
+    graph: dict[str, dict[str, float]] = {}
+    for edge in net.getEdges(withInternal=True):
+        for to_edge, conns in edge.getOutgoing().items():
+            if any(c.getFromLane().allows("pedestrian") and c.getToLane().allows("pedestrian")
+                   for c in conns):
+                a, b = edge.getID(), to_edge.getID()
+                graph.setdefault(a, {})[b] = to_edge.getLength()
+                graph.setdefault(b, {})[a] = edge.getLength()
+    return graph
+
+
+def _shortest(graph: dict[str, dict[str, float]], start: str, goal: str,
+              avoid: str) -> tuple[float, list[str]] | None:
+    queue: list[tuple[float, str, list[str]]] = [(0.0, start, [start])]
+    seen: set[str] = set()
+    while queue:
+        cost, node, path = heapq.heappop(queue)
+        if node == goal:
+            return cost, path
+        if node in seen:
+            continue
+        seen.add(node)
+        for nxt, weight in graph.get(node, {}).items():
+            if nxt != avoid and nxt not in seen:
+                heapq.heappush(queue, (cost + weight, nxt, [*path, nxt]))
+    return None
+
+
+# --- XML ----------------------------------------------------------------------------------
+
+
+def _num(value: float) -> str:
+    if not math.isfinite(value):
+        raise ValueError(f"not a finite number: {value}")
+    return f"{value:.10g}"
+
+
+def _element(tag: str, **attrs: object) -> str:
+    parts = " ".join(
+        f"{k}={quoteattr(_num(v) if isinstance(v, float | int) else str(v))}"
+        for k, v in attrs.items())
+    return f"    <{tag} {parts}/>"

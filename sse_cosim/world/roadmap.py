@@ -1,0 +1,239 @@
+"""The road's geometry as plain shapely/numpy data, read once from the ``.net.xml``.
+
+Pure: no SUMO process is needed, so the controller and the sensor models can use it on their
+own. Coordinates are SUMO network metres (x east, y north); the network keeps its source
+coordinates (no offset), so the crossing node C is at (200, 0).
+
+Lane kinds follow the cross-section of ``sumo_net/``: a *sidewalk* admits pedestrians only, a
+*parking strip* admits parked vehicles only (vClass ``custom1``), a *driving lane* admits
+road vehicles (passenger cars, buses, ...).
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import shapely
+import sumolib
+
+from sse_cosim.errors import UserError
+
+PARKED_VCLASS = "custom1"
+"""vClass of parked vehicles; the parking strips admit it only."""
+DRIVING_VCLASSES = ("passenger", "bus")
+
+
+@dataclass(frozen=True)
+class LaneGeometry:
+    """One lane: its centreline ``shape`` (k, 2), ``width`` and ``length`` (m)."""
+
+    id: str
+    edge_id: str
+    index: int
+    shape: np.ndarray
+    width: float
+    length: float
+
+    def polygon(self) -> shapely.Polygon:
+        """The lane's area: the centreline widened by half the width to each side."""
+        return lane_area(self.shape, self.width)
+
+
+@dataclass(frozen=True, eq=False)
+class RoadMap:
+    """The road: crossing, sidewalks, lanes and edge lengths (see module docstring).
+
+    ``crossing`` is the zebra's area, ``crossing_center`` its centre, shape (2,);
+    ``sidewalks`` is the union of the sidewalk lanes and the walking areas; ``driving_lanes``
+    holds the lanes of normal edges that road vehicles use, ``parking_lanes`` the parking
+    strips, ``sidewalk_lanes`` the sidewalks, ``internal_lanes`` the vehicle lanes inside
+    junctions (ids start with ':'). ``edge_lengths`` covers the normal edges;
+    ``junction_lanes[(from_edge, to_edge)]`` is the internal driving lane that leads through the
+    junction between two consecutive edges of a vehicle route.
+    """
+
+    net_path: Path
+    crossing_id: str
+    crossing_node: str
+    crossing: shapely.Polygon
+    crossing_center: np.ndarray
+    sidewalks: shapely.Polygon | shapely.MultiPolygon
+    driving_lanes: dict[str, LaneGeometry]
+    parking_lanes: dict[str, LaneGeometry]
+    sidewalk_lanes: dict[str, LaneGeometry]
+    internal_lanes: dict[str, LaneGeometry]
+    edge_lengths: dict[str, float]
+    junction_lanes: dict[tuple[str, str], str] = field(default_factory=dict)
+
+    def lane(self, lane_id: str) -> LaneGeometry:
+        """Any lane known to the map, by id; KeyError when there is none."""
+        for group in (self.driving_lanes, self.parking_lanes, self.sidewalk_lanes,
+                      self.internal_lanes):
+            if lane_id in group:
+                return group[lane_id]
+        raise KeyError(lane_id)
+
+    def lane_polygon(self, lane_id: str) -> shapely.Polygon:
+        """The area of lane ``lane_id`` (driving lane, parking strip, sidewalk or internal)."""
+        return self.lane(lane_id).polygon()
+
+    def route_length(self, edge_ids: Sequence[str]) -> float:
+        """Length (m) of a vehicle route: its edges and the junction passages between them."""
+        total = 0.0
+        for i, edge_id in enumerate(edge_ids):
+            total += self.edge_lengths[edge_id]
+            if i + 1 < len(edge_ids):
+                via = self.junction_lanes.get((edge_id, edge_ids[i + 1]))
+                total += 0.0 if via is None else self.internal_lanes[via].length
+        return total
+
+    def route_line(self, edge_ids: Sequence[str]) -> shapely.LineString:
+        """The centre line a vehicle drives along a route: each edge's driving lane and the
+        junction passages between them, from the start of the first edge (its length is
+        ``route_length``)."""
+        points: list[np.ndarray] = []
+        for i, edge_id in enumerate(edge_ids):
+            points.append(self.edge_driving_lane(edge_id).shape)
+            if i + 1 < len(edge_ids):
+                via = self.junction_lanes.get((edge_id, edge_ids[i + 1]))
+                if via is not None:
+                    points.append(self.internal_lanes[via].shape)
+        coords = np.concatenate(points)
+        keep = np.r_[True, np.any(np.abs(np.diff(coords, axis=0)) > 1e-9, axis=1)]
+        return shapely.LineString(coords[keep])
+
+    def edge_driving_lane(self, edge_id: str) -> LaneGeometry:
+        """The driving lane of a normal edge (the innermost one if it has several)."""
+        lanes = [g for g in self.driving_lanes.values() if g.edge_id == edge_id]
+        if not lanes:
+            raise KeyError(edge_id)
+        return max(lanes, key=lambda g: g.index)
+
+
+def lane_area(shape: np.ndarray, width: float) -> shapely.Polygon:
+    """A centreline widened by ``width / 2`` to each side, cut square at both ends."""
+    line = shapely.LineString(shape)
+    return line.buffer(width / 2.0, cap_style="flat", join_style="mitre")
+
+
+@functools.lru_cache(maxsize=8)
+def _load_cached(path: str, mtime_ns: int) -> RoadMap:
+    del mtime_ns  # part of the cache key only
+    return _read(Path(path))
+
+
+def load_roadmap(net_path: str | os.PathLike[str]) -> RoadMap:
+    """The RoadMap of the ``.net.xml`` at ``net_path`` (read once per path and version)."""
+    path = Path(net_path).resolve()
+    if not path.is_file():
+        raise UserError(str(path), "", "network file not found",
+                        "build it with sse_cosim.world.network.build_network")
+    return _load_cached(str(path), path.stat().st_mtime_ns)
+
+
+def _geometry(lane: sumolib.net.lane.Lane) -> LaneGeometry:
+    return LaneGeometry(
+        id=lane.getID(),
+        edge_id=lane.getEdge().getID(),
+        index=lane.getIndex(),
+        shape=np.asarray(lane.getShape(), dtype=float)[:, :2],
+        width=float(lane.getWidth()),
+        length=float(lane.getLength()),
+    )
+
+
+def is_sidewalk(lane: sumolib.net.lane.Lane) -> bool:
+    """Pedestrians only."""
+    return lane.getPermissions() == {"pedestrian"}
+
+
+def is_parking_strip(lane: sumolib.net.lane.Lane) -> bool:
+    """Parked vehicles only."""
+    return lane.getPermissions() == {PARKED_VCLASS}
+
+
+def is_driving_lane(lane: sumolib.net.lane.Lane) -> bool:
+    """Road vehicles, no pedestrians."""
+    return not lane.allows("pedestrian") and any(lane.allows(c) for c in DRIVING_VCLASSES)
+
+
+def _read(path: Path) -> RoadMap:
+    try:
+        net = sumolib.net.readNet(str(path), withInternal=True, withPedestrianConnections=True)
+    except Exception as exc:  # sumolib raises plain exceptions on broken XML
+        raise UserError(str(path), "", f"cannot read the network ({exc})",
+                        "rebuild it from the sources (delete sumo_net/build/)") from None
+    driving: dict[str, LaneGeometry] = {}
+    parking: dict[str, LaneGeometry] = {}
+    sidewalk: dict[str, LaneGeometry] = {}
+    internal: dict[str, LaneGeometry] = {}
+    edge_lengths: dict[str, float] = {}
+    crossings: list[sumolib.net.edge.Edge] = []
+    walking_areas: list[shapely.Polygon] = []
+    for edge in net.getEdges(withInternal=True):
+        function = edge.getFunction()
+        if function == "crossing":
+            crossings.append(edge)
+            continue
+        if function == "walkingarea":
+            ring = np.asarray(edge.getLane(0).getShape(), dtype=float)[:, :2]
+            if len(ring) >= 3:
+                poly = shapely.make_valid(shapely.Polygon(ring))
+                if poly.area > 1e-6:
+                    walking_areas.append(poly)
+            continue
+        if function == "internal":
+            for lane in edge.getLanes():
+                if is_driving_lane(lane):
+                    internal[lane.getID()] = _geometry(lane)
+            continue
+        edge_lengths[edge.getID()] = float(edge.getLength())
+        for lane in edge.getLanes():
+            if is_sidewalk(lane):
+                sidewalk[lane.getID()] = _geometry(lane)
+            elif is_parking_strip(lane):
+                parking[lane.getID()] = _geometry(lane)
+            elif is_driving_lane(lane):
+                driving[lane.getID()] = _geometry(lane)
+    if len(crossings) != 1:
+        raise UserError(str(path), "", f"the network has {len(crossings)} pedestrian crossings, "
+                        "expected exactly one (the zebra)", "define one <crossing> in the .con.xml")
+    crossing_edge = crossings[0]
+    crossing_lane = crossing_edge.getLane(0)
+    crossing = lane_area(np.asarray(crossing_lane.getShape(), dtype=float)[:, :2],
+                         float(crossing_lane.getWidth()))
+    sidewalk_union = shapely.union_all(
+        [g.polygon() for g in sidewalk.values()] + walking_areas)
+    return RoadMap(
+        net_path=path,
+        crossing_id=crossing_edge.getID(),
+        crossing_node=crossing_edge.getFromNode().getID(),
+        crossing=crossing,
+        crossing_center=np.array(crossing.centroid.coords[0]) + 0.0,  # no -0.0
+        sidewalks=sidewalk_union,
+        driving_lanes=driving,
+        parking_lanes=parking,
+        sidewalk_lanes=sidewalk,
+        internal_lanes=internal,
+        edge_lengths=edge_lengths,
+        junction_lanes=_junction_lanes(net),
+    )
+
+
+def _junction_lanes(net: sumolib.net.Net) -> dict[tuple[str, str], str]:
+    """For consecutive normal edges: the internal driving lane between them (the innermost)."""
+    result: dict[tuple[str, str], str] = {}
+    for edge in net.getEdges(withInternal=False):
+        for to_edge, conns in edge.getOutgoing().items():
+            if to_edge.getFunction():  # walking areas and crossings
+                continue
+            vias = [c for c in conns if c.getViaLaneID() and is_driving_lane(c.getFromLane())]
+            if vias:
+                best = max(vias, key=lambda c: c.getFromLane().getIndex())
+                result[(edge.getID(), to_edge.getID())] = best.getViaLaneID()
+    return result

@@ -1,0 +1,106 @@
+"""What the world looks like at one step: pure data, no SUMO.
+
+Headings are mathematical (radians, counter-clockwise from east); the SUMO adapter converts
+SUMO's navigational angle and front-bumper reference into these.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A position (m) and a heading (rad, CCW from east)."""
+
+    x: float
+    y: float
+    heading: float
+
+    @property
+    def position(self) -> np.ndarray:
+        """Shape (2,)."""
+        return np.array([self.x, self.y])
+
+    @property
+    def forward(self) -> np.ndarray:
+        """Unit vector along the heading, shape (2,)."""
+        return np.array([np.cos(self.heading), np.sin(self.heading)])
+
+    @property
+    def left(self) -> np.ndarray:
+        """Unit vector to the left of the heading, shape (2,)."""
+        return np.array([-np.sin(self.heading), np.cos(self.heading)])
+
+    def compose(self, forward_m: float, left_m: float, yaw: float) -> Pose:
+        """The pose offset by ``forward_m``/``left_m`` in this frame and turned by ``yaw`` (rad)."""
+        p = self.position + forward_m * self.forward + left_m * self.left
+        return Pose(float(p[0]), float(p[1]), self.heading + yaw)
+
+
+@dataclass(frozen=True)
+class Footprint:
+    """A vehicle's oriented rectangle; ``front`` is the front bumper's centre (SUMO's reference)."""
+
+    front: Pose
+    length: float
+    width: float
+
+    @property
+    def center(self) -> np.ndarray:
+        """Centre of the rectangle, shape (2,)."""
+        return self.front.position - 0.5 * self.length * self.front.forward
+
+    def corners(self) -> np.ndarray:
+        """Corners counter-clockwise from the rear right, shape (4, 2)."""
+        f, l_ = self.front.forward, self.front.left
+        rear = self.front.position - self.length * f
+        half = 0.5 * self.width * l_
+        front = self.front.position
+        return np.array([rear - half, front - half, front + half, rear + half])
+
+    def polygon(self) -> shapely.Polygon:
+        """The footprint as a shapely polygon."""
+        return shapely.Polygon(self.corners())
+
+
+@dataclass(frozen=True)
+class VehicleState:
+    """One vehicle at one step."""
+
+    id: str
+    role: str  # "bus", "truck", "car" or "other"
+    footprint: Footprint
+    speed: float  # m/s
+
+
+@dataclass(frozen=True)
+class PersonState:
+    """One pedestrian at one step; ``position`` is its centre, shape (2,)."""
+
+    id: str
+    position: tuple[float, float]
+    speed: float  # m/s
+    on_crossing: bool = False
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """The world at time ``time`` (s): every vehicle and person by id."""
+
+    time: float
+    vehicles: dict[str, VehicleState] = field(default_factory=dict)
+    persons: dict[str, PersonState] = field(default_factory=dict)
+
+    def role(self, role: str) -> VehicleState | None:
+        """The first vehicle with this role, or None when it is not (or no longer) in the scene."""
+        return next((v for v in self.vehicles.values() if v.role == role), None)
+
+    @property
+    def bus_actual_speed(self) -> float | None:
+        """The bus's speed (m/s) as SUMO moved it, or None when the bus is not in the scene."""
+        bus = self.role("bus")
+        return None if bus is None else bus.speed

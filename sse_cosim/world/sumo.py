@@ -1,0 +1,381 @@
+"""The SUMO world: the only module of the project that imports ``libsumo``.
+
+``SumoWorld(scenario, run_dir, scenario_name)`` is a context manager. Entering it builds (or
+reuses) the network, checks the scenario's actors against it, writes the run's SUMO files into
+``run_dir`` (``scenario.rou.xml``, ``sumo.sumocfg`` -- ``sumo-gui -c run_dir/sumo.sumocfg``
+replays the run's scene -- and ``sumo.log`` with SUMO's warnings) and starts SUMO in-process.
+Leaving it always closes SUMO, also when a step raised.
+
+Time. ``step()`` advances SUMO by one step and returns the :class:`Snapshot` of the new state.
+Its ``time`` is the time SUMO's own outputs (FCD etc.) give that state: the first step returns
+t=0 with the actors that depart at t=0 standing at their departure places, i.e. one step less
+than ``libsumo.simulation.getTime()`` after the step.
+
+Speed mode. The bus drives under speed mode 31 (SUMO's default, set explicitly): SUMO keeps the
+safe speed towards leaders, the bus's maximum acceleration and deceleration, and the right of
+way at junctions -- so SUMO still yields to pedestrians on the priority crossing -- while
+:meth:`SumoWorld.set_bus_speed` sets the speed the bus follows (``vehicle.setSpeed``, held
+until the next command) as closely as its acceleration and deceleration allow. The actual speed
+is in the snapshot (``Snapshot.bus_actual_speed``), the command in ``last_commanded_speed``.
+Before the first command the bus drives at its nominal speed (its maximum speed).
+
+Emergency brake. ``set_bus_speed(v, emergency=True)`` sets the bus's deceleration to the
+scenario's emergency deceleration (``vehicle.setDecel``) before commanding ``v``; the next
+normal command restores the comfortable deceleration. So an emergency brake uses the same
+control path as any command (speed mode, right of way and safe speed stay on) and brakes at
+exactly ``emergency_decel_mps2`` per second; ``slowDown`` would instead spread the change over
+a chosen duration, which is not what a brake is.
+
+One simulation per process. libsumo runs SUMO inside this process and holds one simulation at
+a time: a second ``SumoWorld`` entered while one is open raises :class:`SimulationError`. After
+``close()`` a new simulation can be started in the same process (the tests do so), but sweeps
+run each simulation in its own process so that they can run in parallel.
+
+Determinism. Every vehicle and person type has ``speedDev=0`` and ``sigma=0``, pedestrians do
+not dawdle (``pedestrian.striping.dawdling 0``) and SUMO's seed is the scenario's seed: one
+scenario gives one sequence of snapshots. Nobody is teleported (``time-to-teleport -1``);
+collisions are reported (``collision.action warn``, junctions included) and kept in
+``collisions``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import logging
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+from xml.sax.saxutils import quoteattr
+
+from sse_cosim.errors import SimulationError, UserError
+from sse_cosim.files import write_text_atomic
+from sse_cosim.scenario.model import Scenario
+from sse_cosim.world import demand
+from sse_cosim.world.demand import BUS_ID, PEDESTRIAN_ID, ROLES, ActorPlan, PedestrianPlan
+from sse_cosim.world.network import build_network
+from sse_cosim.world.roadmap import RoadMap, load_roadmap
+from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
+
+with contextlib.redirect_stdout(io.StringIO()):
+    # libsumo's import prints a note about the installed pyarrow's version; keep stdout clean.
+    import libsumo
+
+log = logging.getLogger(__name__)
+
+BUS_SPEED_MODE = 31
+CONFIG_FILE_NAME = "sumo.sumocfg"
+LOG_FILE_NAME = "sumo.log"
+_VEHICLE_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED)
+_BUS_VARS = (*_VEHICLE_VARS, libsumo.VAR_DISTANCE)
+_PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libsumo.VAR_ROAD_ID)
+_LIBSUMO_ERRORS: tuple[type[BaseException], ...] = (
+    libsumo.TraCIException, libsumo.FatalTraCIError, RuntimeError)
+
+_open_world: SumoWorld | None = None
+
+
+def sumo_version() -> str:
+    """SUMO's version, e.g. ``1.28.0`` (of the libsumo in use)."""
+    version = str(libsumo.__version__) if hasattr(libsumo, "__version__") else ""
+    if version:
+        return version
+    return str(libsumo.getVersion()[1]).removeprefix("SUMO ").strip()
+
+
+@dataclass(frozen=True)
+class Collision:
+    """A collision SUMO reported (it only warns; nobody is removed)."""
+
+    time: float
+    collider: str
+    victim: str
+    kind: str
+
+
+class SumoWorld:
+    """The scenario's scene in SUMO, stepped by the caller (see module docstring)."""
+
+    def __init__(self, scenario: Scenario, run_dir: str | Path, scenario_name: str) -> None:
+        self.scenario = scenario
+        self.run_dir = Path(run_dir)
+        self.scenario_name = scenario_name
+        self._dt = scenario.simulation.step_length_s
+        self._roadmap: RoadMap | None = None
+        self._plan: ActorPlan | None = None
+        self._net_path: Path | None = None
+        self._open = False
+        self._entered = False
+        self._time = -self._dt
+        self._bus_seen = False
+        self._bus_arrived = False
+        self._bus_distance = 0.0
+        self._bus_decel = scenario.bus.comfortable_decel_mps2
+        self._last_commanded: float | None = None
+        self._last_emergency = False
+        self._teleports = 0
+        self._collisions: list[Collision] = []
+        self._sizes: dict[str, tuple[float, float]] = {}
+        self._person_length: dict[str, float] = {}
+
+    # --- context manager ------------------------------------------------------------------
+
+    def __enter__(self) -> SumoWorld:
+        global _open_world
+        if self._entered:
+            raise RuntimeError("a SumoWorld runs once; create a new one for another run")
+        if _open_world is not None or libsumo.isLoaded():
+            raise SimulationError(self.scenario_name, "another SUMO simulation is already open in "
+                                  "this process; libsumo runs one at a time -- close it first, "
+                                  "or run each simulation in its own process")
+        self._entered = True
+        self._net_path = build_network(self.scenario.network.sources_dir)
+        self._roadmap = load_roadmap(self._net_path)
+        self._plan = demand.plan_actors(self.scenario, self._net_path, self._roadmap,
+                                        source=self.scenario_name)
+        if self._plan.pedestrian is not None and self._plan.pedestrian.late:
+            p = self._plan.pedestrian
+            log.warning("%s: the pedestrian needs %.1f s to walk %.1f m to the crossing, so it "
+                        "departs at t=0 and reaches the crossing at %.1f s instead of %.1f s",
+                        self.scenario_name, p.crossing_time_s - p.depart_s,
+                        p.distance_to_crossing_m, p.crossing_time_s, p.configured_crossing_time_s)
+        config = self._write_files()
+        try:
+            libsumo.start(["sumo", "-c", str(config)])
+        except _LIBSUMO_ERRORS as exc:
+            with contextlib.suppress(*_LIBSUMO_ERRORS):
+                libsumo.close()
+            raise SimulationError(self.scenario_name, f"SUMO did not start: {_message(exc)} "
+                                  f"(see {self.run_dir / LOG_FILE_NAME})") from exc
+        _open_world = self
+        self._open = True
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Close SUMO (idempotent)."""
+        global _open_world
+        if not self._open:
+            return
+        self._open = False
+        _open_world = None
+        try:
+            libsumo.close()
+        except _LIBSUMO_ERRORS as exc:
+            log.warning("%s: closing SUMO failed: %s", self.scenario_name, _message(exc))
+
+    # --- stepping -------------------------------------------------------------------------
+
+    def step(self) -> Snapshot:
+        """Advance SUMO by one step and return the new state."""
+        self._require_open()
+        try:
+            libsumo.simulationStep()
+            return self._snapshot()
+        except _LIBSUMO_ERRORS as exc:
+            raise SimulationError(self.scenario_name,
+                                  f"SUMO step at t={self._time + self._dt:.2f} s failed: "
+                                  f"{_message(exc)}") from exc
+
+    def set_bus_speed(self, commanded_mps: float, emergency: bool = False) -> None:
+        """Command the bus's speed (m/s); ``emergency`` brakes at the emergency deceleration.
+
+        The bus follows the command from the next step on, as its acceleration and
+        deceleration allow, and never faster than its nominal speed; SUMO's own right of way
+        stays on. A command given before the bus departs applies from its departure on;
+        after the bus arrived it is only recorded.
+        """
+        if not math.isfinite(commanded_mps) or commanded_mps < 0:
+            raise ValueError(f"commanded bus speed must be finite and >= 0, got {commanded_mps}")
+        self._require_open()
+        self._last_commanded = float(commanded_mps)
+        self._last_emergency = bool(emergency)
+        if not self._bus_seen or self._bus_arrived:
+            return
+        try:
+            self._apply_command()
+        except _LIBSUMO_ERRORS as exc:
+            raise SimulationError(self.scenario_name,
+                                  f"setting the bus's speed failed: {_message(exc)}") from exc
+
+    def _apply_command(self) -> None:
+        if self._last_commanded is None:
+            return
+        bus = self.scenario.bus
+        decel = bus.emergency_decel_mps2 if self._last_emergency else bus.comfortable_decel_mps2
+        if decel != self._bus_decel:
+            libsumo.vehicle.setDecel(BUS_ID, decel)
+            self._bus_decel = decel
+        libsumo.vehicle.setSpeed(BUS_ID, self._last_commanded)
+
+    # --- state ----------------------------------------------------------------------------
+
+    @property
+    def roadmap(self) -> RoadMap:
+        """The road's geometry (available once entered)."""
+        if self._roadmap is None:
+            raise RuntimeError("SumoWorld: enter the context first")
+        return self._roadmap
+
+    @property
+    def net_path(self) -> Path:
+        if self._net_path is None:
+            raise RuntimeError("SumoWorld: enter the context first")
+        return self._net_path
+
+    @property
+    def pedestrian_plan(self) -> PedestrianPlan | None:
+        """When the pedestrian departs and steps onto the crossing (None without one)."""
+        return None if self._plan is None else self._plan.pedestrian
+
+    @property
+    def time(self) -> float:
+        """Time (s) of the latest snapshot; ``-step_length`` before the first step."""
+        return self._time
+
+    @property
+    def step_length(self) -> float:
+        return self._dt
+
+    @property
+    def bus_route_length(self) -> float:
+        """Length (m) of the bus's route from the start of its first edge to the end of its last,
+        junction passages included; the frame of ``bus.depart_pos_m``."""
+        return self.roadmap.route_length(self.scenario.bus.route_edges)
+
+    @property
+    def bus_route_position(self) -> float:
+        """The bus front's position (m) along its route, same frame as ``bus_route_length``."""
+        return self.scenario.bus.depart_pos_m + self._bus_distance
+
+    @property
+    def bus_arrived(self) -> bool:
+        """Whether the bus reached the end of its route (and left the simulation)."""
+        return self._bus_arrived
+
+    @property
+    def last_commanded_speed(self) -> float | None:
+        """The latest ``set_bus_speed`` command (m/s), None before the first."""
+        return self._last_commanded
+
+    @property
+    def teleports(self) -> int:
+        """Vehicles SUMO teleported so far (always 0 unless something is badly wrong)."""
+        return self._teleports
+
+    @property
+    def collisions(self) -> tuple[Collision, ...]:
+        return tuple(self._collisions)
+
+    # --- internals ------------------------------------------------------------------------
+
+    def _require_open(self) -> None:
+        if not self._open:
+            raise SimulationError(self.scenario_name, "the SUMO world is not open "
+                                  "(use it inside 'with SumoWorld(...) as world:')")
+
+    def _write_files(self) -> Path:
+        assert self._plan is not None and self._net_path is not None
+        try:
+            self.run_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise UserError(str(self.run_dir), "", f"cannot create the run folder ({exc})",
+                            "choose a writable output folder") from None
+        routes = demand.write_route_file(self.scenario, self._plan,
+                                         self.run_dir / demand.ROUTE_FILE_NAME)
+        sim = self.scenario.simulation
+        options = {
+            "input": {"net-file": str(self._net_path.resolve()), "route-files": routes.name},
+            "time": {"begin": "0", "step-length": f"{sim.step_length_s:.10g}"},
+            "processing": {
+                "time-to-teleport": "-1",
+                "collision.action": "warn",
+                "collision.check-junctions": "true",
+                "pedestrian.model": "striping",
+                "pedestrian.striping.dawdling": "0",
+            },
+            "report": {"no-step-log": "true", "duration-log.disable": "true",
+                       "error-log": LOG_FILE_NAME},
+            "random_number": {"seed": str(sim.seed)},
+        }
+        lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+                 f"<!-- SUMO configuration of scenario {self.scenario_name!r}, written by "
+                 "sse_cosim.world; replay with: sumo-gui -c sumo.sumocfg -->",
+                 "<configuration>"]
+        for section, values in options.items():
+            lines.append(f"    <{section}>")
+            lines += [f"        <{k} value={quoteattr(v)}/>" for k, v in values.items()]
+            lines.append(f"    </{section}>")
+        lines += ["</configuration>", ""]
+        return write_text_atomic(self.run_dir / CONFIG_FILE_NAME, "\n".join(lines))
+
+    def _snapshot(self) -> Snapshot:
+        sim = libsumo.simulation
+        self._time = round(sim.getTime() - self._dt, 6)
+        for vid in sim.getDepartedIDList():
+            libsumo.vehicle.subscribe(vid, _BUS_VARS if vid == BUS_ID else _VEHICLE_VARS)
+            if vid == BUS_ID:
+                self._bus_seen = True
+                libsumo.vehicle.setSpeedMode(BUS_ID, BUS_SPEED_MODE)
+                self._apply_command()
+        for pid in sim.getDepartedPersonIDList():
+            libsumo.person.subscribe(pid, _PERSON_VARS)
+        if BUS_ID in sim.getArrivedIDList():
+            self._bus_arrived = True
+        self._teleports += sim.getStartingTeleportNumber()
+        for c in sim.getCollisions():
+            self._collisions.append(Collision(self._time, c.collider, c.victim, c.type))
+        vehicles: dict[str, VehicleState] = {}
+        for vid, values in libsumo.vehicle.getAllSubscriptionResults().items():
+            x, y = values[libsumo.VAR_POSITION]
+            length, width = self._size(vid)
+            heading = _heading(values[libsumo.VAR_ANGLE])
+            vehicles[vid] = VehicleState(
+                id=vid, role=ROLES.get(vid, "other"),
+                footprint=Footprint(Pose(float(x), float(y), heading), length, width),
+                speed=float(values[libsumo.VAR_SPEED]))
+            if vid == BUS_ID:
+                self._bus_distance = float(values[libsumo.VAR_DISTANCE])
+        persons: dict[str, PersonState] = {}
+        crossing = self.roadmap.crossing_id
+        for pid, values in libsumo.person.getAllSubscriptionResults().items():
+            x, y = values[libsumo.VAR_POSITION]
+            heading = _heading(values[libsumo.VAR_ANGLE])
+            half = 0.5 * self._person_size(pid)
+            # SUMO places a walking person by its front; the snapshot wants its centre.
+            persons[pid] = PersonState(
+                id=pid,
+                position=(float(x) - half * math.cos(heading), float(y) - half * math.sin(heading)),
+                speed=float(values[libsumo.VAR_SPEED]),
+                on_crossing=values[libsumo.VAR_ROAD_ID] == crossing)
+        return Snapshot(time=self._time, vehicles=vehicles, persons=persons)
+
+    def _size(self, vid: str) -> tuple[float, float]:
+        size = self._sizes.get(vid)
+        if size is None:
+            size = (float(libsumo.vehicle.getLength(vid)), float(libsumo.vehicle.getWidth(vid)))
+            self._sizes[vid] = size
+        return size
+
+    def _person_size(self, pid: str) -> float:
+        length = self._person_length.get(pid)
+        if length is None:
+            length = (2.0 * self.scenario.pedestrian.radius_m if pid == PEDESTRIAN_ID
+                      else float(libsumo.person.getLength(pid)))
+            self._person_length[pid] = length
+        return length
+
+
+def _heading(nav_angle_deg: float) -> float:
+    """SUMO's navigational angle (deg, 0 = north, clockwise) as a heading (rad, CCW from east),
+    in [-pi, pi)."""
+    return math.radians((90.0 - nav_angle_deg + 180.0) % 360.0 - 180.0)
+
+
+def _message(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text or type(exc).__name__

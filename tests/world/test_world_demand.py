@@ -1,0 +1,107 @@
+"""The actors against the network: checks, the pedestrian's plan, the route file (no SUMO run)."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+from world_helpers import scenario
+
+from sse_cosim.errors import UserError
+from sse_cosim.world import demand
+from sse_cosim.world.roadmap import load_roadmap
+
+SOURCE = "scenarios/s1_pedestrian.toml"
+
+
+def _plan(net_path: Path, **overrides: object) -> demand.ActorPlan:
+    return demand.plan_actors(scenario("s2_pedestrian", **overrides), net_path,
+                              load_roadmap(net_path), SOURCE)
+
+
+def test_pedestrian_crosses_the_zebra(net_path: Path) -> None:
+    plan = _plan(net_path).pedestrian
+    assert plan is not None
+    assert plan.path == ("WC", ":C_w1", ":C_c0", ":C_w0", "CW")
+    # 12 m of sidewalk (186 -> 198) and the walking area's 2.82 m
+    assert plan.distance_to_crossing_m == pytest.approx(14.82)
+
+
+def test_pedestrian_departure_derived_from_crossing_time(net_path: Path) -> None:
+    plan = _plan(net_path, **{"pedestrian.steps_onto_crossing_s": 20.0}).pedestrian
+    assert plan is not None and not plan.late
+    assert plan.depart_s == pytest.approx(20.0 - 14.82 / 1.2, abs=0.051)
+    assert plan.crossing_time_s == 20.0
+
+
+def test_pedestrian_too_far_departs_at_zero(net_path: Path) -> None:
+    # The paper scenarios: 14.8 m at 1.2 m/s take 12.35 s > 9 s.
+    plan = _plan(net_path).pedestrian
+    assert plan is not None and plan.late
+    assert plan.depart_s == 0.0
+    assert plan.crossing_time_s == pytest.approx(14.82 / 1.2)
+    assert plan.configured_crossing_time_s == 9.0
+
+
+@pytest.mark.parametrize(
+    ("overrides", "field", "words"),
+    [
+        ({"bus.route_edges": ["WC", "XX"]}, "bus.route_edges", "no edge 'XX'"),
+        ({"bus.route_edges": ["WC", "CW"]}, "bus.route_edges", "does not follow"),
+        ({"bus.depart_pos_m": 250.0}, "bus.depart_pos_m", "beyond the end"),
+        ({"truck.edge": "NOPE"}, "truck.edge", "no edge 'NOPE'"),
+        ({"truck.lane_index": 5}, "truck.lane_index", "no lane 5"),
+        ({"truck.lane_index": 2}, "truck.lane_index", "not a parking strip"),
+        ({"truck.end_pos_m": 199.0}, "truck.end_pos_m", "does not fit"),
+        ({"car.lane_index": 0}, "car.lane_index", "does not admit"),
+        ({"car.depart_pos_m": 120.0}, "car.depart_pos_m", "beyond the end"),
+        ({"car.route_edges": ["EC", "WC"]}, "car.route_edges", "does not follow"),
+        ({"pedestrian.start_edge": "XX"}, "pedestrian.start_edge", "no edge 'XX'"),
+        ({"pedestrian.start_pos_m": 500.0}, "pedestrian.start_pos_m", "beyond the end"),
+        ({"pedestrian.end_edge": ":C_w0"}, "pedestrian.end_edge", "no edge"),
+        ({"pedestrian.end_pos_m": 199.0}, "pedestrian.end_pos_m", "beyond the end"),
+    ],
+)
+def test_bad_actor_names_file_and_field(net_path: Path, overrides: dict, field: str,
+                                        words: str) -> None:
+    with pytest.raises(UserError) as info:
+        _plan(net_path, **overrides)
+    assert info.value.source == SOURCE
+    assert info.value.field == field
+    assert words in info.value.problem
+    assert info.value.fix
+
+
+def test_absent_actors_are_not_checked(net_path: Path) -> None:
+    sc = scenario("s1_pedestrian", **{"pedestrian.present": False, "pedestrian.start_edge": "XX",
+                                      "car.lane_index": 0,
+                                      "truck.present": False, "truck.edge": "XX"})
+    assert not sc.car.present
+    plan = demand.plan_actors(sc, net_path, load_roadmap(net_path), SOURCE)
+    assert plan.pedestrian is None
+
+
+def test_route_file(net_path: Path, tmp_path: Path) -> None:
+    sc = scenario("s2_pedestrian")
+    plan = demand.plan_actors(sc, net_path, load_roadmap(net_path), SOURCE)
+    root = ET.parse(demand.write_route_file(sc, plan, tmp_path / "r.rou.xml")).getroot()
+    types = {t.get("id"): t for t in root.iter("vType")}
+    assert set(types) == {"bus", "truck", "car", "pedestrian"}
+    assert all(t.get("speedDev") == "0" for t in types.values())
+    bus = types["bus"]
+    assert (bus.get("vClass"), bus.get("length"), bus.get("width")) == ("bus", "12", "2.55")
+    assert (bus.get("accel"), bus.get("decel"), bus.get("emergencyDecel")) == ("1.5", "3", "7")
+    assert types["truck"].get("vClass") == "custom1"
+    assert types["pedestrian"].get("desiredMaxSpeed") == "1.2"
+    vehicles = {v.get("id"): v for v in root.iter("vehicle")}
+    assert vehicles["bus"].get("departSpeed") == "20"
+    assert vehicles["bus"].get("departLane") == "2"
+    truck = vehicles["truck"]
+    assert (truck.get("departLane"), truck.get("departPos")) == ("1", "194")
+    assert truck.find("stop").get("lane") == "WC_1"
+    assert (vehicles["car"].get("depart"), vehicles["car"].get("departSpeed")) == ("2", "10")
+    walk = root.find("person/walk")
+    assert walk.get("edges") == "WC :C_w1 :C_c0 :C_w0 CW"
+    departs = [float(e.get("depart")) for e in root if e.tag in ("vehicle", "person")]
+    assert departs == sorted(departs)

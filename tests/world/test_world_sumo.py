@@ -1,0 +1,247 @@
+"""The paper scenarios in real SUMO through libsumo.
+
+libsumo holds one simulation per process; these tests start and close one after the other in
+the pytest process (see world_helpers.py for why that is safe).
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+from world_helpers import PAPER_SCENARIOS, Run, run_world, scenario
+
+from sse_cosim.errors import SimulationError, UserError
+from sse_cosim.world.snapshot import PersonState
+
+pytestmark = pytest.mark.sumo
+
+TRUCK_CORNERS = np.array([[184.0, -6.0], [194.0, -6.0], [194.0, -3.5], [184.0, -3.5]])
+_RUNS: dict[str, Run] = {}
+
+
+def _run(name: str, tmp_path_factory: pytest.TempPathFactory) -> Run:
+    if name not in _RUNS:
+        _RUNS[name] = run_world(scenario(name), tmp_path_factory.mktemp(name), name)
+    return _RUNS[name]
+
+
+def test_paper_scenarios_found() -> None:
+    assert len(PAPER_SCENARIOS) == 6
+
+
+@pytest.mark.parametrize("name", PAPER_SCENARIOS)
+def test_actors_where_configured(name: str, tmp_path_factory: pytest.TempPathFactory) -> None:
+    sc = scenario(name)
+    run = _run(name, tmp_path_factory)
+    first = run.snapshots[0]
+    assert first.time == 0.0
+    bus = first.role("bus")
+    assert bus is not None and bus.id == "bus"
+    assert bus.footprint.front.x == pytest.approx(sc.bus.depart_pos_m, abs=0.01)
+    assert bus.footprint.front.y == pytest.approx(-1.75)
+    assert bus.footprint.front.heading == pytest.approx(0.0)
+    assert bus.speed == pytest.approx(sc.bus.nominal_speed_mps)
+    assert (bus.footprint.length, bus.footprint.width) == (12.0, 2.55)
+    truck = first.role("truck")
+    assert truck is not None
+    assert truck.footprint.corners() == pytest.approx(TRUCK_CORNERS, abs=0.05)
+    # the truck stays parked: the same footprint at every step
+    for snap in run.snapshots:
+        assert snap.vehicles["truck"] == truck
+    if sc.car.present:
+        cars = [s.role("car") for s in run.snapshots if s.role("car") is not None]
+        assert cars, "the car never appeared"
+        appear = next(s.time for s in run.snapshots if s.role("car") is not None)
+        assert appear == pytest.approx(sc.car.depart_s)
+        for car in cars:
+            assert car.footprint.front.y == pytest.approx(1.75)  # westbound driving lane
+            assert abs(car.footprint.front.heading) == pytest.approx(math.pi)
+        assert cars[0].speed == pytest.approx(sc.car.speed_mps)
+        assert max(c.speed for c in cars) <= sc.car.speed_mps + 1e-9
+    else:
+        assert all(s.role("car") is None for s in run.snapshots)
+    assert run.teleports == 0
+    assert run.bus_route_length == pytest.approx(300.0)
+
+
+@pytest.mark.parametrize("name", PAPER_SCENARIOS)
+def test_pedestrian_walks_over_the_zebra(name: str,
+                                         tmp_path_factory: pytest.TempPathFactory) -> None:
+    sc = scenario(name)
+    run = _run(name, tmp_path_factory)
+    if not sc.pedestrian.present:
+        assert all(not s.persons for s in run.snapshots)
+        assert run.pedestrian_plan is None
+        return
+    plan = run.pedestrian_plan
+    tracks = [(s.time, s.persons["pedestrian"]) for s in run.snapshots if "pedestrian" in s.persons]
+    t0, p0 = tracks[0]
+    assert t0 == pytest.approx(plan.depart_s)
+    assert p0.position[0] == pytest.approx(sc.pedestrian.start_pos_m, abs=0.5)
+    assert -8.0 < p0.position[1] < -6.0  # on the south sidewalk, behind the truck
+    on = [t for t, p in tracks if p.on_crossing]
+    assert on, "the pedestrian never stepped onto the crossing"
+    # the configured time, or (paper scenarios: too far to make it) when it can get there
+    assert on[0] == pytest.approx(plan.crossing_time_s, abs=1.5)
+    assert all(run.roadmap.crossing.buffer(0.5).contains(_point(p))
+               for _, p in tracks if p.on_crossing)
+    after = [p for t, p in tracks if t > on[-1]]
+    assert after and after[-1].position[1] > 6.0, "the pedestrian did not reach the north side"
+    assert max(p.speed for _, p in tracks) == pytest.approx(sc.pedestrian.walking_speed_mps)
+
+
+def test_pedestrian_on_time_when_reachable(tmp_path: Path) -> None:
+    sc = scenario("s1_pedestrian", **{"pedestrian.steps_onto_crossing_s": 15.0,
+                                      "simulation.duration_s": 17.0})
+    run = run_world(sc, tmp_path)
+    assert not run.pedestrian_plan.late
+    on = [s.time for s in run.snapshots if s.persons.get("pedestrian") and
+          s.persons["pedestrian"].on_crossing]
+    assert on[0] == pytest.approx(15.0, abs=0.5)
+
+
+@pytest.mark.parametrize("name", ["s1_pedestrian", "s2_pedestrian", "s3_no_pedestrian"])
+def test_same_seed_same_snapshots(name: str, tmp_path: Path,
+                                  tmp_path_factory: pytest.TempPathFactory) -> None:
+    again = run_world(scenario(name), tmp_path, name)
+    assert again.snapshots == _run(name, tmp_path_factory).snapshots
+
+
+def _fresh_process_run(name: str, run_dir: str) -> list:
+    return run_world(scenario(name), Path(run_dir), name).snapshots
+
+
+def test_restart_in_process_matches_fresh_process(tmp_path: Path,
+                                                  tmp_path_factory: pytest.TempPathFactory) -> None:
+    ctx = multiprocessing.get_context("spawn")
+    with ctx.Pool(1) as pool:
+        fresh = pool.apply(_fresh_process_run, ("s2_pedestrian", str(tmp_path)))
+    assert fresh == _run("s2_pedestrian", tmp_path_factory).snapshots
+
+
+def test_bus_follows_commands(tmp_path: Path) -> None:
+    from sse_cosim.world.sumo import SumoWorld
+
+    sc = scenario("s1_no_pedestrian", **{"simulation.duration_s": 20.0})
+    dt = sc.simulation.step_length_s
+    with SumoWorld(sc, tmp_path, "cmd") as world:
+        assert world.last_commanded_speed is None
+        world.set_bus_speed(14.0)  # before departure: applies from the departure on
+        speeds = [world.step().bus_actual_speed for _ in range(30)]
+        assert world.last_commanded_speed == 14.0
+        # comfortable deceleration (3 m/s^2) from 20 m/s down to 14 m/s, then held
+        assert np.diff(speeds[:21]) == pytest.approx(-3.0 * dt * np.ones(20))
+        assert speeds[25:] == pytest.approx([14.0] * 5)
+        world.set_bus_speed(0.0, emergency=True)
+        braking = [world.step().bus_actual_speed for _ in range(5)]
+        assert np.diff([speeds[-1], *braking]) == pytest.approx(-7.0 * dt * np.ones(5))
+        world.set_bus_speed(20.0)
+        accel = [world.step().bus_actual_speed for _ in range(5)]
+        assert np.diff([braking[-1], *accel]) == pytest.approx(1.5 * dt * np.ones(5))
+        x0 = world.step().role("bus").footprint.front.x
+        assert world.bus_route_position == pytest.approx(x0)
+        assert world.time == pytest.approx(40 * dt)  # 41 steps, the first at t=0
+        with pytest.raises(ValueError):
+            world.set_bus_speed(-1.0)
+
+
+def test_bus_arrives(tmp_path: Path) -> None:
+    sc = scenario("s1_no_pedestrian", **{"simulation.duration_s": 16.0})
+    run = run_world(sc, tmp_path)
+    assert run.bus_arrived
+    assert run.snapshots[-1].role("bus") is None
+    assert run.snapshots[-1].bus_actual_speed is None
+
+
+def test_sumo_yields_to_pedestrian_on_crossing(tmp_path: Path) -> None:
+    # The pedestrian is on the crossing when a slow bus arrives: SUMO makes the bus wait.
+    sc = scenario("s1_pedestrian", **{"bus.depart_pos_m": 120.0, "bus.nominal_speed_mps": 5.0,
+                                      "simulation.duration_s": 25.0})
+    snaps = run_world(sc, tmp_path).snapshots
+    for s in snaps:
+        ped, bus = s.persons.get("pedestrian"), s.role("bus")
+        if ped is not None and bus is not None and ped.on_crossing and ped.position[1] > -3.5:
+            # while the pedestrian is on the bus's half of the crossing, the bus is not on it
+            assert not bus.footprint.polygon().intersects(_point(ped).buffer(0.3))
+    stopped = [s.time for s in snaps if s.role("bus") is not None and s.bus_actual_speed < 0.1]
+    assert stopped, "the bus never stopped for the pedestrian"
+
+
+def test_one_simulation_per_process(tmp_path: Path) -> None:
+    from sse_cosim.world.sumo import SumoWorld
+
+    sc = scenario("s1_no_pedestrian")
+    with SumoWorld(sc, tmp_path / "a", "first") as world:
+        world.step()
+        second = SumoWorld(sc, tmp_path / "b", "second")
+        with pytest.raises(SimulationError, match="already open"), second:
+            pass
+        world.step()
+    with SumoWorld(sc, tmp_path / "c", "third") as world:  # after closing, a new one starts
+        assert world.step().time == 0.0
+    with pytest.raises(SimulationError, match="not open"):
+        world.step()
+
+
+def test_libsumo_error_becomes_simulation_error(tmp_path: Path,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    from sse_cosim.world import sumo as sumo_module
+
+    def broken() -> None:
+        raise sumo_module.libsumo.TraCIException("boom")
+
+    sc = scenario("s1_no_pedestrian")
+    with (pytest.raises(SimulationError, match=r"s1_no_pedestrian: simulation failed: .*boom"),
+          sumo_module.SumoWorld(sc, tmp_path, "s1_no_pedestrian") as world):
+        world.step()
+        monkeypatch.setattr(sumo_module.libsumo, "simulationStep", broken)
+        world.step()
+    monkeypatch.undo()
+    assert not sumo_module.libsumo.isLoaded()  # closed on the way out
+
+
+def test_bad_actor_is_a_user_error_before_sumo_starts(tmp_path: Path) -> None:
+    from sse_cosim.world import sumo as sumo_module
+
+    sc = scenario("s1_pedestrian", **{"pedestrian.start_edge": "XX"})
+    world = sumo_module.SumoWorld(sc, tmp_path, "s1_pedestrian.toml")
+    with pytest.raises(UserError) as info, world:
+        pass
+    assert (info.value.source, info.value.field) == ("s1_pedestrian.toml", "pedestrian.start_edge")
+    assert not sumo_module.libsumo.isLoaded()
+    sc = scenario("s1_pedestrian", **{"truck.end_pos_m": 250.0})
+    world = sumo_module.SumoWorld(sc, tmp_path, "x")
+    with pytest.raises(UserError, match=r"truck\.end_pos_m"), world:
+        pass
+
+
+def test_sumo_version() -> None:
+    from sse_cosim.world.sumo import sumo_version
+
+    assert sumo_version().split(".")[0] == "1"
+
+
+def _point(person: PersonState) -> shapely.Point:
+    return shapely.Point(*person.position)
+
+
+def test_start_failure_is_a_simulation_error(tmp_path: Path,
+                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    from sse_cosim.world import sumo as sumo_module
+
+    def refuse(args: list[str]) -> None:
+        raise sumo_module.libsumo.TraCIException("cannot load")
+
+    sc = scenario("s1_no_pedestrian")
+    monkeypatch.setattr(sumo_module.libsumo, "start", refuse)
+    world = sumo_module.SumoWorld(sc, tmp_path, "s1_no_pedestrian")
+    with pytest.raises(SimulationError, match="SUMO did not start: cannot load"), world:
+        pass
+    monkeypatch.undo()
+    with sumo_module.SumoWorld(sc, tmp_path, "s1_no_pedestrian") as world:  # nothing left open
+        assert world.step().time == 0.0
