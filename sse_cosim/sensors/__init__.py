@@ -1,1 +1,56 @@
-"""sensors."""
+"""Sensor layer: pure geometry of what each sensor sees and measures at one step.
+
+- :mod:`.geometry`: sectors, vectorized in-sector and line-of-sight tests, shadows, regions.
+- :mod:`.spec`: sensor specs from the scenario and their world poses on their carriers.
+- :mod:`.measurement`: y = H p + v as strips (paper eqs. senmodel and strip).
+- :mod:`.observe`: every sensor's observation of a snapshot.
+"""
+
+from sse_cosim.sensors.geometry import (
+    Boxes,
+    box_distances,
+    cached_sector_polygon,
+    clear_mask,
+    in_sector,
+    line_of_sight,
+    sector_mask,
+    sector_polygon,
+    shadow_polygons,
+    sight_masks,
+    visibility_regions,
+)
+from sse_cosim.sensors.measurement import Detection, draw_noise, measure, measurement_matrix
+from sse_cosim.sensors.observe import SensorObservation, observe, seen_mask
+from sse_cosim.sensors.spec import (
+    NoiseKind,
+    SensorSpec,
+    find_carrier,
+    locate,
+    specs_from_scenario,
+)
+
+__all__ = [
+    "Boxes",
+    "Detection",
+    "NoiseKind",
+    "SensorObservation",
+    "SensorSpec",
+    "box_distances",
+    "cached_sector_polygon",
+    "clear_mask",
+    "draw_noise",
+    "find_carrier",
+    "in_sector",
+    "line_of_sight",
+    "locate",
+    "measure",
+    "measurement_matrix",
+    "observe",
+    "sector_mask",
+    "sector_polygon",
+    "seen_mask",
+    "shadow_polygons",
+    "sight_masks",
+    "specs_from_scenario",
+    "visibility_regions",
+]
