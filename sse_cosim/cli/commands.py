@@ -43,8 +43,8 @@ def run(scenario: Path, out_dir: Path | None, scene_times: tuple[float, ...],
     position set), summary.json (speeds, detections, set sizes, violations), scenario.json
     (the resolved scenario) and plots (speed, set areas, scenes).
     """
-    from sse_cosim.runner.run import run_scenario_file
     from sse_cosim.runner.parameters import parse_assignment
+    from sse_cosim.runner.run import run_scenario_file
 
     out_dir = _writable_folder(out_dir or Path("runs") / scenario.stem, "--out")
     values = dict(parse_assignment(text, "--set") for text in overrides)

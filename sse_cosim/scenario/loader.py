@@ -131,7 +131,9 @@ def _read_toml(path: Path) -> dict[str, Any]:
         with path.open("rb") as fh:
             return tomllib.load(fh)
     except tomllib.TOMLDecodeError as exc:
-        raise UserError(str(path), "syntax", str(exc), "fix the TOML syntax at that place") from None
+        raise UserError(
+            str(path), "syntax", str(exc), "fix the TOML syntax at that place"
+        ) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise UserError(str(path), "", f"cannot be read ({exc})", "check the file") from None
 

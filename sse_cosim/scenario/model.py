@@ -59,7 +59,8 @@ class Truck(StrictModel):
     edge: str = Field("WC", description="Edge it is parked on (the bus's side).")
     lane_index: int = Field(1, ge=0, description="Lane index on that edge (1 = parking strip).")
     end_pos_m: NonNegativeFloat = Field(
-        194.0, description="Position of its front along the edge (m): a few metres before the crossing."
+        194.0,
+        description="Position of its front along the edge (m): a few metres before the crossing.",
     )
     length_m: PositiveFloat = Field(10.0, description="Truck length (m).")
     width_m: PositiveFloat = Field(2.5, description="Truck width (m).")
@@ -83,7 +84,7 @@ class Pedestrian(StrictModel):
         186.0, description="Start position along that edge (m), behind the truck."
     )
     end_edge: str = Field("CW", description="Edge whose sidewalk it walks to (across the zebra).")
-    end_pos_m: NonNegativeFloat = Field(196.0, description="Arrival position along that edge (m).")
+    end_pos_m: NonNegativeFloat = Field(4.0, description="Arrival position along that edge (m).")
     walking_speed_mps: PositiveFloat = Field(1.2, le=3.0, description="Walking speed (m/s).")
     steps_onto_crossing_s: NonNegativeFloat = Field(
         9.0, description="Time at which it reaches the crossing (s); its departure is derived."
@@ -97,7 +98,9 @@ class SensorMount(StrictModel):
         "a vehicle's reference point is its front bumper's centre, a unit's its position."
     )
     left_m: float = Field(0.0, description="Offset to the carrier's left (m).")
-    yaw_deg: float = Field(0.0, description="Boresight relative to the carrier's heading (deg, CCW).")
+    yaw_deg: float = Field(
+        0.0, description="Boresight relative to the carrier's heading (deg, CCW)."
+    )
 
 
 class Sensor(StrictModel):
@@ -132,8 +135,14 @@ class Estimator(StrictModel):
     max_pedestrian_speed_mps: PositiveFloat = Field(
         2.5, description="Speed bound (m/s): the process noise |dx|, |dy| <= bound * step length."
     )
+    position_jitter_m: NonNegativeFloat = Field(
+        0.5,
+        description="How far the simulated position may stray from a speed-bounded path (m); "
+        "covers SUMO's pedestrian jumps at lane transitions (up to 0.7 m).",
+    )
     max_velocity_change_mps: PositiveFloat = Field(
-        5.0, description="Bound on a velocity component's change per step (m/s), constant-velocity only."
+        5.0,
+        description="Bound on a velocity component's change per step (m/s); constant velocity.",
     )
     gain_method: str = Field("volume", description="Proposition 1 gain method (sets.gains).")
     fusion_method: str = Field("strips", description="Proposition 2 fusion method (sets.fusion).")
@@ -161,7 +170,8 @@ class Controller(StrictModel):
     slow_factor: float = Field(0.5, gt=0, le=1, description="Slow speed / nominal.")
     very_slow_factor: float = Field(0.2, gt=0, le=1, description="Very slow speed / nominal.")
     crossing_horizon_m: PositiveFloat = Field(
-        60.0, description="The crossing counts as 'ahead' within this distance of the bus front (m)."
+        60.0,
+        description="The crossing counts as 'ahead' within this distance of the bus front (m).",
     )
     interest_radius_m: PositiveFloat = Field(
         15.0, description="Sidewalk and crossing within this distance of the crossing matter (m)."
@@ -199,7 +209,9 @@ class Scenario(StrictModel):
     truck: Truck = Field(default_factory=Truck)
     car: ConnectedCar = Field(default_factory=ConnectedCar)
     pedestrian: Pedestrian = Field(default_factory=Pedestrian)
-    rsus: dict[str, RoadSideUnit] = Field(default_factory=dict, description="Road-side units by id.")
+    rsus: dict[str, RoadSideUnit] = Field(
+        default_factory=dict, description="Road-side units by id."
+    )
     sensors: dict[str, Sensor] = Field(default_factory=dict, description="Sensors by name.")
     v2x: V2X = Field(default_factory=V2X)
     estimator: Estimator = Field(default_factory=Estimator)

@@ -1,0 +1,126 @@
+"""The pedestrian's motion model (paper eq. ``sysmodel``): x_{k+1} = F x_k + n_k, n_k in Z_Q.
+
+Two state models:
+
+- ``position``: x = (p_x, p_y), F = I, n_k in the box |n_i| <= v_max * dt. Sound whenever
+  the pedestrian moves at most v_max * dt in one step (the box holds that disc).
+- ``constant-velocity``: x = (p, v) with v_k := (p_{k+1} - p_k) / dt (the displacement
+  over the next step, so the position row of F is exact), F = [[I, dt I], [0, I]], and the
+  velocity change per step bounded by ``max_velocity_change_mps`` per axis. The speed bound
+  |v| <= v_max is applied every step as pseudo-measurement strips (always true, so sound).
+
+Sensors measure the position only: ``position_matrix`` C (2, n) maps a state to it.
+
+Jitter. SUMO's pedestrian models jump by up to 0.7 m in one step where a pedestrian moves
+from one lane to the next (walking area to crossing), faster than any speed bound that is
+useful. We therefore model the simulated position as p = s + e: a path s that obeys the
+bounds above plus a jitter ||e|| <= eps. Every node estimates s, so its strips widen by
+eps * ||h|| (|h.e| <= eps ||h||), and the position set it reports for p is C Z (+) box(eps),
+which holds the disc of radius eps. Any admissible path s lies in every node's set, hence
+in the fused one. ``tests/world`` checks that SUMO's trajectories admit such a path.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sse_cosim.scenario.model import Estimator
+from sse_cosim.sets import Strips, Zonotope, intersect_strips
+
+
+@dataclass(frozen=True)
+class MotionModel:
+    """F (n, n), process-noise zonotope Q (dimension n), position matrix C (2, n)."""
+
+    transition: np.ndarray
+    process_noise: Zonotope
+    position_matrix: np.ndarray
+    state_bounds: Strips | None
+    max_speed: float
+    jitter: float = 0.0
+
+    @property
+    def dim(self) -> int:
+        return int(self.transition.shape[0])
+
+    @classmethod
+    def from_config(cls, config: Estimator, step_length: float) -> MotionModel:
+        """The model named by ``config.state_model`` for steps of ``step_length`` seconds."""
+        v_max = config.max_pedestrian_speed_mps
+        if config.state_model == "position":
+            return cls(
+                transition=np.eye(2),
+                process_noise=Zonotope(np.zeros(2), np.eye(2) * v_max * step_length),
+                position_matrix=np.eye(2),
+                state_bounds=None,
+                max_speed=v_max,
+                jitter=config.position_jitter_m,
+            )
+        transition = np.block([[np.eye(2), step_length * np.eye(2)], [np.zeros((2, 2)), np.eye(2)]])
+        noise = np.zeros((4, 2))
+        noise[2:, :] = np.eye(2) * config.max_velocity_change_mps
+        velocity_rows = np.hstack([np.zeros((2, 2)), np.eye(2)])
+        return cls(
+            transition=transition,
+            process_noise=Zonotope(np.zeros(4), noise),
+            position_matrix=np.hstack([np.eye(2), np.zeros((2, 2))]),
+            state_bounds=Strips(velocity_rows, np.zeros(2), np.full(2, v_max)),
+            max_speed=v_max,
+            jitter=config.position_jitter_m,
+        )
+
+    def predict(self, estimate: Zonotope, steps: int = 1) -> Zonotope:
+        """Predicted state set after ``steps`` steps: F Z (+) Q, repeated (Definition 1)."""
+        for _ in range(steps):
+            estimate = self.transition @ estimate + self.process_noise
+        return estimate
+
+    def position(self, estimate: Zonotope) -> Zonotope:
+        """The set of the simulated 2-D position: C Z (+) box(jitter)."""
+        path = self.position_matrix @ estimate
+        if self.jitter == 0.0:
+            return path
+        return path + Zonotope(np.zeros(2), np.eye(2) * self.jitter)
+
+    def path_strips(self, measured: Strips) -> Strips:
+        """Position strips about p turned into strips about the path s (widened by the jitter)."""
+        widened = measured.radii + self.jitter * np.linalg.norm(measured.normals, axis=1)
+        return Strips(measured.normals, measured.values, widened)
+
+    def initial_set(self, strips: Strips, gain_method: str) -> Zonotope:
+        """A first estimate from path strips (at least two with independent normals).
+
+        The first two independent strips intersect exactly in the parallelogram
+        <H^-1 y, H^-1 diag(r)>; the others are intersected with it by Proposition 1.
+        Velocity components (constant-velocity model) start as the box |v| <= v_max.
+        """
+        first, second = _independent_pair(strips.normals)
+        pair = strips.select(np.isin(np.arange(len(strips)), [first, second]))
+        inverse = np.linalg.inv(pair.normals)
+        position = Zonotope(inverse @ pair.values, inverse * pair.radii[np.newaxis, :])
+        rest = np.ones(len(strips), dtype=bool)
+        rest[[first, second]] = False
+        if rest.any():
+            position = intersect_strips(position, strips.select(rest), gain_method)
+        if self.dim == 2:
+            return position
+        velocity_box = np.eye(2) * self.max_speed
+        center = np.concatenate([position.center, np.zeros(2)])
+        generators = np.block(
+            [
+                [position.generators, np.zeros((2, 2))],
+                [np.zeros((2, position.n_generators)), velocity_box],
+            ]
+        )
+        return Zonotope(center, generators)
+
+
+def _independent_pair(normals: np.ndarray, tol: float = 1e-6) -> tuple[int, int]:
+    """Indices of the first two rows of ``normals`` (m, 2) that are not parallel."""
+    for i in range(len(normals)):
+        for j in range(i + 1, len(normals)):
+            if abs(np.linalg.det(normals[[i, j]])) > tol:
+                return i, j
+    raise ValueError("a track needs two position strips with independent normals")

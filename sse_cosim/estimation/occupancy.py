@@ -1,0 +1,145 @@
+"""Where pedestrians can be, refined with negative information (polygons, not zonotopes).
+
+A sensor that sees a region V and does not detect a pedestrian proves the pedestrian is not
+in V (every pedestrian inside a visible region is detected). That knowledge is not convex,
+so the zonotopes (sound on their own) ignore it, and the bus keeps polygons instead:
+
+- :class:`OccupancyTracker`, per *known* pedestrian, a region R_k for its path s;
+- :class:`UnobservedArea`, where a pedestrian *nobody has detected* may be.
+
+Both reason about the path s of :mod:`sse_cosim.estimation.motion` (p = s + e, ||e|| <= eps,
+s moving at most v dt per step): if p is in a set A, then s is in A (+) disc(eps). So
+
+    U_k = (U_{k-1} (+) disc(v dt)) ∩ ((walkable minus views_k) (+) disc(eps)),
+
+and the pedestrian itself is in (U_k (+) disc(eps)) ∩ walkable, minus what the bus sees now.
+Shared views arrive ``latency`` steps late: U is kept exactly up to step k - latency (when
+those views were taken) and carried to step k with the bus's own views. Every buffer uses
+polygons that circumscribe their discs, so each step over-approximates.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+
+from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.sets import Zonotope
+
+EMPTY = shapely.Polygon()
+QUAD_SEGMENTS = 2  # polygon arcs: 2 segments per quarter circle
+ARC_SAFETY = 1.0 / np.cos(np.pi / (4 * QUAD_SEGMENTS))  # makes those arcs circumscribe the disc
+
+
+def dilate(region: shapely.Geometry, distance: float) -> shapely.Geometry:
+    """A polygon containing region (+) disc(distance)."""
+    if distance <= 0 or region.is_empty:
+        return region
+    return region.buffer(ARC_SAFETY * distance, quad_segs=QUAD_SEGMENTS)
+
+
+@dataclass(frozen=True)
+class ClearRegion:
+    """A region some node saw, ``age`` steps ago, without the pedestrian in question."""
+
+    region: shapely.Geometry
+    age: int
+
+
+class OccupancyTracker:
+    """The bus's refined region of every known pedestrian (one polygon each)."""
+
+    def __init__(self, model: MotionModel, step_length: float) -> None:
+        self.model = model
+        self.reach = model.max_speed * step_length
+        self._paths: dict[str, shapely.Geometry] = {}
+        self._step: int | None = None
+
+    def update(
+        self,
+        step: int,
+        fused: Mapping[str, Zonotope],
+        clear: Mapping[str, Sequence[ClearRegion]],
+    ) -> dict[str, shapely.Geometry]:
+        """Where each pedestrian of ``fused`` can be at ``step`` (its position, with jitter)."""
+        elapsed = 0 if self._step is None else step - self._step
+        eps = self.model.jitter
+        paths: dict[str, shapely.Geometry] = {}
+        regions: dict[str, shapely.Geometry] = {}
+        for person_id, estimate in fused.items():
+            path = zonotope_polygon(self.model.position_matrix @ estimate)
+            previous = self._paths.get(person_id)
+            if previous is not None:
+                path = shapely.intersection(dilate(previous, self.reach * elapsed), path)
+            now_clear = [c.region for c in clear.get(person_id, ()) if c.age == 0]
+            for item in clear.get(person_id, ()):
+                # p was outside item.region ``age`` steps ago, within eps + reach*age of s now.
+                slack = eps + self.reach * item.age
+                outside = shapely.difference(dilate(path, slack), item.region)
+                path = shapely.intersection(path, dilate(outside, slack))
+            paths[person_id] = path
+            region = dilate(path, eps)
+            regions[person_id] = shapely.difference(region, shapely.union_all(now_clear)) \
+                if now_clear else region
+        self._paths = paths
+        self._step = step
+        return regions
+
+
+class UnobservedArea:
+    """Walkable area where an undetected pedestrian may be, as the bus knows it."""
+
+    def __init__(self, walkable: shapely.Geometry, model: MotionModel, step_length: float,
+                 latency_steps: int) -> None:
+        self.walkable = walkable
+        self.model = model
+        self.reach = model.max_speed * step_length  # how far a path moves in one step
+        self.latency = latency_steps
+        self._base = dilate(walkable, model.jitter)  # path region at step self._base_step
+        self._base_step: int | None = None
+        self._own: dict[int, shapely.Geometry] = {}  # the bus's views not yet in the base
+
+    def update(
+        self, step: int, own_view: shapely.Geometry, shared_views: Sequence[shapely.Geometry]
+    ) -> shapely.Geometry:
+        """Where an undetected pedestrian may be at ``step``.
+
+        ``own_view`` is what the bus sees now; ``shared_views`` what other nodes saw at
+        ``step - latency`` (the messages delivered now).
+        """
+        self._own[step] = own_view
+        target = step - self.latency
+        if self._base_step is None:
+            self._base_step = target - 1
+        while self._base_step < target:
+            self._base_step += 1
+            views = [self._own.pop(self._base_step, EMPTY)]
+            if self._base_step == target:
+                views += list(shared_views)
+            self._base = self._advance(self._base, views)
+        current = self._base
+        for later in range(target + 1, step + 1):
+            current = self._advance(current, [self._own.get(later, EMPTY)])
+        return shapely.difference(
+            shapely.intersection(dilate(current, self.model.jitter), self.walkable), own_view
+        )
+
+    def _advance(
+        self, path: shapely.Geometry, views: Sequence[shapely.Geometry]
+    ) -> shapely.Geometry:
+        """One step of the path region: move, then keep what is near unseen walkable ground."""
+        seen = [v for v in views if not v.is_empty]
+        unseen = shapely.difference(self.walkable, shapely.union_all(seen)) if seen \
+            else self.walkable
+        return shapely.intersection(dilate(path, self.reach), dilate(unseen, self.model.jitter))
+
+
+def zonotope_polygon(position_set: Zonotope) -> shapely.Geometry:
+    """A 2-D zonotope as a shapely geometry (a segment or point when degenerate)."""
+    vertices = position_set.vertices()
+    if len(vertices) >= 3:
+        return shapely.Polygon(vertices)
+    return shapely.MultiPoint(vertices).convex_hull

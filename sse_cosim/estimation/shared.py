@@ -1,0 +1,38 @@
+"""The bus's second fusion level: its own and the received estimates (Proposition 2)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.observer import EstimatorSettings, Track
+from sse_cosim.sets import Zonotope, fuse
+
+
+def fuse_at_bus(
+    own: Mapping[str, Track],
+    received: Mapping[str, Mapping[str, Zonotope]],
+    fusion_method: str,
+    settings: EstimatorSettings,
+    model: MotionModel,
+) -> dict[str, Zonotope]:
+    """One fused state set per pedestrian known to the bus or to any sender.
+
+    Every input contains the pedestrian, so their intersection does, and each fusion method
+    over-approximates that intersection: the fused set is sound. Order reduction may enlarge
+    it, so the bus keeps whichever is smaller in position area: the reduced fusion or the
+    smallest input. The fused set is therefore never larger than the smallest set it fuses.
+    """
+    fused: dict[str, Zonotope] = {}
+    for person_id in sorted(own.keys() | received.keys()):
+        inputs = [own[person_id].estimate] if person_id in own else []
+        inputs += [received[person_id][s] for s in sorted(received.get(person_id, {}))]
+        if len(inputs) == 1:
+            fused[person_id] = inputs[0]
+            continue
+        reduced = fuse(inputs, fusion_method).reduce(
+            settings.max_generators, settings.reduction_method
+        )
+        fused[person_id] = min([reduced, *inputs], key=lambda z: model.position(z).volume())
+    return fused
+

@@ -1,0 +1,98 @@
+"""V2X sharing: nodes send the bus their estimates and visible regions, late or never.
+
+A message leaves a node at step k and arrives at step k + latency unless it is dropped
+(probability ``drop_probability``, drawn from the scenario's seeded generator) or the sender
+is farther than ``range_m`` from the bus when sending. The bus keeps the newest message per
+sender; a stale estimate is predicted forward to the current step before it is fused. Visible
+regions are used at the step they were seen (:mod:`sse_cosim.estimation.occupancy`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+
+from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.occupancy import ClearRegion
+from sse_cosim.scenario.model import V2X
+from sse_cosim.sets import Zonotope
+
+
+@dataclass(frozen=True)
+class Message:
+    """What a node shares: its estimates (state sets by pedestrian id) and what it sees.
+
+    ``detected`` names the pedestrians its sensors saw when sending: for any other
+    pedestrian, ``visible_region`` is a place it was not (negative information).
+    """
+
+    sender: str
+    sent_step: int
+    estimates: dict[str, Zonotope]
+    visible_region: shapely.Geometry
+    detected: frozenset[str] = frozenset()
+
+
+@dataclass(frozen=True)
+class SharedPicture:
+    """Received information brought to the current step."""
+
+    estimates: dict[str, dict[str, Zonotope]]  # pedestrian id -> sender -> state set
+    regions: dict[str, shapely.Geometry]  # sender -> visible region when sent
+    ages: dict[str, int]  # sender -> steps since it sent
+    detected: dict[str, frozenset[str]]  # sender -> pedestrians it saw
+
+    def clear_of(self, person_id: str) -> list[ClearRegion]:
+        """Regions seen by senders that did not detect ``person_id`` (negative information)."""
+        return [
+            ClearRegion(region, self.ages[sender])
+            for sender, region in self.regions.items()
+            if person_id not in self.detected[sender]
+        ]
+
+
+class V2XLink:
+    """Every node's link to the bus, with the scenario's range, latency and losses."""
+
+    def __init__(self, config: V2X, rng: np.random.Generator) -> None:
+        self.config = config
+        self.rng = rng
+        self._in_flight: list[tuple[int, Message]] = []
+        self.latest: dict[str, Message] = {}
+
+    def send(self, message: Message, distance_to_bus: float) -> bool:
+        """Queue ``message``; False if out of range or dropped."""
+        if distance_to_bus > self.config.range_m:
+            return False
+        if self.rng.random() < self.config.drop_probability:
+            return False
+        arrival = message.sent_step + self.config.latency_steps
+        self._in_flight.append((arrival, message))
+        return True
+
+    def deliver(self, step: int) -> list[Message]:
+        """Hand the bus every message due by ``step`` (returned); it keeps the newest per sender."""
+        due = [m for arrival, m in self._in_flight if arrival <= step]
+        self._in_flight = [(a, m) for a, m in self._in_flight if a > step]
+        for message in due:
+            kept = self.latest.get(message.sender)
+            if kept is None or message.sent_step > kept.sent_step:
+                self.latest[message.sender] = message
+        return due
+
+    def picture(self, step: int, model: MotionModel) -> SharedPicture:
+        """The newest message of every sender, predicted to ``step``."""
+        estimates: dict[str, dict[str, Zonotope]] = {}
+        for sender, message in sorted(self.latest.items()):
+            for person_id, estimate in message.estimates.items():
+                age = step - message.sent_step
+                estimates.setdefault(person_id, {})[sender] = model.predict(estimate, age)
+        latest = sorted(self.latest.items())
+        return SharedPicture(
+            estimates,
+            regions={sender: m.visible_region for sender, m in latest},
+            ages={sender: step - m.sent_step for sender, m in latest},
+            detected={sender: m.detected for sender, m in latest},
+        )

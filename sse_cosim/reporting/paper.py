@@ -1,0 +1,180 @@
+"""The paper's Table I and Fig. 7 figures, built from finished run folders.
+
+Everything here reads run folders (``summary.json``, ``trace.csv``, ``scenario.json``), so
+``sse-cosim batch`` and ``sse-cosim report`` produce the same tables from the same runs.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from sse_cosim.files import atomic_path, write_text_atomic
+from sse_cosim.reporting import plots
+from sse_cosim.reporting.outputs import SCENARIO, SUMMARY, TRACE
+
+# Paper Table I: average speed of the ego vehicle (nominal 20).
+PAPER_TABLE1 = {
+    ("S1", True): 13.0, ("S1", False): 15.0,
+    ("S2", True): 13.1, ("S2", False): 20.0,
+    ("S3", True): 13.2, ("S3", False): 20.0,
+}
+# Paper Fig. 7: zonotope areas when the shared estimates are first fused (with pedestrian).
+PAPER_FIG7 = {
+    "S2": {"bus": 50.3, "car": 123.1, "fused": 94.0},
+    "S3": {"bus": 100.5, "rsu1": 227.5, "rsu2": 227.5, "fused": 170.0},
+}
+DIFFERENCE_NOTE = 0.10  # relative difference above which table1.md flags a figure
+
+
+@dataclass(frozen=True)
+class RunFolder:
+    """A finished run read back from disk."""
+
+    path: Path
+    summary: dict[str, Any]
+    scenario: dict[str, Any]
+
+    @property
+    def name(self) -> str:
+        return str(self.summary["scenario"])
+
+    @property
+    def pedestrian(self) -> bool:
+        return bool(self.summary["pedestrian"])
+
+    @property
+    def label(self) -> str:
+        return f"{self.name} {'with' if self.pedestrian else 'without'} pedestrian"
+
+    def trace(self) -> pd.DataFrame:
+        return pd.read_csv(self.path / TRACE)
+
+
+def read_run_folders(folders: Sequence[Path]) -> list[RunFolder]:
+    """Every folder among ``folders`` (searched recursively) that holds a finished run."""
+    runs = []
+    for root in folders:
+        for summary_path in sorted(Path(root).rglob(SUMMARY)):
+            folder = summary_path.parent
+            if not (folder / SCENARIO).is_file():
+                continue
+            runs.append(RunFolder(
+                folder,
+                json.loads(summary_path.read_text(encoding="utf-8")),
+                json.loads((folder / SCENARIO).read_text(encoding="utf-8")),
+            ))
+    return runs
+
+
+def table1(runs: Sequence[RunFolder]) -> pd.DataFrame:
+    """One row per paper scenario run: our average speed beside the paper's."""
+    rows = []
+    for run in sorted(runs, key=lambda r: (r.name, not r.pedestrian)):
+        s = run.summary
+        nodes = s["nodes"]
+        paper = PAPER_TABLE1.get((run.name, run.pedestrian))
+        first = s["first_detection"].get("fused", {})
+        rows.append({
+            "scenario": run.name,
+            "shared_awareness": len(nodes) > 1,
+            "pedestrian": run.pedestrian,
+            "sensors": " + ".join(_node_label(n) for n in nodes),
+            "average_speed_mps": round(s["average_speed_mps"], 2),
+            "paper_average_speed": paper,
+            "nominal_speed_mps": run.scenario["bus"]["nominal_speed_mps"],
+            "first_detection_bus_to_crossing_m": _round(first.get("bus_distance_to_crossing_m")),
+            "min_distance_bus_pedestrian_m": _round(s["min_distance_bus_pedestrian_m"]),
+            "containment_violations": s["containment_violations"],
+            "collisions": s["collisions"],
+        })
+    return pd.DataFrame(rows)
+
+
+def fig7(runs: Sequence[RunFolder]) -> pd.DataFrame:
+    """Set areas at the first shared fusion, beside the paper's Fig. 7 values."""
+    rows = []
+    for run in runs:
+        shared = run.summary.get("first_shared_fusion")
+        if not run.pedestrian or not shared:
+            continue
+        paper = PAPER_FIG7.get(run.name, {})
+        areas = {**shared["input_areas_m2"], "fused": shared["fused_area_m2"]}
+        for node, area in areas.items():
+            rows.append({"scenario": run.name, "t": shared["t"], "set": node,
+                         "area_m2": round(area, 2), "paper_area": paper.get(node)})
+    return pd.DataFrame(rows)
+
+
+def write_paper_report(out_dir: Path, runs: Sequence[RunFolder]) -> list[Path]:
+    """``table1.csv``/``.md``, ``fig7_set_sizes.csv``, combined speed and set-size figures."""
+    written = []
+    table = table1(runs)
+    if not table.empty:
+        written.append(_csv(table, out_dir / "table1.csv"))
+        written.append(write_text_atomic(out_dir / "table1.md", table1_markdown(table)))
+        written.append(plots.save_figure(_speed_panels(runs), out_dir / "speed_profiles.png"))
+    sizes = fig7(runs)
+    if not sizes.empty:
+        written.append(_csv(sizes, out_dir / "fig7_set_sizes.csv"))
+        figure = plots.set_size_bars(sizes)
+        written.append(plots.save_figure(figure, out_dir / "fig7_set_sizes.png"))
+    return written
+
+
+def table1_markdown(table: pd.DataFrame) -> str:
+    """Table I as Markdown, with a note wherever our figure differs from the paper's."""
+    header = ("| Scenario | Shared awareness | Pedestrian | Sensors | Average speed (m/s) "
+              "| Paper | First detection: bus to crossing (m) | Min. distance (m) "
+              "| Violations | Collisions |\n|---|---|---|---|---|---|---|---|---|---|\n")
+    lines, notes = [], []
+    for row in table.itertuples(index=False):
+        tick = lambda flag: "✓" if flag else "–"  # noqa: E731
+        lines.append(
+            f"| {row.scenario} | {tick(row.shared_awareness)} | {tick(row.pedestrian)} "
+            f"| {row.sensors} | {row.average_speed_mps:.1f} | {_fmt(row.paper_average_speed)} "
+            f"| {_fmt(row.first_detection_bus_to_crossing_m)} "
+            f"| {_fmt(row.min_distance_bus_pedestrian_m)} "
+            f"| {row.containment_violations} | {row.collisions} |"
+        )
+        paper = row.paper_average_speed
+        if paper is not None and abs(row.average_speed_mps - paper) > DIFFERENCE_NOTE * paper:
+            notes.append(
+                f"- {row.scenario} {'with' if row.pedestrian else 'without'} pedestrian: "
+                f"{row.average_speed_mps:.1f} m/s against the paper's {paper:.1f} m/s."
+            )
+    text = "# Table I: average bus speed\n\n" + header + "\n".join(lines) + "\n"
+    if notes:
+        text += ("\nWhere our figures differ from the paper's by more than "
+                 f"{DIFFERENCE_NOTE:.0%} (see `docs/results.md` for why):\n\n"
+                 + "\n".join(notes) + "\n")
+    return text
+
+
+def _speed_panels(runs: Sequence[RunFolder]):
+    with_ped = {r.label: r.trace() for r in sorted(runs, key=lambda r: r.name) if r.pedestrian}
+    without = {r.label: r.trace() for r in sorted(runs, key=lambda r: r.name) if not r.pedestrian}
+    return plots.speed_panels(with_ped, without)
+
+
+def _csv(frame: pd.DataFrame, target: Path) -> Path:
+    with atomic_path(target) as tmp:
+        frame.to_csv(tmp, index=False)
+    return target
+
+
+def _node_label(node: str) -> str:
+    return {"bus": "local sensor", "car": "connected vehicle"}.get(node, f"road-side unit {node}")
+
+
+def _round(value) -> float | None:
+    return None if value is None else round(float(value), 1)
+
+
+def _fmt(value) -> str:
+    return "–" if value is None or value != value else f"{value:.1f}"

@@ -1,0 +1,178 @@
+"""Figures: speed profiles (paper Fig. 6), set areas, scene snapshots (Figs. 5 and 7)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import shapely
+from matplotlib.figure import Figure
+
+from sse_cosim.files import atomic_path
+from sse_cosim.reporting.recorder import SceneFrame
+from sse_cosim.world.roadmap import RoadMap
+
+NODE_COLORS = {"bus": "tab:blue", "car": "tab:orange", "fused": "black"}
+RSU_COLORS = ["tab:green", "tab:cyan", "tab:olive", "tab:pink"]
+
+
+def save_figure(fig: Figure, target: Path) -> Path:
+    """Write ``fig`` to ``target`` atomically and close it."""
+    with atomic_path(target) as tmp:
+        fig.savefig(tmp, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+    return target
+
+
+def node_color(node: str, order: Sequence[str] = ()) -> str:
+    """A stable colour per node: bus blue, car orange, fused black, units in turn."""
+    if node in NODE_COLORS:
+        return NODE_COLORS[node]
+    others = [n for n in order if n not in NODE_COLORS] or [node]
+    index = others.index(node) if node in others else 0
+    return RSU_COLORS[index % len(RSU_COLORS)]
+
+
+def speed_profile(traces: Mapping[str, pd.DataFrame], title: str) -> Figure:
+    """Actual (solid) and commanded (dotted) bus speed over time, one colour per run."""
+    fig, ax = plt.subplots(figsize=(8, 4))
+    for i, (label, trace) in enumerate(traces.items()):
+        color = f"C{i}"
+        ax.plot(trace["t"], trace["bus_speed"], color=color, label=f"{label}")
+        ax.plot(trace["t"], trace["commanded_speed"], color=color, linestyle=":", linewidth=1)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("bus speed (m/s)")
+    ax.set_title(title)
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend(title="solid: actual, dotted: commanded", fontsize=8)
+    return fig
+
+
+def set_areas(trace: pd.DataFrame, nodes: Sequence[str], title: str) -> Figure:
+    """Area of every node's position set and of the fused set over time (log scale)."""
+    fig, ax = plt.subplots(figsize=(8, 4))
+    for node in [*nodes, "fused"]:
+        column = f"{node}_area"
+        if column in trace and trace[column].notna().any():
+            style = "-" if node == "fused" else "--"
+            ax.plot(trace["t"], trace[column], style, color=node_color(node, nodes), label=node)
+    ax.set_yscale("log")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("position set area (m²)")
+    ax.set_title(title)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    return fig
+
+
+def scene(frame: SceneFrame, roadmap: RoadMap, nodes: Sequence[str], title: str) -> Figure:
+    """Footprints, fields of view, shadows, strips, local and fused zonotopes at one time."""
+    fig, ax = plt.subplots(figsize=(10, 5))
+    _fill(ax, roadmap.sidewalks, "0.85", "sidewalk")
+    _fill(ax, roadmap.crossing, "w", "zebra", hatch="||")
+    for _name, (node, visible, occluded) in frame.sectors.items():
+        color = node_color(node, nodes)
+        _fill(ax, visible, color, None, alpha=0.12)
+        _fill(ax, occluded, "tab:red", None, alpha=0.18)
+    _fill(ax, frame.unobserved, "none", "unobserved walkable area", hatch="xxx")
+    for role, polygon in frame.footprints.items():
+        _fill(ax, polygon, {"bus": "tab:blue", "truck": "tab:red"}.get(role, "gold"), role,
+              alpha=0.8)
+    view = _view_box(frame)
+    for node, normal, value, radius in frame.strips:
+        _draw_strip(ax, normal, value, radius, view, node_color(node, nodes))
+    for node, zonotope in frame.local_sets.items():
+        _outline(ax, zonotope.vertices(), node_color(node, nodes), f"{node} set", "--")
+    if frame.fused_set is not None:
+        _outline(ax, frame.fused_set.vertices(), "black", "fused set", "-")
+    if frame.truth is not None:
+        ax.plot(*frame.truth, "s", color="tab:red", markersize=6, label="pedestrian (truth)")
+    ax.set_xlim(view[0], view[2])
+    ax.set_ylim(view[1], view[3])
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(f"{title}, t = {frame.time:.1f} s")
+    handles, labels = ax.get_legend_handles_labels()
+    unique = dict(zip(labels, handles, strict=True))
+    ax.legend(unique.values(), unique.keys(), fontsize=7, loc="upper left", ncol=3)
+    return fig
+
+
+def _view_box(frame: SceneFrame) -> tuple[float, float, float, float]:
+    """A window around the bus and the crossing area."""
+    bus = frame.footprints.get("bus")
+    x0 = (bus.bounds[0] - 5.0) if bus is not None else 120.0
+    x1 = max(x0 + 60.0, 225.0)
+    return (x0, -14.0, x1, 14.0)
+
+
+def _fill(ax, geometry, color, label, alpha: float = 1.0, hatch: str | None = None) -> None:
+    if geometry is None or geometry.is_empty:
+        return
+    for polygon in getattr(geometry, "geoms", [geometry]):
+        if isinstance(polygon, shapely.Polygon):
+            x, y = polygon.exterior.xy
+            ax.fill(x, y, facecolor=color, alpha=alpha, label=label, hatch=hatch,
+                    edgecolor="0.4" if hatch else color, linewidth=0.5)
+            label = None
+
+
+def _outline(ax, vertices: np.ndarray, color: str, label: str, style: str) -> None:
+    closed = np.vstack([vertices, vertices[:1]])
+    ax.plot(closed[:, 0], closed[:, 1], style, color=color, linewidth=1.5, label=label)
+
+
+def _draw_strip(ax, normal: np.ndarray, value: float, radius: float, view, color: str) -> None:
+    """The two lines n·x = y ± r, clipped to the view."""
+    box = shapely.box(*view)
+    direction = np.array([-normal[1], normal[0]])
+    span = 200.0
+    for offset in (value - radius, value + radius):
+        base = normal * offset / float(normal @ normal)
+        line = shapely.LineString([base - span * direction, base + span * direction])
+        clipped = line.intersection(box)
+        if not clipped.is_empty:
+            x, y = clipped.xy
+            ax.plot(x, y, color=color, linewidth=0.6, alpha=0.6)
+
+
+def speed_panels(
+    with_pedestrian: Mapping[str, pd.DataFrame], without_pedestrian: Mapping[str, pd.DataFrame]
+) -> Figure:
+    """Paper Fig. 6: the scenarios' speed profiles with (left) and without (right) pedestrian."""
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4), sharey=True)
+    for ax, traces, title in ((axes[0], with_pedestrian, "with pedestrian"),
+                              (axes[1], without_pedestrian, "without pedestrian")):
+        for i, (label, trace) in enumerate(traces.items()):
+            ax.plot(trace["t"], trace["bus_speed"], color=f"C{i}", label=label.split()[0])
+        ax.set_title(f"Bus speed, {title}")
+        ax.set_xlabel("time (s)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[0].set_ylabel("bus speed (m/s)")
+    axes[0].set_ylim(bottom=0)
+    return fig
+
+
+def set_size_bars(sizes: pd.DataFrame) -> Figure:
+    """Paper Fig. 7: areas of the local and fused sets at the first shared fusion."""
+    scenarios = list(dict.fromkeys(sizes["scenario"]))
+    fig, axes = plt.subplots(1, len(scenarios), figsize=(5 * len(scenarios), 3.5), squeeze=False)
+    for ax, name in zip(axes[0], scenarios, strict=True):
+        rows = sizes[sizes["scenario"] == name]
+        x = np.arange(len(rows))
+        ax.bar(x - 0.2, rows["area_m2"], width=0.4, label="sse-cosim")
+        ax.bar(x + 0.2, rows["paper_area"].fillna(0), width=0.4, label="paper", alpha=0.6)
+        ax.set_xticks(x, rows["set"])
+        ax.set_ylabel("area (m²)")
+        ax.set_title(f"{name}: sets at first shared fusion (t = {rows['t'].iloc[0]:.1f} s)")
+        ax.legend(fontsize=8)
+    return fig

@@ -1,0 +1,219 @@
+"""Collects what a run produced, step by step: trace rows, sets, summary figures, scene frames.
+
+The recorder only reads :class:`~sse_cosim.runner.simulation.StepResult`; writing files is
+:mod:`sse_cosim.reporting.outputs`'s job.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import shapely
+
+from sse_cosim.control.speed import SpeedLevel
+from sse_cosim.scenario.model import BUS_NODE, Scenario
+from sse_cosim.sets import Zonotope
+
+FUSED = "fused"
+
+
+@dataclass(frozen=True)
+class SceneFrame:
+    """What a scene plot at one time needs (position sets, geometries)."""
+
+    time: float
+    footprints: dict[str, shapely.Polygon]  # vehicle role -> footprint
+    sectors: dict[str, tuple[str, shapely.Geometry, shapely.Geometry]]  # sensor -> node, vis, occ
+    strips: list[tuple[str, np.ndarray, float, float]]  # (node, normal (2,), value, radius)
+    local_sets: dict[str, Zonotope]  # node -> position set
+    fused_set: Zonotope | None
+    truth: tuple[float, float] | None
+    unobserved: shapely.Geometry  # walkable area where an undetected pedestrian may be
+
+
+@dataclass
+class RunRecorder:
+    """Callable passed to ``simulate``; keeps everything the reports need."""
+
+    scenario: Scenario
+    scene_times: tuple[float, ...] = ()
+    rows: list[dict[str, Any]] = field(default_factory=list)
+    set_lines: list[dict[str, Any]] = field(default_factory=list)
+    scenes: list[SceneFrame] = field(default_factory=list)
+    violations: list[dict[str, Any]] = field(default_factory=list)
+    first_detection: dict[str, dict[str, float]] = field(default_factory=dict)
+    first_shared_fusion: dict[str, Any] | None = None
+
+    def __call__(self, result) -> None:
+        snap = result.snapshot
+        bus = snap.role(BUS_NODE)
+        t = round(snap.time, 6)
+        person = next(iter(sorted(snap.persons.items())), None)
+        truth = np.asarray(person[1].position) if person else None
+        person_id = person[0] if person else None
+        row: dict[str, Any] = {
+            "t": t,
+            "bus_x": bus.footprint.front.x,
+            "bus_y": bus.footprint.front.y,
+            "bus_speed": bus.speed,
+            "commanded_speed": result.commanded_speed,
+            "level": result.level.label,
+            "emergency": result.level is SpeedLevel.EMERGENCY,
+            "ped_x": truth[0] if truth is not None else None,
+            "ped_y": truth[1] if truth is not None else None,
+        }
+        local_sets: dict[str, Zonotope] = {}
+        for node, tracks in result.tracks.items():
+            track = tracks.get(person_id) if person_id else None
+            row[f"{node}_detected"] = bool(track and track.detected)
+            area = None
+            if track is not None:
+                position = result.model.position(track.estimate)
+                local_sets[node] = position
+                area = position.volume()
+                self._check(t, node, position, truth)
+                self._set_line(t, node, "local", position)
+                if track.detected and node not in self.first_detection:
+                    self.first_detection[node] = self._moment(t, result)
+            row[f"{node}_area"] = area
+        fused = result.fused.get(person_id) if person_id else None
+        fused_position = result.model.position(fused) if fused is not None else None
+        row["fused_area"] = fused_position.volume() if fused_position is not None else None
+        row["fused_contains_truth"] = (
+            self._check(t, FUSED, fused_position, truth) if fused_position is not None else None
+        )
+        if fused_position is not None:
+            self._set_line(t, FUSED, "fused", fused_position)
+            if FUSED not in self.first_detection:
+                self.first_detection[FUSED] = self._moment(t, result)
+            self._note_shared_fusion(t, person_id, local_sets, fused_position, result)
+        region = result.possible.get(person_id) if person_id else None
+        row["possible_area"] = region.area if region is not None else None
+        row["possible_contains_truth"] = (
+            self._check_region(t, region, truth) if region is not None else None
+        )
+        row["unresolved_occluded_m2"] = result.picture.unresolved_occluded_m2
+        row["own_occluded_m2"] = result.picture.own_occluded_m2
+        row["distance_to_crossing"] = result.picture.distance_to_crossing
+        distance = _distance(bus.footprint.polygon(), truth)
+        row["distance_bus_pedestrian"] = distance
+        row["collision"] = bool(
+            distance is not None and distance <= self.scenario.pedestrian.radius_m
+        )
+        self.rows.append(row)
+        if self._wants_scene(t):
+            self.scenes.append(_frame(t, result, local_sets, fused_position, truth))
+
+    def _check(self, t: float, node: str, position: Zonotope, truth) -> bool | None:
+        if truth is None:
+            return None
+        inside = bool(position.contains(truth, tol=1e-7))
+        if not inside:
+            self.violations.append({"t": t, "node": node, "truth": truth.tolist()})
+        return inside
+
+    def _check_region(self, t: float, region: shapely.Geometry, truth) -> bool | None:
+        if truth is None:
+            return None
+        inside = bool(region.buffer(1e-7).covers(shapely.Point(truth)))
+        if not inside:
+            self.violations.append({"t": t, "node": "possible", "truth": truth.tolist()})
+        return inside
+
+    def _set_line(self, t: float, node: str, kind: str, position: Zonotope) -> None:
+        self.set_lines.append({"t": t, "node": node, "kind": kind, **position.to_json()})
+
+    @staticmethod
+    def _moment(t: float, result) -> dict[str, float]:
+        return {"t": t, "bus_distance_to_crossing_m": result.picture.distance_to_crossing}
+
+    def _note_shared_fusion(self, t, person_id, local_sets, fused_position, result) -> None:
+        """Record the first step at which the bus fuses two or more sets (paper Fig. 7)."""
+        if self.first_shared_fusion is not None:
+            return
+        inputs = dict(result.shared.estimates.get(person_id, {}))
+        own = result.tracks[BUS_NODE].get(person_id)
+        if own is not None:
+            inputs[BUS_NODE] = own.estimate
+        if len(inputs) < 2:
+            return
+        self.first_shared_fusion = {
+            "t": t,
+            "input_areas_m2": {n: result.model.position(z).volume() for n, z in inputs.items()},
+            "fused_area_m2": fused_position.volume(),
+        }
+        self.scenes.append(_frame(t, result, local_sets, fused_position, None))
+
+    def _wants_scene(self, t: float) -> bool:
+        dt = self.scenario.simulation.step_length_s
+        return any(abs(t - s) < 0.5 * dt for s in self.scene_times)
+
+    def summary(self) -> dict[str, Any]:
+        """The run's figures (``summary.json``)."""
+        dt = self.scenario.simulation.step_length_s
+        speeds = np.array([r["bus_speed"] for r in self.rows]) if self.rows else np.zeros(0)
+        levels = Counter(r["level"] for r in self.rows)
+        distances = [r["distance_bus_pedestrian"] for r in self.rows
+                     if r["distance_bus_pedestrian"] is not None]
+        return {
+            "scenario": self.scenario.name,
+            "pedestrian": self.scenario.pedestrian.present,
+            "nodes": self.scenario.node_ids(),
+            "steps": len(self.rows),
+            "average_speed_mps": float(speeds.mean()) if speeds.size else None,
+            "travel_time_s": len(self.rows) * dt,
+            "distance_travelled_m": float(speeds.sum() * dt),
+            "min_distance_bus_pedestrian_m": min(distances) if distances else None,
+            "first_detection": self.first_detection,
+            "set_area_m2": self._area_stats(),
+            "first_shared_fusion": self.first_shared_fusion,
+            "containment_violations": len(self.violations),
+            "violations": self.violations[:20],
+            "collisions": sum(r["collision"] for r in self.rows),
+            "level_share": {
+                level.label: levels.get(level.label, 0) / max(len(self.rows), 1)
+                for level in SpeedLevel
+            },
+        }
+
+    def _area_stats(self) -> dict[str, dict[str, float]]:
+        stats = {}
+        for column in [c for c in (self.rows[0] if self.rows else {}) if c.endswith("_area")]:
+            values = [r[column] for r in self.rows if r[column] is not None]
+            if values:
+                name = column.removesuffix("_area")
+                stats[name] = {"mean": float(np.mean(values)), "max": float(np.max(values))}
+        return stats
+
+
+def _distance(footprint: shapely.Polygon, truth) -> float | None:
+    return None if truth is None else float(footprint.distance(shapely.Point(truth)))
+
+
+def _frame(t, result, local_sets, fused_position, truth) -> SceneFrame:
+    snap = result.snapshot
+    if truth is None and snap.persons:
+        truth = np.asarray(next(iter(sorted(snap.persons.items())))[1].position)
+    strips = [
+        (obs.node, normal, float(value), float(radius))
+        for obs in result.observations.values()
+        for d in obs.detections.values()
+        for normal, value, radius in zip(
+            d.strips.normals, d.strips.values, d.strips.radii, strict=True
+        )
+    ]
+    return SceneFrame(
+        time=t,
+        footprints={v.role if v.role != "other" else v.id: v.footprint.polygon()
+                    for v in snap.vehicles.values()},
+        sectors={name: (o.node, o.visible, o.occluded)
+                 for name, o in result.observations.items() if o.pose is not None},
+        strips=strips,
+        local_sets=dict(local_sets),
+        fused_set=fused_position,
+        truth=None if truth is None else (float(truth[0]), float(truth[1])),
+        unobserved=result.unobserved,
+    )

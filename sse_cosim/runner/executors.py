@@ -1,0 +1,96 @@
+"""Where tasks run: a local pool of worker processes, or Dask distributed.
+
+Either way each task runs in its own fresh process (:func:`run_in_subprocess`) and is
+seeded by its scenario alone, so the outcomes do not depend on the executor, the number
+of workers or the order in which tasks finish. Outcomes come back in the tasks' order.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from contextlib import contextmanager
+from typing import Literal
+
+from tqdm import tqdm
+
+from sse_cosim.runner.tasks import RunTask, TaskOutcome, finished_outcome, run_in_subprocess
+
+ExecutorName = Literal["local", "dask"]
+
+
+def default_workers() -> int:
+    """The number of cores this process may use."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def execute(
+    tasks: Sequence[RunTask],
+    workers: int | None = None,
+    executor: ExecutorName = "local",
+    scheduler: str | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    description: str = "runs",
+) -> list[TaskOutcome]:
+    """Run every task (skipping finished ones with ``resume``) and return outcomes in order."""
+    done: dict[str, TaskOutcome] = {}
+    if resume:
+        for task in tasks:
+            outcome = finished_outcome(task)
+            if outcome is not None and outcome.ok:
+                done[task.key] = outcome
+    todo = [t for t in tasks if t.key not in done]
+    workers = workers or default_workers()
+    bar = tqdm(total=len(tasks), initial=len(done), desc=description, unit="run",
+               disable=not progress, dynamic_ncols=True)
+    failures = 0
+    with bar, _runner(executor, workers, scheduler) as submit_all:
+        for outcome in submit_all(todo):
+            done[outcome.key] = outcome
+            failures += not outcome.ok
+            bar.set_postfix(failed=failures)
+            bar.update(1)
+    return [done[t.key] for t in tasks]
+
+
+@contextmanager
+def _runner(executor: ExecutorName, workers: int, scheduler: str | None):
+    if executor == "local":
+        yield lambda todo: _local(todo, workers)
+    elif executor == "dask":
+        with _dask_client(workers, scheduler) as client:
+            yield lambda todo: _dask(client, todo)
+    else:
+        raise ValueError(f"unknown executor {executor!r}")
+
+
+def _local(todo: Sequence[RunTask], workers: int) -> Iterator[TaskOutcome]:
+    """Threads that each supervise one worker process at a time."""
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        futures = [pool.submit(run_in_subprocess, task) for task in todo]
+        for future in as_completed(futures):
+            yield future.result()
+
+
+@contextmanager
+def _dask_client(workers: int, scheduler: str | None):
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler:
+        with Client(scheduler) as client:
+            yield client
+        return
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        yield client
+
+
+def _dask(client, todo: Sequence[RunTask]) -> Iterator[TaskOutcome]:
+    from dask.distributed import as_completed as dask_as_completed
+
+    futures = [client.submit(run_in_subprocess, task, key=f"run-{task.key}", pure=False)
+               for task in todo]
+    for future in dask_as_completed(futures):
+        yield future.result()

@@ -1,0 +1,186 @@
+"""One co-simulation run: SUMO, sensors, local observers, V2X, fusion, control, in that order.
+
+Data flows one way through a step:
+
+1. the SUMO snapshot (footprints, speeds, the pedestrian's true position);
+2. sensors: visibility, detections, strips;
+3. every node's observer: predict, correct with its own strips (Proposition 1), reduce;
+4. V2X: every other node sends the bus its estimates and visible region;
+5. the bus fuses its own and the received estimates (Proposition 2), refines where each
+   known pedestrian can be and where an undetected one may be (negative information);
+6. the situational picture; 7. the speed level, set back into SUMO.
+
+The true position is checked against every node's set and the fused set at every step.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import shapely
+
+from sse_cosim.control.picture import Picture, SceneContext, assess
+from sse_cosim.control.speed import SpeedLevel, choose_level, level_speed
+from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver, Track
+from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea
+from sse_cosim.estimation.shared import fuse_at_bus
+from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
+from sse_cosim.scenario.model import BUS_NODE, Scenario
+from sse_cosim.sensors import SensorObservation, observe, specs_from_scenario
+from sse_cosim.sets import Zonotope
+from sse_cosim.world.roadmap import RoadMap
+from sse_cosim.world.snapshot import Snapshot
+from sse_cosim.world.sumo import SumoWorld
+
+CONTAINMENT_TOLERANCE = 1e-7
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """Everything one step produced, handed to the recorder."""
+
+    step: int
+    snapshot: Snapshot
+    observations: dict[str, SensorObservation]
+    tracks: dict[str, dict[str, Track]]  # node -> pedestrian id -> track
+    shared: SharedPicture
+    unobserved: shapely.Geometry  # walkable area where an undetected pedestrian may be
+    fused: dict[str, Zonotope]  # pedestrian id -> fused state set
+    possible: dict[str, shapely.Geometry]  # pedestrian id -> fused position set minus clear areas
+    picture: Picture
+    level: SpeedLevel
+    commanded_speed: float
+    model: MotionModel
+
+
+StepCallback = Callable[[StepResult], None]
+
+
+@dataclass(frozen=True)
+class SimulationInfo:
+    """How a run ended and the road map it ran on."""
+
+    steps: int
+    bus_arrived: bool
+    roadmap: RoadMap
+
+
+def simulate(
+    scenario: Scenario, run_dir: Path, scenario_name: str, on_step: StepCallback
+) -> SimulationInfo:
+    """Run ``scenario`` in SUMO, calling ``on_step`` after every step.
+
+    SUMO's own files (routes, logs) go to ``run_dir``. The bus leaving the network (end of
+    its route) or the scenario's duration ends the run.
+    """
+    dt = scenario.simulation.step_length_s
+    noise_rng, v2x_rng = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(scenario.simulation.seed).spawn(2)
+    )
+    model = MotionModel.from_config(scenario.estimator, dt)
+    settings = EstimatorSettings(
+        scenario.estimator.gain_method,
+        scenario.estimator.reduction_method,
+        scenario.estimator.max_generators,
+    )
+    observers = {node: NodeObserver(node, model, settings) for node in scenario.node_ids()}
+    link = V2XLink(scenario.v2x, v2x_rng)
+    occupancy = OccupancyTracker(model, dt)
+    specs = specs_from_scenario(scenario)
+    n_steps = round(scenario.simulation.duration_s / dt)
+    with SumoWorld(scenario, run_dir, scenario_name) as world:
+        context = SceneContext.build(
+            world.roadmap, scenario.bus.route_edges, scenario.bus, scenario.controller
+        )
+        unobserved = UnobservedArea(context.walkable, model, dt, scenario.v2x.latency_steps)
+        for step in range(n_steps):
+            snapshot = world.step()
+            bus = snapshot.role(BUS_NODE)
+            if bus is None:
+                if world.bus_arrived:
+                    return SimulationInfo(step, True, world.roadmap)
+                continue
+            observations = observe(snapshot, specs, noise_rng, want_regions=True)
+            tracks = {
+                node: observer.step(step, _detections_of(node, observations))
+                for node, observer in observers.items()
+            }
+            _share(step, snapshot, scenario, observations, tracks, link)
+            delivered = link.deliver(step)
+            shared = link.picture(step, model)
+            fused = fuse_at_bus(
+                tracks[BUS_NODE], shared.estimates, scenario.estimator.fusion_method, settings,
+                model,
+            )
+            bus_views = [o for o in observations.values() if o.node == BUS_NODE]
+            clear = {
+                pid: [ClearRegion(o.visible, 0) for o in bus_views if pid not in o.detections]
+                + shared.clear_of(pid)
+                for pid in fused
+            }
+            possible = occupancy.update(step, fused, clear)
+            unknown = unobserved.update(
+                step, _union(o.visible for o in bus_views), [m.visible_region for m in delivered]
+            )
+            picture = assess(
+                context,
+                bus.footprint.front.position,
+                bus.speed,
+                _union(o.occluded for o in bus_views),
+                unknown,
+                list(possible.values()),
+            )
+            level = choose_level(picture, scenario.controller)
+            commanded = level_speed(level, scenario.bus.nominal_speed_mps, scenario.controller)
+            world.set_bus_speed(commanded, emergency=level is SpeedLevel.EMERGENCY)
+            on_step(
+                StepResult(
+                    step, snapshot, observations, tracks, shared, unknown, fused, possible,
+                    picture, level, commanded, model,
+                )
+            )
+        return SimulationInfo(n_steps, world.bus_arrived, world.roadmap)
+
+
+def _detections_of(node: str, observations: dict[str, SensorObservation]) -> dict[str, list]:
+    """Pedestrian id -> the strips of ``node``'s sensors that see it."""
+    result: dict[str, list] = {}
+    for obs in observations.values():
+        if obs.node == node:
+            for person_id, detection in obs.detections.items():
+                result.setdefault(person_id, []).append(detection.strips)
+    return result
+
+
+def _share(
+    step: int,
+    snapshot: Snapshot,
+    scenario: Scenario,
+    observations: dict[str, SensorObservation],
+    tracks: dict[str, dict[str, Track]],
+    link: V2XLink,
+) -> None:
+    """Every node other than the bus that is in the scene sends its picture to the bus."""
+    bus_xy = snapshot.role(BUS_NODE).footprint.front.position
+    for node, node_tracks in tracks.items():
+        if node == BUS_NODE:
+            continue
+        node_obs = [o for o in observations.values() if o.node == node and o.pose is not None]
+        if not node_obs:
+            continue
+        position = node_obs[0].pose.position
+        region = _union(o.visible for o in node_obs)
+        estimates = {pid: t.estimate for pid, t in node_tracks.items()}
+        seen = frozenset(pid for o in node_obs for pid in o.detections)
+        message = Message(node, step, estimates, region, seen)
+        link.send(message, float(np.hypot(*(position - bus_xy))))
+
+
+def _union(geometries) -> shapely.Geometry:
+    parts = [g for g in geometries if g is not None and not g.is_empty]
+    return shapely.union_all(parts) if parts else shapely.Polygon()
+
