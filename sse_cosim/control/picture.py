@@ -24,21 +24,37 @@ class SceneContext:
 
     route_line: shapely.LineString
     walkable: shapely.Geometry  # sidewalks, walking areas and the crossing
-    area_of_interest: shapely.Geometry  # walkable within interest_radius_m of the crossing
+    crossing: shapely.Polygon
     crossing_span: tuple[float, float]  # (start, end) of the crossing along the route (m)
     bus: Bus
     config: Controller
+    pedestrian_speed: float  # the estimator's speed bound (m/s)
 
     @classmethod
-    def build(cls, roadmap: RoadMap, route_edges: Sequence[str], bus: Bus, config: Controller):
+    def build(
+        cls, roadmap: RoadMap, route_edges: Sequence[str], bus: Bus, config: Controller,
+        pedestrian_speed: float,
+    ) -> SceneContext:
         """Prepare the static geometry for a bus driving ``route_edges``."""
         route_line = roadmap.route_line(route_edges)
         walkable = shapely.union(roadmap.sidewalks, roadmap.crossing)
-        near_crossing = roadmap.crossing.buffer(config.interest_radius_m)
-        interest = shapely.intersection(walkable, near_crossing)
         along = [route_line.project(shapely.Point(p)) for p in _boundary_points(roadmap.crossing)]
-        shapely.prepare(walkable)
-        return cls(route_line, walkable, interest, (min(along), max(along)), bus, config)
+        return cls(route_line, walkable, roadmap.crossing, (min(along), max(along)), bus, config,
+                   pedestrian_speed)
+
+    def reach_radius(self, front_s: float) -> float:
+        """How far from the crossing an unseen pedestrian can be and still reach it before the
+        bus, keeping its nominal speed, has cleared it; capped by ``interest_radius_m``.
+
+        Farther away, a pedestrian cannot meet a bus at nominal speed on the crossing, so
+        hidden area there is no reason to slow down; nearer, the bus slows so that it can
+        stop for a pedestrian who steps out.
+        """
+        to_clear = self.crossing_span[1] - front_s + self.bus.length_m
+        if to_clear <= 0:
+            return 0.0
+        radius = self.pedestrian_speed * to_clear / self.bus.nominal_speed_mps
+        return min(radius, self.config.interest_radius_m)
 
     def path_ahead(self, front_s: float, length: float, margin: float) -> shapely.Geometry:
         """The corridor the bus sweeps over the next ``length`` metres, widened by ``margin``."""
@@ -63,8 +79,9 @@ class Picture:
     front_s: float  # bus front along its route (m)
     distance_to_crossing: float  # front to the crossing's near edge (m); negative once on it
     crossing_ahead: bool
+    reach_radius_m: float  # how far from the crossing a pedestrian still matters
     own_occluded_m2: float  # hidden in the bus's own view and possibly holding a pedestrian
-    unresolved_occluded_m2: float  # the same within the area of interest near the crossing
+    unresolved_occluded_m2: float  # the part of it within the reach radius of the crossing
     pedestrian_near_crossing: bool
     pedestrian_near_path: bool
     pedestrian_in_stopping_distance: bool
@@ -90,7 +107,9 @@ def assess(
     to_crossing = context.crossing_span[0] - front_s
     crossing_ahead = context.crossing_span[1] > front_s and to_crossing <= cfg.crossing_horizon_m
     own_hidden = shapely.intersection(own_occluded, unobserved)
-    near_crossing_hidden = shapely.intersection(own_hidden, context.area_of_interest)
+    reach = context.reach_radius(front_s)
+    relevant = context.crossing.buffer(reach) if reach > 0 else shapely.Polygon()
+    hidden_in_reach = shapely.intersection(own_hidden, relevant)
     near_path = context.path_ahead(front_s, cfg.crossing_horizon_m, cfg.path_margin_m)
     stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0)
     sets = [s for s in pedestrian_regions if not s.is_empty]
@@ -98,9 +117,10 @@ def assess(
         front_s=float(front_s),
         distance_to_crossing=float(to_crossing),
         crossing_ahead=bool(crossing_ahead),
+        reach_radius_m=float(reach),
         own_occluded_m2=float(own_hidden.area),
-        unresolved_occluded_m2=float(near_crossing_hidden.area),
-        pedestrian_near_crossing=any(s.intersects(context.area_of_interest) for s in sets),
+        unresolved_occluded_m2=float(hidden_in_reach.area),
+        pedestrian_near_crossing=any(s.intersects(relevant) for s in sets),
         pedestrian_near_path=any(s.intersects(near_path) for s in sets),
         pedestrian_in_stopping_distance=any(s.intersects(stopping) for s in sets),
     )

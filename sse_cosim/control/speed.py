@@ -7,11 +7,15 @@ them as *reductions*: cautious 0.7, slow 0.5 and very slow 0.2 of nominal (confi
 
 1. a pedestrian region in the swept path within the stopping distance: emergency brake;
 2. a pedestrian region within ``path_margin_m`` of the path ahead: very slow;
-3. the crossing ahead with a pedestrian set near it, or with hidden sidewalk or crossing
-   area near it that no shared view resolves: slow;
-4. hidden sidewalk or crossing area anywhere in the bus's own view that no shared view
-   resolves: cautious;
+3. the crossing ahead, with a pedestrian region near it or with hidden walkable area near
+   it that may hold an undetected pedestrian: slow;
+4. such hidden area in the bus's own view while the crossing is farther off: cautious;
 5. otherwise nominal.
+
+"Near the crossing" is a reachability radius (``SceneContext.reach_radius``): a hidden place
+matters only if a pedestrian starting there could reach the crossing before the bus, at its
+nominal speed, has cleared it. "Hidden" is what the bus's sensors cannot see and no node
+has seen recently enough (``estimation.occupancy.UnobservedArea``).
 """
 
 from __future__ import annotations
@@ -45,7 +49,7 @@ def choose_level(picture: Picture, config: Controller) -> SpeedLevel:
     hidden_near_crossing = picture.unresolved_occluded_m2 > config.occlusion_threshold_m2
     if picture.crossing_ahead and (picture.pedestrian_near_crossing or hidden_near_crossing):
         return SpeedLevel.SLOW
-    if picture.own_occluded_m2 > config.occlusion_threshold_m2:
+    if hidden_near_crossing:
         return SpeedLevel.CAUTIOUS
     return SpeedLevel.NOMINAL
 

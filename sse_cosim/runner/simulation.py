@@ -94,7 +94,8 @@ def simulate(
     n_steps = round(scenario.simulation.duration_s / dt)
     with SumoWorld(scenario, run_dir, scenario_name) as world:
         context = SceneContext.build(
-            world.roadmap, scenario.bus.route_edges, scenario.bus, scenario.controller
+            world.roadmap, scenario.bus.route_edges, scenario.bus, scenario.controller,
+            model.max_speed,
         )
         unobserved = UnobservedArea(context.walkable, model, dt, scenario.v2x.latency_steps)
         for step in range(n_steps):

@@ -59,8 +59,9 @@ class Truck(StrictModel):
     edge: str = Field("WC", description="Edge it is parked on (the bus's side).")
     lane_index: int = Field(1, ge=0, description="Lane index on that edge (1 = parking strip).")
     end_pos_m: NonNegativeFloat = Field(
-        194.0,
-        description="Position of its front along the edge (m): a few metres before the crossing.",
+        186.0,
+        description="Position of its front along the edge (m): a few metres before the crossing "
+        "(the crossing starts at 198 m; Swedish rules forbid parking within 10 m before it).",
     )
     length_m: PositiveFloat = Field(10.0, description="Truck length (m).")
     width_m: PositiveFloat = Field(2.5, description="Truck width (m).")
@@ -81,13 +82,13 @@ class Pedestrian(StrictModel):
     present: bool = Field(True, description="Whether the pedestrian is in the scene.")
     start_edge: str = Field("WC", description="Edge whose sidewalk it starts on.")
     start_pos_m: NonNegativeFloat = Field(
-        186.0, description="Start position along that edge (m), behind the truck."
+        184.0, description="Start position along that edge (m), behind the truck."
     )
     end_edge: str = Field("CW", description="Edge whose sidewalk it walks to (across the zebra).")
     end_pos_m: NonNegativeFloat = Field(4.0, description="Arrival position along that edge (m).")
     walking_speed_mps: PositiveFloat = Field(1.2, le=3.0, description="Walking speed (m/s).")
     steps_onto_crossing_s: NonNegativeFloat = Field(
-        9.0, description="Time at which it reaches the crossing (s); its departure is derived."
+        12.0, description="Time at which it reaches the crossing (s); its departure is derived."
     )
     radius_m: PositiveFloat = Field(0.3, description="Body radius used for collisions (m).")
 
@@ -136,7 +137,7 @@ class Estimator(StrictModel):
         2.5, description="Speed bound (m/s): the process noise |dx|, |dy| <= bound * step length."
     )
     position_jitter_m: NonNegativeFloat = Field(
-        0.5,
+        0.3,
         description="How far the simulated position may stray from a speed-bounded path (m); "
         "covers SUMO's pedestrian jumps at lane transitions (up to 0.7 m).",
     )
@@ -174,7 +175,10 @@ class Controller(StrictModel):
         description="The crossing counts as 'ahead' within this distance of the bus front (m).",
     )
     interest_radius_m: PositiveFloat = Field(
-        15.0, description="Sidewalk and crossing within this distance of the crossing matter (m)."
+        15.0,
+        description="Largest distance from the crossing at which a hidden pedestrian matters "
+        "(m); nearer, the reach radius (pedestrian speed bound x time for the bus to clear "
+        "the crossing) decides.",
     )
     occlusion_threshold_m2: NonNegativeFloat = Field(
         0.5, description="Unresolved occluded area of interest above which the bus slows (m^2)."
