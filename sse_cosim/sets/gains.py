@@ -1,0 +1,251 @@
+"""Proposition 1: zonotope ∩ strips over-approximated by a zonotope (eqs. C_lambda, G_lambda).
+
+:func:`apply_gain` is the update for a given gain Λ = [λ_1, ..., λ_m] (n, m):
+
+    c' = c + Λ(y - Hc)                      (eq. C_lambda)
+    G' = [(I - ΛH)G, Λ diag(r)]             (eq. G_lambda)
+
+It is sound for ANY Λ: if x = c + Gβ ∈ Z and y - Hx = diag(r)δ with |δ|∞ <= 1, then
+x = c' + (I - ΛH)Gβ - Λ diag(r)δ ∈ ⟨c', G'⟩. Every method in :data:`GAIN_METHODS` therefore
+only chooses Λ.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import cvxpy as cp
+import numpy as np
+from numpy.typing import ArrayLike
+
+from sse_cosim.sets._registry import lookup
+from sse_cosim.sets.consistency import strip_covers
+from sse_cosim.sets.strips import Strips
+from sse_cosim.sets.zonotope import FloatArray, Zonotope, cofactor_vectors, generator_volume
+
+GainMethod = Callable[[Zonotope, Strips], FloatArray]
+"""Chooses Λ (n, m) for Z and m strips with unit normals."""
+
+StripGain = Callable[[FloatArray, FloatArray, float], FloatArray]
+"""Chooses λ (n,) for generators G (n, e) of a full-rank zonotope and one strip (h, r)."""
+
+
+@dataclass(frozen=True)
+class CompiledProblem:
+    """A parametrized DPP problem, its decision variable of interest and its parameters."""
+
+    problem: cp.Problem
+    variable: cp.Variable
+    parameters: dict[str, cp.Parameter]
+
+
+PROBLEM_CACHE: dict[tuple[str | int, ...], CompiledProblem] = {}
+"""DPP problems built once per (kind, shape...) and re-solved with new parameter values."""
+
+
+def updated_generators(generators: FloatArray, strips: Strips, gain: FloatArray) -> FloatArray:
+    """G' = [(I - ΛH)G, Λ diag(r)] (eq. G_lambda); G (n, e), Λ (n, m) -> (n, e + m)."""
+    return np.hstack([generators - gain @ (strips.normals @ generators), gain * strips.radii])
+
+
+def apply_gain(zonotope: Zonotope, strips: Strips, gain: ArrayLike) -> Zonotope:
+    """Prop. 1 update for a given gain Λ (n, m) (eqs. C_lambda, G_lambda), zero columns dropped."""
+    lam = np.asarray(gain, dtype=np.float64)
+    if lam.shape != (zonotope.dim, len(strips)):
+        raise ValueError(f"gain must have shape {(zonotope.dim, len(strips))}; got {lam.shape}")
+    center = zonotope.center + lam @ (strips.values - strips.normals @ zonotope.center)
+    generators = updated_generators(zonotope.generators, strips, lam)
+    return Zonotope(center, generators).remove_zero_generators()
+
+
+def frobenius_gain(zonotope: Zonotope, strips: Strips) -> FloatArray:
+    """Λ = P Hᵀ (H P Hᵀ + diag(r²))⁻¹ with P = GGᵀ, the minimizer of ‖G'‖_F², shape (n, m).
+
+    Solved as the equivalent least-squares problem Λ [HG, diag(r)] ≈ [G, 0] (no inverse and
+    no squared condition number).
+    """
+    g, h, r = zonotope.generators, strips.normals, strips.radii
+    lhs = np.hstack([h @ g, np.diag(r)])
+    rhs = np.hstack([g, np.zeros((g.shape[0], len(r)))])
+    return np.linalg.lstsq(lhs.T, rhs.T, rcond=None)[0].T
+
+
+def _compiled(key: tuple[str | int, ...], build: Callable[..., CompiledProblem]) -> CompiledProblem:
+    if key not in PROBLEM_CACHE:
+        PROBLEM_CACHE[key] = build(*key[1:])
+    return PROBLEM_CACHE[key]
+
+
+def _solve(compiled: CompiledProblem, solver: str, **values: object) -> FloatArray | None:
+    """Set the parameters, re-solve (no warm start: results never depend on call history) and
+    return the variable's value, or None unless the solver reports an optimum."""
+    for name, value in values.items():
+        compiled.parameters[name].value = value
+    try:
+        compiled.problem.solve(solver=solver, warm_start=False)
+    except cp.error.SolverError:
+        return None
+    if compiled.problem.status != cp.OPTIMAL:
+        return None
+    return np.asarray(compiled.variable.value, dtype=np.float64)
+
+
+def _build_frobenius(n: int, m: int, e: int) -> CompiledProblem:
+    gain = cp.Variable((n, m))
+    g, hg, r = cp.Parameter((n, e)), cp.Parameter((m, e)), cp.Parameter((m, m))
+    objective = cp.sum_squares(g - gain @ hg) + cp.sum_squares(gain @ r)
+    return CompiledProblem(cp.Problem(cp.Minimize(objective)), gain, {"g": g, "hg": hg, "r": r})
+
+
+def cvxpy_frobenius_gain(zonotope: Zonotope, strips: Strips) -> FloatArray:
+    """The ``frobenius`` gain from cvxpy: min ‖G - Λ(HG)‖_F² + ‖Λ diag(r)‖_F² (cached DPP)."""
+    g = zonotope.generators
+    scale = max(np.abs(g).max(), strips.radii.max())
+    n, e = g.shape
+    compiled = _compiled(("frobenius", n, len(strips), e), _build_frobenius)
+    gain = _solve(
+        compiled,
+        cp.CLARABEL,
+        g=g / scale,
+        hg=strips.normals @ g / scale,
+        r=np.diag(strips.radii / scale),
+    )
+    if gain is None:
+        raise RuntimeError(f"cvxpy-frobenius: solver status {compiled.problem.status}")
+    return gain
+
+
+def _piecewise_volume(base: float, cofactors: FloatArray, normal: FloatArray, radius: float,
+                      lams: FloatArray) -> FloatArray:
+    return base * np.abs(1.0 - lams @ normal) + radius * np.abs(lams @ cofactors.T).sum(axis=1)
+
+
+def strip_gain_volume(generators: FloatArray, normal: FloatArray, radius: float,
+                      gains: ArrayLike) -> FloatArray:
+    """vol(⟨·, [(I - λhᵀ)G, rλ]⟩)/2ⁿ for each row λ of ``gains`` (k, n), shape (k,).
+
+    Equals |1 - hᵀλ|·V + r·Σ_S |d_Sᵀλ| with V = vol(⟨·, G⟩)/2ⁿ and d_S the cofactor vector of
+    each (n-1)-subset S of G's columns: convex and piecewise linear in λ.
+    """
+    lams = np.atleast_2d(np.asarray(gains, dtype=np.float64))
+    base = generator_volume(generators) / 2.0 ** generators.shape[0]
+    return _piecewise_volume(base, cofactor_vectors(generators), normal, radius, lams)
+
+
+def volume_gain_vertices(generators: FloatArray, normal: FloatArray, radius: float) -> FloatArray:
+    """Exact 2-D minimizer of :func:`strip_gain_volume`: the best vertex of the arrangement of
+    the lines hᵀλ = 1 and d_iᵀλ = 0, i.e. λ = 0 or λ = g_i / (hᵀg_i)."""
+    hg = normal @ generators
+    usable = np.abs(hg) > 1e-12 * np.linalg.norm(generators, axis=0)
+    candidates = np.vstack([np.zeros(2), (generators[:, usable] / hg[usable]).T])
+    return candidates[np.argmin(strip_gain_volume(generators, normal, radius, candidates))]
+
+
+def _build_volume_lp(n: int, k: int) -> CompiledProblem:
+    lam, t, s = cp.Variable(n), cp.Variable(), cp.Variable(k)
+    h, d = cp.Parameter(n), cp.Parameter((k, n))
+    base, radius = cp.Parameter(nonneg=True), cp.Parameter(nonneg=True)
+    residual, cuts = 1 - h @ lam, d @ lam
+    constraints = [residual <= t, -t <= residual, cuts <= s, -s <= cuts]
+    problem = cp.Problem(cp.Minimize(base * t + radius * cp.sum(s)), constraints)
+    return CompiledProblem(problem, lam, {"h": h, "d": d, "base": base, "radius": radius})
+
+
+def volume_gain_lp(generators: FloatArray, normal: FloatArray, radius: float) -> FloatArray:
+    """Minimizer of :func:`strip_gain_volume` by an LP (cvxpy, HiGHS), any dimension.
+
+    min V·t + r·Σs s.t. |1 - hᵀλ| <= t, |Dλ| <= s. D is zero-padded to a power-of-two row
+    count so few problem shapes are compiled. Falls back to λ = 0 if the solver fails or its
+    λ is (by tolerance) worse than λ = 0.
+    """
+    n = generators.shape[0]
+    scale = np.abs(generators).max()
+    d = cofactor_vectors(generators / scale)
+    base = generator_volume(generators / scale) / 2.0**n
+    rows = max(8, 1 << (len(d) - 1).bit_length())
+    compiled = _compiled(("volume", n, rows), _build_volume_lp)
+    padded = np.vstack([d, np.zeros((rows - len(d), n))])
+    lam = _solve(compiled, cp.HIGHS, h=normal, d=padded, base=base, radius=radius / scale)
+    zero = np.zeros(n)
+    if lam is None:
+        return zero
+    values = _piecewise_volume(base, d, normal, radius / scale, np.vstack([lam, zero]))
+    return lam if values[0] <= values[1] else zero
+
+
+def _volume_gain_fast(generators: FloatArray, normal: FloatArray, radius: float) -> FloatArray:
+    if generators.shape[0] == 2:
+        return volume_gain_vertices(generators, normal, radius)
+    return volume_gain_lp(generators, normal, radius)
+
+
+def _sequential(choose: StripGain) -> GainMethod:
+    """Apply the strips one after another, λ_j by ``choose`` on the current set, and return the
+    equivalent joint gain: after step j, Λ <- [(I - λ_j h_jᵀ)Λ, λ_j].
+
+    A strip that covers the current set gets λ = 0 (optimal: nothing to cut); a rank-deficient
+    current set (volume 0 for every λ) gets the one-strip ``frobenius`` gain.
+    """
+
+    def gain(zonotope: Zonotope, strips: Strips) -> FloatArray:
+        n = zonotope.dim
+        total = np.zeros((n, 0))
+        current = zonotope
+        for j in range(len(strips)):
+            strip = strips.select([j])
+            normal, radius = strip.normals[0], float(strip.radii[0])
+            if strip_covers(current, strip)[0]:
+                lam = np.zeros(n)
+            elif np.linalg.matrix_rank(current.generators) < n:
+                lam = frobenius_gain(current, strip)[:, 0]
+            else:
+                lam = choose(current.generators, normal, radius)
+            total = np.column_stack([total - np.outer(lam, normal @ total), lam])
+            current = apply_gain(current, strip, lam[:, None])
+        return total
+
+    return gain
+
+
+def _smallest_volume(*methods: GainMethod) -> GainMethod:
+    """The candidate gain (of ``methods`` and Λ = 0) whose result has the least exact volume."""
+
+    def gain(zonotope: Zonotope, strips: Strips) -> FloatArray:
+        candidates = [method(zonotope, strips) for method in methods]
+        candidates.append(np.zeros((zonotope.dim, len(strips))))
+        volumes = [
+            generator_volume(updated_generators(zonotope.generators, strips, lam))
+            for lam in candidates
+        ]
+        return candidates[int(np.argmin(volumes))]
+
+    return gain
+
+
+GAIN_METHODS: dict[str, GainMethod] = {
+    "frobenius": frobenius_gain,
+    "cvxpy-frobenius": cvxpy_frobenius_gain,
+    "volume": _smallest_volume(_sequential(_volume_gain_fast), frobenius_gain),
+    "cvxpy-volume": _smallest_volume(_sequential(volume_gain_lp), frobenius_gain),
+}
+
+
+def available_gain_methods() -> tuple[str, ...]:
+    """Names accepted by :func:`intersect_strips`."""
+    return tuple(GAIN_METHODS)
+
+
+def intersect_strips(zonotope: Zonotope, strips: Strips, method: str = "frobenius") -> Zonotope:
+    """Zonotope ⊇ Z ∩ S_1 ∩ ... ∩ S_m by Prop. 1 with the gain of ``method``.
+
+    Strips are first rescaled to unit normals (same sets, same result for every method up to
+    rounding). A point Z (no generators) or no strips returns Z.
+    """
+    choose = lookup(GAIN_METHODS, method, "gain method")
+    if strips.dim != zonotope.dim:
+        raise ValueError(f"{strips.dim}-D strips cannot cut a {zonotope.dim}-D zonotope")
+    if len(strips) == 0 or zonotope.n_generators == 0:
+        return zonotope
+    unit = strips.normalized()
+    return apply_gain(zonotope, unit, choose(zonotope, unit))
