@@ -46,6 +46,7 @@ class RunRecorder:
     violations: list[dict[str, Any]] = field(default_factory=list)
     first_detection: dict[str, dict[str, float]] = field(default_factory=dict)
     first_shared_fusion: dict[str, Any] | None = None
+    fusion_larger_than_input: int = 0  # steps where the fused set outgrew its smallest input
 
     def __call__(self, result) -> None:
         snap = result.snapshot
@@ -86,6 +87,10 @@ class RunRecorder:
             self._check(t, FUSED, fused_position, truth) if fused_position is not None else None
         )
         if fused_position is not None:
+            inputs = _fusion_inputs(result, person_id)
+            smallest = min(result.model.position(z).volume() for z in inputs.values())
+            if fused_position.volume() > smallest * (1 + 1e-9) + 1e-12:
+                self.fusion_larger_than_input += 1
             self._set_line(t, FUSED, "fused", fused_position)
             if FUSED not in self.first_detection:
                 self.first_detection[FUSED] = self._moment(t, result)
@@ -134,10 +139,7 @@ class RunRecorder:
         """Record the first step at which the bus fuses two or more sets (paper Fig. 7)."""
         if self.first_shared_fusion is not None:
             return
-        inputs = dict(result.shared.estimates.get(person_id, {}))
-        own = result.tracks[BUS_NODE].get(person_id)
-        if own is not None:
-            inputs[BUS_NODE] = own.estimate
+        inputs = _fusion_inputs(result, person_id)
         if len(inputs) < 2:
             return
         self.first_shared_fusion = {
@@ -171,6 +173,7 @@ class RunRecorder:
             "set_area_m2": self._area_stats(),
             "first_shared_fusion": self.first_shared_fusion,
             "containment_violations": len(self.violations),
+            "fusion_larger_than_input": self.fusion_larger_than_input,
             "violations": self.violations[:20],
             "collisions": sum(r["collision"] for r in self.rows),
             "level_share": {
@@ -187,6 +190,15 @@ class RunRecorder:
                 name = column.removesuffix("_area")
                 stats[name] = {"mean": float(np.mean(values)), "max": float(np.max(values))}
         return stats
+
+
+def _fusion_inputs(result, person_id: str) -> dict[str, Zonotope]:
+    """The state sets the bus fused for ``person_id``: its own and the received ones."""
+    inputs = dict(result.shared.estimates.get(person_id, {}))
+    own = result.tracks[BUS_NODE].get(person_id)
+    if own is not None:
+        inputs[BUS_NODE] = own.estimate
+    return inputs
 
 
 def _distance(footprint: shapely.Polygon, truth) -> float | None:

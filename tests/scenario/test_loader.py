@@ -98,5 +98,5 @@ def test_override_of_an_unknown_table_is_an_error():
 
 
 def test_override_of_an_unknown_field_is_an_error():
-    with pytest.raises(UserError, match="bus.top_speed"):
+    with pytest.raises(UserError, match=r"bus\.top_speed"):
         load_scenario(SCENARIOS / "s1_pedestrian.toml", {"bus.top_speed": 3})

@@ -1,0 +1,89 @@
+"""Speed levels and the situational picture on the real road map (no SUMO run needed)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+
+from sse_cosim.control.picture import Picture, SceneContext, assess
+from sse_cosim.control.speed import SpeedLevel, choose_level, level_speed
+from sse_cosim.scenario.loader import load_scenario
+from sse_cosim.world.network import build_network
+from sse_cosim.world.roadmap import load_roadmap
+
+SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "s1_pedestrian.toml"
+
+
+@pytest.fixture(scope="module")
+def context() -> SceneContext:
+    scenario = load_scenario(SCENARIO)
+    roadmap = load_roadmap(build_network(scenario.network.sources_dir))
+    return SceneContext.build(roadmap, scenario.bus.route_edges, scenario.bus,
+                              scenario.controller, scenario.estimator.max_pedestrian_speed_mps)
+
+
+def picture(**changes) -> Picture:
+    base = dict(front_s=100.0, distance_to_crossing=98.0, crossing_ahead=False,
+                reach_radius_m=5.0, own_occluded_m2=0.0, unresolved_occluded_m2=0.0,
+                pedestrian_near_crossing=False, pedestrian_near_path=False,
+                pedestrian_in_stopping_distance=False)
+    return Picture(**{**base, **changes})
+
+
+@pytest.mark.parametrize(
+    ("changes", "level"),
+    [
+        ({}, SpeedLevel.NOMINAL),
+        ({"unresolved_occluded_m2": 3.0}, SpeedLevel.CAUTIOUS),
+        ({"unresolved_occluded_m2": 3.0, "crossing_ahead": True}, SpeedLevel.SLOW),
+        ({"pedestrian_near_crossing": True, "crossing_ahead": True}, SpeedLevel.SLOW),
+        ({"pedestrian_near_crossing": True}, SpeedLevel.NOMINAL),
+        ({"own_occluded_m2": 50.0, "crossing_ahead": True}, SpeedLevel.NOMINAL),
+        ({"pedestrian_near_path": True, "unresolved_occluded_m2": 3.0}, SpeedLevel.VERY_SLOW),
+        ({"pedestrian_in_stopping_distance": True, "pedestrian_near_path": True},
+         SpeedLevel.EMERGENCY),
+    ],
+)
+def test_levels_follow_the_rules_most_severe_first(changes, level):
+    config = load_scenario(SCENARIO).controller
+    assert choose_level(picture(**changes), config) is level
+
+
+def test_level_speeds_are_the_configured_reductions():
+    config = load_scenario(SCENARIO).controller
+    speeds = [level_speed(level, 20.0, config) for level in SpeedLevel]
+    assert speeds == pytest.approx([20.0, 14.0, 10.0, 4.0, 0.0])
+
+
+def test_reach_radius_shrinks_as_the_bus_nears_and_vanishes_once_past(context):
+    start, end = context.crossing_span
+    radii = [context.reach_radius(s) for s in (start - 60, start - 30, start - 5)]
+    assert radii[0] > radii[1] > radii[2] > 0
+    assert radii[0] <= context.config.interest_radius_m
+    assert context.reach_radius(end + context.bus.length_m + 0.1) == 0.0
+
+
+def test_a_pedestrian_in_the_lane_ahead_triggers_an_emergency_stop(context):
+    start, _ = context.crossing_span
+    front = np.array(context.route_line.interpolate(start - 20.0).coords[0])
+    in_lane = shapely.Point(front + np.array([10.0, 0.0])).buffer(0.5)
+    on_far_sidewalk = shapely.Point(front[0] + 10.0, 7.0).buffer(0.5)
+    empty = shapely.Polygon()
+    stop = assess(context, front, 14.0, empty, empty, [in_lane])
+    clear = assess(context, front, 14.0, empty, empty, [on_far_sidewalk])
+    assert stop.pedestrian_in_stopping_distance and stop.pedestrian_near_path
+    assert not clear.pedestrian_near_path and not clear.pedestrian_in_stopping_distance
+
+
+def test_hidden_area_counts_only_within_reach_of_the_crossing(context):
+    start, _ = context.crossing_span
+    front = np.array(context.route_line.interpolate(start - 40.0).coords[0])
+    near = shapely.box(196.0, -8.0, 198.0, -6.0)  # sidewalk right at the zebra
+    far = shapely.box(150.0, -8.0, 152.0, -6.0)  # sidewalk 46 m before it
+    for hidden, expected in ((near, True), (far, False)):
+        result = assess(context, front, 20.0, hidden, hidden, [])
+        assert (result.unresolved_occluded_m2 > 1.0) is expected
+        assert result.own_occluded_m2 == pytest.approx(hidden.area, rel=1e-6)

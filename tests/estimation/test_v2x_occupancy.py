@@ -1,0 +1,93 @@
+"""V2X delivery and the polygon refinements (negative information)."""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+
+from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.occupancy import (
+    ClearRegion,
+    OccupancyTracker,
+    UnobservedArea,
+    dilate,
+)
+from sse_cosim.estimation.v2x import Message, V2XLink
+from sse_cosim.scenario.model import V2X, Estimator
+from sse_cosim.sets import Zonotope
+
+DT = 0.1
+
+
+def message(sender: str, step: int) -> Message:
+    return Message(sender, step, {"ped": Zonotope(np.zeros(2), np.eye(2))}, shapely.box(0, 0, 1, 1))
+
+
+def test_latency_delays_delivery_and_newest_message_wins():
+    link = V2XLink(V2X(latency_steps=2, drop_probability=0.0), np.random.default_rng(0))
+    assert link.send(message("car", 0), distance_to_bus=10.0)
+    assert link.deliver(1) == []
+    assert [m.sent_step for m in link.deliver(2)] == [0]
+    link.send(message("car", 3), 10.0)
+    link.deliver(5)
+    assert link.latest["car"].sent_step == 3
+
+
+def test_out_of_range_and_dropped_messages_never_arrive():
+    link = V2XLink(V2X(range_m=50.0, drop_probability=0.5), np.random.default_rng(1))
+    assert not link.send(message("car", 0), distance_to_bus=60.0)
+    sent = sum(link.send(message("car", k), 10.0) for k in range(400))
+    assert 150 < sent < 250  # about half dropped, reproducibly for this seed
+
+
+def test_stale_estimates_are_predicted_to_now():
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.0), DT)
+    link = V2XLink(V2X(latency_steps=3), np.random.default_rng(0))
+    link.send(message("rsu1", 0), 5.0)
+    link.deliver(3)
+    aged = link.picture(3, model).estimates["ped"]["rsu1"]
+    grown = 2.0 * (1.0 + 3 * model.max_speed * DT)
+    assert abs(aged.volume() - grown**2) < 1e-9
+
+
+def test_dilate_circumscribes_the_disc():
+    square = shapely.box(0, 0, 1, 1)
+    grown = dilate(square, 1.0)
+    for angle in np.linspace(0, 2 * np.pi, 73):
+        corner_reach = shapely.Point(1 + np.cos(angle), 1 + np.sin(angle))
+        assert grown.buffer(1e-9).covers(corner_reach)
+
+
+def test_unobserved_area_is_cleared_by_views_and_grows_back_from_unseen_ground():
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.0, max_pedestrian_speed_mps=1.0),
+                                    DT)
+    walkable = shapely.box(0, 0, 20, 2)
+    area = UnobservedArea(walkable, model, DT, latency_steps=0)
+    seen = shapely.box(0, -1, 10, 3)
+    first = area.update(0, seen, [])
+    assert abs(first.area - 20.0) < 1e-6  # the half in view is clear
+    regrown = area.update(1, shapely.Polygon(), [])
+    # the cleared half regrows from the unseen half at 1 m/s: 0.1 m per step (+ polygon slack)
+    assert 20.0 + 2 * 0.1 - 1e-6 <= regrown.area <= 2 * (10.0 + 0.1 * 1.1)
+
+
+def test_shared_views_apply_at_the_step_they_were_taken():
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.0, max_pedestrian_speed_mps=1.0),
+                                    DT)
+    walkable = shapely.box(0, 0, 20, 2)
+    area = UnobservedArea(walkable, model, DT, latency_steps=2)
+    for step in range(2):
+        area.update(step, shapely.Polygon(), [])
+    # the view taken at step 0 arrives at step 2: carried two steps forward, not eroded
+    now = area.update(2, shapely.Polygon(), [shapely.box(-1, -1, 21, 3)])
+    assert now.is_empty
+
+
+def test_known_pedestrian_region_excludes_clear_regions_and_keeps_the_truth():
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    tracker = OccupancyTracker(model, DT)
+    fused = {"ped": Zonotope(np.array([5.0, 0.0]), np.eye(2) * 3.0)}
+    view = shapely.box(0, -5, 4, 5)  # saw x < 4 without the pedestrian
+    region = tracker.update(0, fused, {"ped": [ClearRegion(view, 0)]})["ped"]
+    assert not region.intersects(shapely.box(0, -2, 3.5, 2))
+    assert region.covers(shapely.Point(6.0, 1.0))
