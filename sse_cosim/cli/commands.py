@@ -118,3 +118,17 @@ def fields() -> None:
     from sse_cosim.scenario.fields import fields_markdown
 
     click.echo(fields_markdown(), nl=False)
+
+
+@cli.command()
+@click.argument("sources", type=click.Path(path_type=Path, file_okay=False),
+                default=Path("sumo_net"))
+def network(sources: Path) -> None:
+    """Build the road network from the plain-XML SOURCES folder (default: sumo_net/).
+
+    Runs netconvert (from the eclipse-sumo package) and caches the .net.xml under
+    SOURCES/build/; a run rebuilds it by itself when a source changes. Prints its path.
+    """
+    from sse_cosim.world.network import build_network
+
+    click.echo(build_network(sources))

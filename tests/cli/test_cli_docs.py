@@ -16,7 +16,7 @@ def test_readme_field_table_is_generated_from_the_schema():
     assert fields_markdown() in (ROOT / "README.md").read_text(encoding="utf-8")
 
 
-@pytest.mark.parametrize("command", [[], ["run"], ["batch"], ["fields"]])
+@pytest.mark.parametrize("command", [[], ["run"], ["batch"], ["fields"], ["network"]])
 def test_help_explains_every_command(command, capsys):
     main([*command, "--help"])
     text = capsys.readouterr().out
