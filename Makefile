@@ -25,7 +25,7 @@ run: $(STAMP)
 	$(BIN)/sse-cosim batch scenarios/ --out results/
 
 test: $(DEVSTAMP)
-	$(BIN)/ruff check sse_cosim tests benchmarks
+	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q
 
 bench: $(STAMP)
