@@ -254,7 +254,8 @@ def _plan_pedestrian(net: sumolib.net.Net, scenario: Scenario, roadmap: RoadMap,
     distance = distance_to_crossing(net, path, ped.start_pos_m)
     walk_s = distance / ped.walking_speed_mps
     wanted = ped.steps_onto_crossing_s
-    depart = max(0.0, round((wanted - walk_s) / dt) * dt)
+    # the last step at which it can leave and still be on time (never late by rounding)
+    depart = max(0.0, math.floor((wanted - walk_s) / dt + 1e-9) * dt)
     return PedestrianPlan(
         path=tuple(path),
         distance_to_crossing_m=distance,

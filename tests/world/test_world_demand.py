@@ -20,28 +20,39 @@ def _plan(net_path: Path, **overrides: object) -> demand.ActorPlan:
                               load_roadmap(net_path), SOURCE)
 
 
+WALKING_AREA_M = 2.82  # the south walking area's path from the sidewalk to the zebra
+CROSSING_START_M = 198.0  # where WC's sidewalk meets the junction
+
+
+def _walk_to_crossing(name: str = "s2_pedestrian") -> float:
+    return CROSSING_START_M - scenario(name).pedestrian.start_pos_m + WALKING_AREA_M
+
+
 def test_pedestrian_crosses_the_zebra(net_path: Path) -> None:
     plan = _plan(net_path).pedestrian
     assert plan is not None
     assert plan.path == ("WC", ":C_w1", ":C_c0", ":C_w0", "CW")
-    # 12 m of sidewalk (186 -> 198) and the walking area's 2.82 m
-    assert plan.distance_to_crossing_m == pytest.approx(14.82)
+    # the sidewalk from the start to the junction, then the walking area
+    assert plan.distance_to_crossing_m == pytest.approx(_walk_to_crossing())
 
 
 def test_pedestrian_departure_derived_from_crossing_time(net_path: Path) -> None:
     plan = _plan(net_path, **{"pedestrian.steps_onto_crossing_s": 20.0}).pedestrian
     assert plan is not None and not plan.late
-    assert plan.depart_s == pytest.approx(20.0 - 14.82 / 1.2, abs=0.051)
+    # the last 0.1 s step from which it is on time
+    latest = 20.0 - _walk_to_crossing() / 1.2
+    assert latest - 0.1 < plan.depart_s <= latest
     assert plan.crossing_time_s == 20.0
 
 
 def test_pedestrian_too_far_departs_at_zero(net_path: Path) -> None:
-    # The paper scenarios: 14.8 m at 1.2 m/s take 12.35 s > 9 s.
-    plan = _plan(net_path).pedestrian
+    # asked to reach the zebra 3 s before it can walk there
+    walk_time = _walk_to_crossing() / 1.2
+    plan = _plan(net_path, **{"pedestrian.steps_onto_crossing_s": walk_time - 3.0}).pedestrian
     assert plan is not None and plan.late
     assert plan.depart_s == 0.0
-    assert plan.crossing_time_s == pytest.approx(14.82 / 1.2)
-    assert plan.configured_crossing_time_s == 9.0
+    assert plan.crossing_time_s == pytest.approx(walk_time)
+    assert plan.configured_crossing_time_s == pytest.approx(walk_time - 3.0)
 
 
 @pytest.mark.parametrize(
@@ -98,9 +109,11 @@ def test_route_file(net_path: Path, tmp_path: Path) -> None:
     assert vehicles["bus"].get("departSpeed") == "20"
     assert vehicles["bus"].get("departLane") == "2"
     truck = vehicles["truck"]
-    assert (truck.get("departLane"), truck.get("departPos")) == ("1", "194")
+    assert (truck.get("departLane"), float(truck.get("departPos"))) == ("1", sc.truck.end_pos_m)
     assert truck.find("stop").get("lane") == "WC_1"
-    assert (vehicles["car"].get("depart"), vehicles["car"].get("departSpeed")) == ("2", "10")
+    car = vehicles["car"]
+    assert (float(car.get("depart")), float(car.get("departSpeed"))) == (sc.car.depart_s,
+                                                                          sc.car.speed_mps)
     walk = root.find("person/walk")
     assert walk.get("edges") == "WC :C_w1 :C_c0 :C_w0 CW"
     departs = [float(e.get("depart")) for e in root if e.tag in ("vehicle", "person")]

@@ -20,7 +20,14 @@ from sse_cosim.world.snapshot import PersonState
 
 pytestmark = pytest.mark.sumo
 
-TRUCK_CORNERS = np.array([[184.0, -6.0], [194.0, -6.0], [194.0, -3.5], [184.0, -3.5]])
+PARKING_STRIP_Y = (-6.0, -3.5)  # the eastbound parking strip (sumo_net/README.md)
+
+
+def truck_corners(end_pos_m: float, length_m: float) -> np.ndarray:
+    """The parked truck's corners, counter-clockwise from the rear right, shape (4, 2)."""
+    rear, low, high = end_pos_m - length_m, *PARKING_STRIP_Y
+    return np.array([[rear, low], [end_pos_m, low], [end_pos_m, high], [rear, high]])
+
 _RUNS: dict[str, Run] = {}
 
 
@@ -49,7 +56,8 @@ def test_actors_where_configured(name: str, tmp_path_factory: pytest.TempPathFac
     assert (bus.footprint.length, bus.footprint.width) == (12.0, 2.55)
     truck = first.role("truck")
     assert truck is not None
-    assert truck.footprint.corners() == pytest.approx(TRUCK_CORNERS, abs=0.05)
+    expected = truck_corners(sc.truck.end_pos_m, sc.truck.length_m)
+    assert truck.footprint.corners() == pytest.approx(expected, abs=0.05)
     # the truck stays parked: the same footprint at every step
     for snap in run.snapshots:
         assert snap.vehicles["truck"] == truck
