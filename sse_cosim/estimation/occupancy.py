@@ -78,6 +78,8 @@ class OccupancyTracker:
             for item in clear.get(person_id, ()):
                 # p was outside item.region ``age`` steps ago, within eps + reach*age of s now.
                 slack = eps + self.reach * item.age
+                if _apart(path, item.region, 2.0 * ARC_SAFETY * slack):
+                    continue  # the region cannot touch dilate(path): the cut keeps path whole
                 outside = shapely.difference(dilate(path, slack), item.region)
                 path = shapely.intersection(path, dilate(outside, slack))
             paths[person_id] = path
@@ -135,6 +137,16 @@ class UnobservedArea:
         unseen = shapely.difference(self.walkable, shapely.union_all(seen)) if seen \
             else self.walkable
         return shapely.intersection(dilate(path, self.reach), dilate(unseen, self.model.jitter))
+
+
+def _apart(first: shapely.Geometry, second: shapely.Geometry, margin: float) -> bool:
+    """Whether the bounding boxes of two geometries are more than ``margin`` apart (or one is
+    empty): then ``second`` misses ``first`` dilated by anything up to ``margin``."""
+    if first.is_empty or second.is_empty:
+        return True
+    a, b = first.bounds, second.bounds
+    return (a[0] - margin > b[2] or b[0] > a[2] + margin
+            or a[1] - margin > b[3] or b[1] > a[3] + margin)
 
 
 def zonotope_polygon(position_set: Zonotope) -> shapely.Geometry:

@@ -13,6 +13,7 @@ of the arc (sagitta ``range * (1 - cos(pi / (4 * resolution)))``).
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -306,11 +307,33 @@ def visibility_regions(
     ``boxes`` are the occluders (the carrier already left out); only those reaching the
     sector's bounding circle are used. ``sector`` overrides the computed sector polygon
     (e.g. a cached one of a static sensor). The two regions partition the sector.
+
+    A static sensor (same pose, same ``sector`` object) whose near occluders stand still
+    (a parked truck) gets the same regions step after step: they are memoised on the pose,
+    the sector and the occluders' exact coordinates, so a hit returns the identical result.
     """
+    given = sector is not None  # a computed sector is new every call: nothing to reuse
     if sector is None:
         sector = sector_polygon(pose, fov_rad, range_m, resolution)
     near = boxes.subset(boxes.distances(pose.position) <= range_m) if len(boxes) else boxes
     if len(near) == 0:
         return sector, shapely.Polygon()
+    key = None
+    if given:
+        key = (pose.x, pose.y, pose.heading, fov_rad, range_m, id(sector),
+               near.centers.tobytes(), near.axes.tobytes(), near.half.tobytes())
+        hit = _REGION_CACHE.get(key)
+        if hit is not None and hit[0] is sector:
+            _REGION_CACHE.move_to_end(key)
+            return hit[1], hit[2]
     shadow = shapely.union_all(shadow_polygons(pose.position, near, range_m))
-    return shapely.difference(sector, shadow), shapely.intersection(sector, shadow)
+    visible, occluded = shapely.difference(sector, shadow), shapely.intersection(sector, shadow)
+    if key is not None:
+        _REGION_CACHE[key] = (sector, visible, occluded)
+        if len(_REGION_CACHE) > _REGION_CACHE_SIZE:
+            _REGION_CACHE.popitem(last=False)
+    return visible, occluded
+
+
+_REGION_CACHE_SIZE = 64
+_REGION_CACHE: OrderedDict[tuple, tuple] = OrderedDict()

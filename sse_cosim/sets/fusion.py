@@ -43,7 +43,9 @@ def fuse_with_weights(zonotopes: Sequence[Zonotope], weights: ArrayLike) -> Zono
         raise ValueError("fusion weights must not sum to zero (Prop. 2)")
     center = sum(wj * z.center for wj, z in zip(w, zonotopes, strict=True)) / total
     generators = np.hstack([wj * z.generators for wj, z in zip(w, zonotopes, strict=True)]) / total
-    return Zonotope(center, generators).remove_zero_generators()
+    if not (np.isfinite(center).all() and np.isfinite(generators).all()):
+        raise ValueError("zonotope center and generators must be finite")
+    return Zonotope.unchecked(center, generators).remove_zero_generators()
 
 
 def frobenius_weights(zonotopes: Sequence[Zonotope]) -> FloatArray:
@@ -79,6 +81,8 @@ def strips_fusion(zonotopes: Sequence[Zonotope]) -> Zonotope:
     base = zonotopes[index]
     facets = [zonotope_facet_strips(z) for j, z in enumerate(zonotopes) if j != index]
     cutting = Strips.stack([s.select(~strip_covers(base, s)) for s in facets]).normalized()
+    if len(cutting) == 0:
+        return base
     lo, hi = projection_interval(base, cutting)
     tightest_first = np.argsort(cutting.radii / (hi - lo), kind="stable")
     return intersect_strips(base, cutting.select(tightest_first), method="volume")

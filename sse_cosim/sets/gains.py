@@ -20,9 +20,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from sse_cosim.sets._registry import lookup
-from sse_cosim.sets.consistency import strip_covers
 from sse_cosim.sets.strips import Strips
-from sse_cosim.sets.zonotope import FloatArray, Zonotope, cofactor_vectors, generator_volume
+from sse_cosim.sets.zonotope import (
+    FloatArray,
+    Zonotope,
+    cofactor_vectors,
+    full_rank,
+    generator_volume,
+)
 
 GainMethod = Callable[[Zonotope, Strips], FloatArray]
 """Chooses Λ (n, m) for Z and m strips with unit normals."""
@@ -54,9 +59,13 @@ def apply_gain(zonotope: Zonotope, strips: Strips, gain: ArrayLike) -> Zonotope:
     lam = np.asarray(gain, dtype=np.float64)
     if lam.shape != (zonotope.dim, len(strips)):
         raise ValueError(f"gain must have shape {(zonotope.dim, len(strips))}; got {lam.shape}")
+    if not np.isfinite(lam).all():
+        raise ValueError("gain must be finite")
     center = zonotope.center + lam @ (strips.values - strips.normals @ zonotope.center)
     generators = updated_generators(zonotope.generators, strips, lam)
-    return Zonotope(center, generators).remove_zero_generators()
+    if not (np.isfinite(center).all() and np.isfinite(generators).all()):
+        raise ValueError("zonotope center and generators must be finite")
+    return Zonotope.unchecked(center, generators).remove_zero_generators()
 
 
 def frobenius_gain(zonotope: Zonotope, strips: Strips) -> FloatArray:
@@ -135,11 +144,23 @@ def strip_gain_volume(generators: FloatArray, normal: FloatArray, radius: float,
 
 def volume_gain_vertices(generators: FloatArray, normal: FloatArray, radius: float) -> FloatArray:
     """Exact 2-D minimizer of :func:`strip_gain_volume`: the best vertex of the arrangement of
-    the lines hᵀλ = 1 and d_iᵀλ = 0, i.e. λ = 0 or λ = g_i / (hᵀg_i)."""
-    hg = normal @ generators
-    usable = np.abs(hg) > 1e-12 * np.linalg.norm(generators, axis=0)
-    candidates = np.vstack([np.zeros(2), (generators[:, usable] / hg[usable]).T])
-    return candidates[np.argmin(strip_gain_volume(generators, normal, radius, candidates))]
+    the lines hᵀλ = 1 and d_iᵀλ = 0, i.e. λ = 0 or λ = g_i / (hᵀg_i).
+
+    All candidates are scored at once in closed form: d_iᵀλ = g_i × λ (2-D cross product) and
+    V = Σ_{i<j} |g_i × g_j|; the same values as :func:`strip_gain_volume`.
+    """
+    g0, g1 = generators[0], generators[1]
+    hg = normal[0] * g0 + normal[1] * g1
+    usable = np.abs(hg) > 1e-12 * np.sqrt(g0 * g0 + g1 * g1)
+    cand0 = np.concatenate([[0.0], g0[usable] / hg[usable]])
+    cand1 = np.concatenate([[0.0], g1[usable] / hg[usable]])
+    nonzero = (g0 != 0) | (g1 != 0)
+    a, b = g0[nonzero], g1[nonzero]
+    base = 0.5 * np.abs(a[:, None] * b - b[:, None] * a).sum()  # vol / 2², as generator_volume
+    cuts = np.abs(cand1[:, None] * g0 - cand0[:, None] * g1).sum(axis=1)  # Σ_i |g_i × λ|
+    values = base * np.abs(1.0 - (cand0 * normal[0] + cand1 * normal[1])) + radius * cuts
+    best = int(np.argmin(values))
+    return np.array([cand0[best], cand1[best]])
 
 
 def _build_volume_lp(n: int, k: int) -> CompiledProblem:
@@ -189,20 +210,29 @@ def _sequential(choose: StripGain) -> GainMethod:
     """
 
     def gain(zonotope: Zonotope, strips: Strips) -> FloatArray:
+        # Plain arrays throughout: the same arithmetic as strip_covers, frobenius_gain and
+        # apply_gain on one strip, without building a Strips and a Zonotope per strip.
         n = zonotope.dim
-        total = np.zeros((n, 0))
-        current = zonotope
+        total = np.zeros((n, len(strips)))
+        center, g = zonotope.center, zonotope.generators
         for j in range(len(strips)):
-            strip = strips.select([j])
-            normal, radius = strip.normals[0], float(strip.radii[0])
-            if strip_covers(current, strip)[0]:
-                lam = np.zeros(n)
-            elif np.linalg.matrix_rank(current.generators) < n:
-                lam = frobenius_gain(current, strip)[:, 0]
+            normal, value, radius = strips.normals[j], strips.values[j], float(strips.radii[j])
+            hg = normal @ g
+            mid, half = normal @ center, np.abs(hg).sum()
+            if mid - half >= value - radius and mid + half <= value + radius:
+                continue  # the strip covers the current set: λ = 0, nothing changes
+            if not full_rank(g):
+                # one-strip frobenius gain: λ = G (hG)ᵀ / (|hG|² + r²)
+                lam = g @ hg / (hg @ hg + radius * radius)
             else:
-                lam = choose(current.generators, normal, radius)
-            total = np.column_stack([total - np.outer(lam, normal @ total), lam])
-            current = apply_gain(current, strip, lam[:, None])
+                lam = choose(g, normal, radius)
+            if not lam.any():
+                continue
+            total[:, :j] -= np.outer(lam, normal @ total[:, :j])
+            total[:, j] = lam
+            center = center + lam * (value - mid)
+            g = np.hstack([g - np.outer(lam, hg), (lam * radius)[:, None]])
+            g = g[:, np.any(g != 0, axis=0)]
         return total
 
     return gain
@@ -213,11 +243,12 @@ def _smallest_volume(*methods: GainMethod) -> GainMethod:
 
     def gain(zonotope: Zonotope, strips: Strips) -> FloatArray:
         candidates = [method(zonotope, strips) for method in methods]
-        candidates.append(np.zeros((zonotope.dim, len(strips))))
         volumes = [
             generator_volume(updated_generators(zonotope.generators, strips, lam))
             for lam in candidates
         ]
+        volumes.append(zonotope.volume())  # Λ = 0: the update only adds zero columns
+        candidates.append(np.zeros((zonotope.dim, len(strips))))
         return candidates[int(np.argmin(volumes))]
 
     return gain

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sse_cosim.sets.zonotope import BoolArray, FloatArray, Zonotope, facet_normals
+from sse_cosim.sets.zonotope import BoolArray, FloatArray, Zonotope, facet_normals, full_rank
 
 
 def _read_only(values: FloatArray) -> FloatArray:
@@ -27,6 +27,16 @@ class Strips:
     normals: FloatArray
     values: FloatArray
     radii: FloatArray
+
+    @classmethod
+    def unchecked(cls, normals: FloatArray, values: FloatArray, radii: FloatArray) -> Strips:
+        """Strips from float64 arrays (m, n), (m,), (m,) that this library derived from
+        validated strips or sets (finite, radii > 0, nonzero normals): no copy, no checks."""
+        strips = object.__new__(cls)
+        for name, array in (("normals", normals), ("values", values), ("radii", radii)):
+            array.setflags(write=False)
+            object.__setattr__(strips, name, array)
+        return strips
 
     def __post_init__(self) -> None:
         normals = np.atleast_2d(np.array(self.normals, dtype=np.float64))
@@ -68,25 +78,36 @@ class Strips:
         c = np.asarray(output_map, dtype=np.float64)
         if c.ndim != 2 or c.shape[0] != self.dim:
             raise ValueError(f"output map must have shape ({self.dim}, n); got {c.shape}")
-        return Strips(self.normals @ c, self.values, self.radii)
+        normals = self.normals @ c
+        if not np.isfinite(normals).all() or not np.any(normals != 0, axis=1).all():
+            raise ValueError("strip normals must be finite and nonzero")
+        return Strips.unchecked(normals, self.values, self.radii)
 
     def select(self, mask: ArrayLike) -> Strips:
         """The strips picked by a boolean mask (m,) or an index array."""
         index = np.asarray(mask)
         normals = self.normals[index].reshape(-1, self.dim)
-        return Strips(normals, self.values[index], self.radii[index])
+        return Strips.unchecked(
+            normals, self.values[index].reshape(-1), self.radii[index].reshape(-1)
+        )
 
     def normalized(self) -> Strips:
         """The same sets with unit normals (rows divided by ‖h_j‖)."""
-        norms = np.linalg.norm(self.normals, axis=1)
-        return Strips(self.normals / norms[:, None], self.values / norms, self.radii / norms)
+        norms = np.sqrt((self.normals * self.normals).sum(axis=1))
+        if (norms == 1.0).all():
+            return self
+        return Strips.unchecked(
+            self.normals / norms[:, None], self.values / norms, self.radii / norms
+        )
 
     @staticmethod
     def stack(strips: Sequence[Strips]) -> Strips:
         """All strips of a non-empty list, in order."""
         if not strips:
             raise ValueError("cannot stack an empty list of strips")
-        return Strips(
+        if len(strips) == 1:
+            return strips[0]
+        return Strips.unchecked(
             np.vstack([s.normals for s in strips]),
             np.concatenate([s.values for s in strips]),
             np.concatenate([s.radii for s in strips]),
@@ -101,8 +122,8 @@ def zonotope_facet_strips(zonotope: Zonotope) -> Strips:
     Z) when G has full rank; a rank-deficient Z has no full-dimensional facet and gives no strip.
     """
     g = zonotope.generators
-    if g.shape[1] < zonotope.dim or np.linalg.matrix_rank(g) < zonotope.dim:
-        return Strips(np.zeros((0, zonotope.dim)), np.zeros(0), np.zeros(0))
+    if not full_rank(g):
+        return Strips.unchecked(np.zeros((0, zonotope.dim)), np.zeros(0), np.zeros(0))
     normals = facet_normals(g)
-    return Strips(normals, normals @ zonotope.center, np.abs(normals @ g).sum(axis=1))
+    return Strips.unchecked(normals, normals @ zonotope.center, np.abs(normals @ g).sum(axis=1))
 

@@ -2,6 +2,12 @@
 
 Exact operations: Minkowski sum (eq. minkowski), linear map (eq. linmap), support function,
 interval hull, volume, 2-D vertices and point containment.
+
+Performance: the public constructor validates and copies its arrays; operations of this
+library build their results with :meth:`Zonotope.unchecked`, which skips that for arrays the
+library computed itself from validated inputs (finite by construction). 2-D sets, the only
+ones the co-simulation uses, get closed-form paths (cross products instead of SVDs and
+determinant stacks); ``tests/sets`` checks them against the general code.
 """
 
 from __future__ import annotations
@@ -45,11 +51,12 @@ def generator_volume(generators: FloatArray) -> float:
 
     Zero columns are skipped first, so adding or dropping them never changes the rounding.
     """
+    if generators.shape[0] == 2:
+        g = generators[:, (generators[0] != 0) | (generators[1] != 0)]
+        cross = g[0][:, None] * g[1] - g[1][:, None] * g[0]
+        return float(2.0 * np.abs(cross).sum())
     generators = generators[:, np.any(generators != 0, axis=0)]
     n, e = generators.shape
-    if n == 2:
-        cross = np.outer(generators[0], generators[1]) - np.outer(generators[1], generators[0])
-        return float(2.0 * np.abs(cross).sum())
     blocks = generators[:, subset_indices(e, n)].transpose(1, 0, 2)
     return float(2.0**n * np.abs(np.linalg.det(blocks)).sum())
 
@@ -60,6 +67,8 @@ def cofactor_vectors(generators: FloatArray) -> FloatArray:
     G (n, e) -> (C(e, n-1), n); in 2-D row i is (-g_i[1], g_i[0]).
     """
     n, e = generators.shape
+    if n == 2:
+        return np.stack([-generators[1], generators[0]], axis=1)
     blocks = generators[:, subset_indices(e, n - 1)].transpose(1, 0, 2)
     rows = np.arange(n)
     minors = np.stack([np.linalg.det(blocks[:, rows != i, :]) for i in range(n)], axis=1)
@@ -70,14 +79,36 @@ def facet_normals(generators: FloatArray) -> FloatArray:
     """Unit normals (k, n) of all candidate facets of ⟨c, G⟩: the nonzero cofactor vectors,
     normalized, with parallel ones merged (sign fixed so the first nonzero entry is positive)."""
     d = cofactor_vectors(generators)
-    norms = np.linalg.norm(d, axis=1)
+    norms = np.sqrt((d * d).sum(axis=1))
     units = d[norms > 0] / norms[norms > 0, None]
     rounded = np.round(units, 12) + 0.0
     first = np.argmax(rounded != 0, axis=1)
     sign = np.sign(rounded[np.arange(len(units)), first])
-    _, keep = np.unique(rounded * sign[:, None] + 0.0, axis=0, return_index=True)
+    keyed = rounded * sign[:, None] + 0.0
+    if keyed.shape[1] == 2:  # same first occurrences as the row-wise unique, much cheaper
+        _, keep = np.unique(keyed[:, 0] + 1j * keyed[:, 1], return_index=True)
+    else:
+        _, keep = np.unique(keyed, axis=0, return_index=True)
     keep = np.sort(keep)
     return units[keep] * sign[keep, None]
+
+
+def full_rank(generators: FloatArray) -> bool:
+    """Whether G (n, e) has rank n, with numpy's ``matrix_rank`` tolerance
+    (s_min > e·eps·s_max); 2-D in closed form (s_max² and s_min·s_max from 2×2 minors)."""
+    n, e = generators.shape
+    if e < n:
+        return False
+    if n != 2:
+        return bool(np.linalg.matrix_rank(generators) == n)
+    a, b = generators[0], generators[1]
+    p, q, r = a @ a, b @ b, a @ b
+    if p + q == 0.0:
+        return False
+    s_max2 = 0.5 * (p + q) + np.sqrt(0.25 * (p - q) ** 2 + r * r)  # largest eigenvalue of GGᵀ
+    cross = a[:, None] * b - b[:, None] * a
+    s_prod = np.sqrt(0.5 * (cross * cross).sum())  # s_min·s_max = sqrt(det GGᵀ) (Cauchy-Binet)
+    return bool(s_prod > e * np.finfo(np.float64).eps * s_max2)
 
 
 def _merge_parallel(sorted_generators: FloatArray) -> FloatArray:
@@ -98,6 +129,17 @@ class Zonotope:
 
     # Makes numpy defer ``M @ Z`` and ``v + Z`` to __rmatmul__ / __radd__.
     __array_ufunc__ = None
+
+    @classmethod
+    def unchecked(cls, center: FloatArray, generators: FloatArray) -> Zonotope:
+        """⟨c, G⟩ from float64 arrays of shapes (n,), (n, e) that this library computed from
+        validated inputs: no copy, no checks (they are made read-only in place)."""
+        zonotope = object.__new__(cls)
+        center.setflags(write=False)
+        generators.setflags(write=False)
+        object.__setattr__(zonotope, "center", center)
+        object.__setattr__(zonotope, "generators", generators)
+        return zonotope
 
     def __post_init__(self) -> None:
         center = np.array(self.center, dtype=np.float64)
@@ -131,7 +173,7 @@ class Zonotope:
             if other.dim != self.dim:
                 raise ValueError(f"Minkowski sum of a {self.dim}-D and a {other.dim}-D zonotope")
             generators = np.hstack([self.generators, other.generators])
-            return Zonotope(self.center + other.center, generators)
+            return Zonotope.unchecked(self.center + other.center, generators)
         return self.translate(other)
 
     __radd__ = __add__
@@ -139,16 +181,20 @@ class Zonotope:
     def __rmatmul__(self, matrix: ArrayLike) -> Zonotope:
         """``M @ Z`` = ⟨Mc, MG⟩ for M (m, n) (eq. linmap)."""
         m = np.asarray(matrix, dtype=np.float64)
-        if m.ndim != 2 or m.shape[1] != self.dim:
+        if m.ndim != 2 or m.shape[1] != self.dim or m.shape[0] == 0:
             raise ValueError(f"linear map must have shape (m, {self.dim}); got {m.shape}")
-        return Zonotope(m @ self.center, m @ self.generators)
+        if not np.isfinite(m).all():
+            raise ValueError("zonotope center and generators must be finite")
+        return Zonotope.unchecked(m @ self.center, m @ self.generators)
 
     def translate(self, vector: ArrayLike) -> Zonotope:
         """⟨c + v, G⟩ for v (n,)."""
         v = np.asarray(vector, dtype=np.float64)
         if v.shape != (self.dim,):
             raise ValueError(f"translation must have shape ({self.dim},); got {v.shape}")
-        return Zonotope(self.center + v, self.generators)
+        if not np.isfinite(v).all():
+            raise ValueError("zonotope center and generators must be finite")
+        return Zonotope.unchecked(self.center + v, self.generators)
 
     def scale(self, factor: float) -> Zonotope:
         """L·Z = ⟨Lc, LG⟩ for a scalar L (eq. linmap)."""
@@ -166,8 +212,13 @@ class Zonotope:
         return float(values) if d.ndim == 1 else values
 
     def volume(self) -> float:
-        """Exact n-D volume: 2ⁿ Σ over n-subsets S of generators of |det G_S|."""
-        return generator_volume(self.generators)
+        """Exact n-D volume: 2ⁿ Σ over n-subsets S of generators of |det G_S| (computed once:
+        the arrays are read-only)."""
+        cached = self.__dict__.get("_volume")
+        if cached is None:
+            cached = generator_volume(self.generators)
+            self.__dict__["_volume"] = cached
+        return cached
 
     def vertices(self) -> FloatArray:
         """Vertices of a 2-D zonotope, counter-clockwise from the lowest one, shape (k, 2).
@@ -200,7 +251,7 @@ class Zonotope:
         if points.shape[1] != self.dim:
             raise ValueError(f"points must have {self.dim} coordinates; got shape {x.shape}")
         g = self.generators
-        if self.dim == 2 and np.linalg.matrix_rank(g) == 2:
+        if self.dim == 2 and full_rank(g):
             normals = facet_normals(g)
             offsets = np.abs((points - self.center) @ normals.T)
             inside = (offsets <= np.abs(normals @ g).sum(axis=1) + tol).all(axis=1)
@@ -225,13 +276,19 @@ class Zonotope:
         return result.status == 0
 
     def remove_zero_generators(self) -> Zonotope:
-        """The same set without all-zero generator columns."""
-        return Zonotope(self.center, self.generators[:, np.any(self.generators != 0, axis=0)])
+        """The same set without all-zero generator columns (itself if it has none)."""
+        keep = np.any(self.generators != 0, axis=0)
+        if keep.all():
+            return self
+        return Zonotope.unchecked(self.center, self.generators[:, keep])
 
     def reduce(self, max_generators: int, method: str = "girard") -> Zonotope:
         """Sound reduction to at most ``max_generators`` (>= n) generators (see reduction.py)."""
         reducer = lookup(REDUCTION_METHODS, method, "reduction method")
-        return Zonotope(self.center, reducer(self.generators, max_generators))
+        generators = reducer(self.generators, max_generators)
+        if generators is self.generators:
+            return self
+        return Zonotope.unchecked(self.center, generators)
 
     def to_json(self) -> dict[str, list[Any]]:
         """``{"center": [n floats], "generators": n rows of e floats}`` (``G.tolist()``)."""
