@@ -54,6 +54,19 @@ def choose_level(picture: Picture, config: Controller) -> SpeedLevel:
     return SpeedLevel.NOMINAL
 
 
+def with_fallback(level: SpeedLevel, inconsistent: bool, config: Controller) -> SpeedLevel:
+    """``level``, made at least ``config.inconsistent_level`` while the picture is inconsistent.
+
+    A flagged source means some node broke its bounds: before the flag (the detection delay)
+    the fused set may have missed the pedestrian, and after it the picture rests on the
+    assumption of a single fault. The floor (default slow, docs/faults.md) covers that; the
+    rules above still apply on top of it.
+    """
+    if not inconsistent:
+        return level
+    return max(level, SpeedLevel[config.inconsistent_level.upper().replace(" ", "_")])
+
+
 def level_speed(level: SpeedLevel, nominal_mps: float, config: Controller) -> float:
     """Commanded speed (m/s) of a level; an emergency brake commands a stop."""
     factors = {

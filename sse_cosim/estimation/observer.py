@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+from sse_cosim.estimation.consistency import Suspicion, correct
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.sets import Strips, Zonotope, intersect_strips
 
@@ -26,12 +27,19 @@ class EstimatorSettings:
 
 @dataclass(frozen=True)
 class Track:
-    """A node's state set for one pedestrian at ``step``; ``detected`` if corrected this step."""
+    """A node's state set for one pedestrian at ``step``; ``detected`` if a sensor saw it.
+
+    ``flagged``: sensors whose strips were judged inconsistent and left out this step;
+    ``conflict``: the estimate is a hull of hypotheses (an inconsistency the node cannot
+    attribute, :mod:`sse_cosim.estimation.consistency`).
+    """
 
     person_id: str
     estimate: Zonotope
     step: int
     detected: bool
+    flagged: frozenset[str] = frozenset()
+    conflict: bool = False
 
 
 class NodeObserver:
@@ -42,30 +50,40 @@ class NodeObserver:
         self.model = model
         self.settings = settings
         self.tracks: dict[str, Track] = {}
+        self._suspicion: dict[str, Suspicion] = {}  # person id -> sensors held out
 
-    def step(self, step: int, detections: Mapping[str, Sequence[Strips]]) -> dict[str, Track]:
+    def step(
+        self, step: int, detections: Mapping[str, Sequence[Strips] | Mapping[str, Strips]]
+    ) -> dict[str, Track]:
         """Advance every track to ``step`` and correct those detected now.
 
         ``detections`` maps a pedestrian id to the position strips of this node's sensors
-        that see it at this step.
+        that see it at this step, by sensor name (or as a list). Strips inconsistent with the
+        prediction and the other sensors are left out (:func:`consistency.correct`).
         """
         updated: dict[str, Track] = {}
         for person_id in self.tracks.keys() | detections.keys():
-            strips = list(detections.get(person_id, ()))
-            path = self.model.path_strips(Strips.stack(strips)) if strips else None
+            strips = _by_sensor(detections.get(person_id, ()))
             previous = self.tracks.get(person_id)
-            if previous is None:
-                estimate = self.model.initial_set(path, self.settings.gain_method)
-            else:
-                estimate = self.model.predict(previous.estimate, step - previous.step)
-                if path is not None:
-                    measured = path.pullback(self.model.position_matrix)
-                    estimate = intersect_strips(estimate, measured, self.settings.gain_method)
+            predicted = None if previous is None else self.model.predict(
+                previous.estimate, step - previous.step)
+            update = correct(self.model, self.settings.gain_method, predicted, strips,
+                             self._suspicion.get(person_id, Suspicion()))
+            self._suspicion[person_id] = update.suspicion
+            estimate = update.estimate
             if self.model.state_bounds is not None:
                 estimate = intersect_strips(
                     estimate, self.model.state_bounds, self.settings.gain_method
                 )
             estimate = estimate.reduce(self.settings.max_generators, self.settings.reduction_method)
-            updated[person_id] = Track(person_id, estimate, step, bool(strips))
+            updated[person_id] = Track(person_id, estimate, step, bool(strips), update.flagged,
+                                       update.conflict)
         self.tracks = updated
         return updated
+
+
+def _by_sensor(strips: Sequence[Strips] | Mapping[str, Strips]) -> dict[str, Strips]:
+    """Detections keyed by sensor name; a plain list is keyed by position."""
+    if isinstance(strips, Mapping):
+        return dict(strips)
+    return {str(i): s for i, s in enumerate(strips)}

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, Track
@@ -27,12 +27,20 @@ def fuse_at_bus(
     for person_id in sorted(own.keys() | received.keys()):
         inputs = [own[person_id].estimate] if person_id in own else []
         inputs += [received[person_id][s] for s in sorted(received.get(person_id, {}))]
-        if len(inputs) == 1:
-            fused[person_id] = inputs[0]
-            continue
-        reduced = fuse(inputs, fusion_method).reduce(
-            settings.max_generators, settings.reduction_method
-        )
-        fused[person_id] = min([reduced, *inputs], key=lambda z: model.position(z).volume())
+        fused[person_id] = fuse_sets(inputs, fusion_method, settings, model)
     return fused
+
+
+def fuse_sets(
+    inputs: Sequence[Zonotope], fusion_method: str, settings: EstimatorSettings,
+    model: MotionModel,
+) -> Zonotope:
+    """Fuse (Prop. 2), reduce, and keep the smaller in position area of that and the
+    smallest input."""
+    if len(inputs) == 1:
+        return inputs[0]
+    reduced = fuse(list(inputs), fusion_method).reduce(
+        settings.max_generators, settings.reduction_method
+    )
+    return min([reduced, *inputs], key=lambda z: model.position(z).volume())
 

@@ -26,6 +26,8 @@ class Message:
 
     ``detected`` names the pedestrians its sensors saw when sending: for any other
     pedestrian, ``visible_region`` is a place it was not (negative information).
+    ``inconsistent``: the sender's own sources disagreed (it left a sensor out, or its
+    estimates are hulls of hypotheses; :mod:`sse_cosim.estimation.consistency`).
     """
 
     sender: str
@@ -33,6 +35,7 @@ class Message:
     estimates: dict[str, Zonotope]
     visible_region: shapely.Geometry
     detected: frozenset[str] = frozenset()
+    inconsistent: bool = False
 
 
 @dataclass(frozen=True)
@@ -62,13 +65,14 @@ class V2XLink:
         self._in_flight: list[tuple[int, Message]] = []
         self.latest: dict[str, Message] = {}
 
-    def send(self, message: Message, distance_to_bus: float) -> bool:
-        """Queue ``message``; False if out of range or dropped."""
+    def send(self, message: Message, distance_to_bus: float, extra_latency_steps: int = 0) -> bool:
+        """Queue ``message``; False if out of range or dropped. ``extra_latency_steps`` delay
+        it beyond the link's latency (an injected fault)."""
         if distance_to_bus > self.config.range_m:
             return False
         if self.rng.random() < self.config.drop_probability:
             return False
-        arrival = message.sent_step + self.config.latency_steps
+        arrival = message.sent_step + self.config.latency_steps + extra_latency_steps
         self._in_flight.append((arrival, message))
         return True
 

@@ -15,6 +15,7 @@ import shapely
 
 from sse_cosim.control.speed import SpeedLevel
 from sse_cosim.scenario.model import BUS_NODE, Scenario
+from sse_cosim.sensors.faults import FaultLog
 from sse_cosim.sets import Zonotope
 
 FUSED = "fused"
@@ -47,6 +48,11 @@ class RunRecorder:
     first_detection: dict[str, dict[str, float]] = field(default_factory=dict)
     first_shared_fusion: dict[str, Any] | None = None
     fusion_larger_than_input: int = 0  # steps where the fused set outgrew its smallest input
+    flag_steps: Counter = field(default_factory=Counter)  # "<sensor or node>: <flag>" -> steps
+    faults: FaultLog = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.faults = FaultLog(self.scenario)
 
     def __call__(self, result) -> None:
         snap = result.snapshot
@@ -80,6 +86,7 @@ class RunRecorder:
                 if track.detected and node not in self.first_detection:
                     self.first_detection[node] = self._moment(t, result)
             row[f"{node}_area"] = area
+        self._flags(row, result)
         fused = result.fused.get(person_id) if person_id else None
         fused_position = result.model.position(fused) if fused is not None else None
         row["fused_area"] = fused_position.volume() if fused_position is not None else None
@@ -111,6 +118,19 @@ class RunRecorder:
         self.rows.append(row)
         if self._wants_scene(t):
             self.scenes.append(_frame(t, result, local_sets, fused_position, truth))
+
+    def _flags(self, row: dict[str, Any], result) -> None:
+        """Flag columns (per sensor: left out; per node: excluded/conflict), fault bookkeeping."""
+        flags = result.flags
+        for sensor, flagged in flags.sensors.items():
+            row[f"{sensor}_flag"] = flagged
+            self.flag_steps[f"{sensor}: left out"] += flagged
+        for node, flag in flags.nodes.items():
+            row[f"{node}_flag"] = flag
+            self.flag_steps[f"{node}: {flag}"] += bool(flag)
+        row["inconsistent"] = flags.inconsistent
+        self.faults.update(result.step, round(result.snapshot.time, 6), result.faults,
+                           flags.sensors, flags.nodes, result.shared.ages)
 
     def _check(self, t: float, node: str, position: Zonotope, truth) -> bool | None:
         if truth is None:
@@ -174,13 +194,27 @@ class RunRecorder:
             "first_shared_fusion": self.first_shared_fusion,
             "containment_violations": len(self.violations),
             "fusion_larger_than_input": self.fusion_larger_than_input,
+            "containment_violations_by_set": dict(Counter(v["node"] for v in self.violations)),
             "violations": self.violations[:20],
+            "faults": self._fault_summary(),
+            "flag_counts": {key: n for key, n in sorted(self.flag_steps.items()) if n},
+            "inconsistent_steps": sum(r["inconsistent"] for r in self.rows),
             "collisions": sum(r["collision"] for r in self.rows),
             "level_share": {
                 level.label: levels.get(level.label, 0) / max(len(self.rows), 1)
                 for level in SpeedLevel
             },
         }
+
+    def _fault_summary(self) -> list[dict[str, Any]]:
+        """Per injected fault its detection, and the fused/refined sets' containment
+        violations from its detection on."""
+        entries = self.faults.summary()
+        for entry in entries:
+            since = entry["detected_t"]
+            entry["fused_violations_after_detection"] = None if since is None else sum(
+                v["node"] in (FUSED, "possible") and v["t"] >= since for v in self.violations)
+        return entries
 
     def _area_stats(self) -> dict[str, dict[str, float]]:
         stats = {}
@@ -193,12 +227,10 @@ class RunRecorder:
 
 
 def _fusion_inputs(result, person_id: str) -> dict[str, Zonotope]:
-    """The state sets the bus fused for ``person_id``: its own and the received ones."""
-    inputs = dict(result.shared.estimates.get(person_id, {}))
+    """The state sets the bus fused for ``person_id``: its own and the received ones that
+    passed the consistency screen."""
     own = result.tracks[BUS_NODE].get(person_id)
-    if own is not None:
-        inputs[BUS_NODE] = own.estimate
-    return inputs
+    return result.screen.inputs(person_id, None if own is None else own.estimate)
 
 
 def _distance(footprint: shapely.Polygon, truth) -> float | None:

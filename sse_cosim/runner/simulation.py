@@ -3,12 +3,16 @@
 Data flows one way through a step:
 
 1. the SUMO snapshot (footprints, speeds, the pedestrian's true position);
-2. sensors: visibility, detections, strips;
-3. every node's observer: predict, correct with its own strips (Proposition 1), reduce;
+2. sensors: visibility, detections, strips -- as the scenario's injected faults distort them;
+3. every node's observer: predict, leave out strips inconsistent with the prediction and the
+   other sensors, correct with the rest (Proposition 1), reduce;
 4. V2X: every other node sends the bus its estimates and visible region;
-5. the bus fuses its own and the received estimates (Proposition 2), refines where each
-   known pedestrian can be and where an undetected one may be (negative information);
-6. the situational picture; 7. the speed level, set back into SUMO.
+5. the bus screens its own and the received estimates (a consistent majority, negative
+   information; :mod:`sse_cosim.estimation.consistency`), fuses those it keeps
+   (Proposition 2), refines where each known pedestrian can be and where an undetected one
+   may be (negative information);
+6. the situational picture; 7. the speed level (no faster than the fallback level while the
+   picture is inconsistent), set back into SUMO.
 
 The true position is checked against every node's set and the fused set at every step.
 """
@@ -16,27 +20,33 @@ The true position is checked against every node's set and the fused set at every
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import shapely
 
 from sse_cosim.control.picture import Picture, SceneContext, assess
-from sse_cosim.control.speed import SpeedLevel, choose_level, level_speed
+from sse_cosim.control.speed import SpeedLevel, choose_level, level_speed, with_fallback
+from sse_cosim.errors import SimulationError
+from sse_cosim.estimation.consistency import BusScreen, BusScreener, StepFlags, step_flags
+from sse_cosim.estimation.kalman import KalmanTracker, all_detections
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver, Track
 from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea
 from sse_cosim.estimation.shared import fuse_at_bus
 from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
+from sse_cosim.runner.timing import StageTimer
 from sse_cosim.scenario.model import BUS_NODE, Scenario
 from sse_cosim.sensors import SensorObservation, observe, specs_from_scenario
-from sse_cosim.sets import Zonotope
+from sse_cosim.sensors.faults import FaultInjector, FaultStatus
+from sse_cosim.sets import Strips, Zonotope
 from sse_cosim.world.roadmap import RoadMap
 from sse_cosim.world.snapshot import Snapshot
 from sse_cosim.world.sumo import SumoWorld
 
 CONTAINMENT_TOLERANCE = 1e-7
+INSERTION_WAIT_S = 2.0  # the bus departs at t = 0; SUMO retries an insertion every step
 
 
 @dataclass(frozen=True)
@@ -55,6 +65,9 @@ class StepResult:
     level: SpeedLevel
     commanded_speed: float
     model: MotionModel
+    screen: BusScreen = field(default_factory=BusScreen)  # what the bus fused, whom it flagged
+    flags: StepFlags = field(default_factory=StepFlags)  # per sensor and node
+    faults: dict[str, FaultStatus] = field(default_factory=dict)  # injected fault -> status
 
 
 StepCallback = Callable[[StepResult], None]
@@ -70,16 +83,18 @@ class SimulationInfo:
 
 
 def simulate(
-    scenario: Scenario, run_dir: Path, scenario_name: str, on_step: StepCallback
+    scenario: Scenario, run_dir: Path, scenario_name: str, on_step: StepCallback,
+    timer: StageTimer | None = None,
 ) -> SimulationInfo:
     """Run ``scenario`` in SUMO, calling ``on_step`` after every step.
 
     SUMO's own files (routes, logs) go to ``run_dir``. The bus leaving the network (end of
-    its route) or the scenario's duration ends the run.
+    its route) or the scenario's duration ends the run. ``timer`` (optional) is charged the
+    time of each stage of each step (:mod:`sse_cosim.runner.timing`).
     """
     dt = scenario.simulation.step_length_s
-    noise_rng, v2x_rng = (
-        np.random.default_rng(s) for s in np.random.SeedSequence(scenario.simulation.seed).spawn(2)
+    noise_rng, v2x_rng, fault_rng = (
+        np.random.default_rng(s) for s in np.random.SeedSequence(scenario.simulation.seed).spawn(3)
     )
     model = MotionModel.from_config(scenario.estimator, dt)
     settings = EstimatorSettings(
@@ -90,7 +105,11 @@ def simulate(
     observers = {node: NodeObserver(node, model, settings) for node in scenario.node_ids()}
     link = V2XLink(scenario.v2x, v2x_rng)
     occupancy = OccupancyTracker(model, dt)
+    kalman = KalmanTracker(model) if scenario.estimator.filter == "kalman" else None
     specs = specs_from_scenario(scenario)
+    faults = FaultInjector(scenario, specs, fault_rng)
+    screener = BusScreener(model, model.max_speed * dt)
+    was_inconsistent = False
     n_steps = round(scenario.simulation.duration_s / dt)
     with SumoWorld(scenario, run_dir, scenario_name) as world:
         context = SceneContext.build(
@@ -99,34 +118,64 @@ def simulate(
         )
         unobserved = UnobservedArea(context.walkable, model, dt, scenario.v2x.latency_steps)
         for step in range(n_steps):
+            if timer is not None:
+                timer.start()
             snapshot = world.step()
             bus = snapshot.role(BUS_NODE)
             if bus is None:
                 if world.bus_arrived:
                     return SimulationInfo(step, True, world.roadmap)
+                if not world.bus_departed and snapshot.time >= INSERTION_WAIT_S:
+                    raise SimulationError(scenario_name, "SUMO could not insert the bus in "
+                                          f"{INSERTION_WAIT_S:g} s (see {run_dir / 'sumo.log'})")
                 continue
-            observations = observe(snapshot, specs, noise_rng, want_regions=True)
+            if timer is not None:
+                timer.lap("sumo")
+            faults.begin_step(snapshot.time)
+            observations = faults.corrupt_observations(
+                snapshot, observe(snapshot, specs, noise_rng, want_regions=True))
+            if timer is not None:
+                timer.lap("geometry")
             tracks = {
                 node: observer.step(step, _detections_of(node, observations))
                 for node, observer in observers.items()
             }
-            _share(step, snapshot, scenario, observations, tracks, link)
+            if timer is not None:
+                timer.lap("local_fusion")
+            _share(step, snapshot, scenario, observations, tracks, link, faults, model)
             delivered = link.deliver(step)
             shared = link.picture(step, model)
-            fused = fuse_at_bus(
-                tracks[BUS_NODE], shared.estimates, scenario.estimator.fusion_method, settings,
-                model,
-            )
             bus_views = [o for o in observations.values() if o.node == BUS_NODE]
             clear = {
                 pid: [ClearRegion(o.visible, 0) for o in bus_views if pid not in o.detections]
                 + shared.clear_of(pid)
-                for pid in fused
+                for pid in tracks[BUS_NODE].keys() | shared.estimates.keys()
             }
-            possible = occupancy.update(step, fused, clear)
-            unknown = unobserved.update(
-                step, _union(o.visible for o in bus_views), [m.visible_region for m in delivered]
+            screen = screener.screen({pid: t.estimate for pid, t in tracks[BUS_NODE].items()},
+                                     shared.estimates, clear)
+            fused = fuse_at_bus(
+                {pid: tracks[BUS_NODE][pid] for pid in screen.own}, screen.received,
+                scenario.estimator.fusion_method, settings, model,
             )
+            flags = step_flags(specs, tracks, screen,
+                               any(m.inconsistent for m in link.latest.values()))
+            if flags.inconsistent and not was_inconsistent:
+                occupancy = OccupancyTracker(model, dt)  # its history may hold a faulty source
+            was_inconsistent = flags.inconsistent
+            if timer is not None:
+                timer.lap("sharing_fusion")
+            possible = occupancy.update(step, fused, clear)
+            if kalman is not None:  # the baseline: the controller gets the KF's 3-sigma ellipses
+                kalman.step(step, all_detections(observations.values()))
+                possible = kalman.regions()
+            unknown = unobserved.update(
+                step, _union(o.visible for o in bus_views),
+                # views delayed beyond the latency (a link fault) are not placed at the wrong step
+                [m.visible_region for m in delivered
+                 if step - m.sent_step == scenario.v2x.latency_steps],
+            )
+            if timer is not None:
+                timer.lap("occupancy")
             picture = assess(
                 context,
                 bus.footprint.front.position,
@@ -135,25 +184,32 @@ def simulate(
                 unknown,
                 list(possible.values()),
             )
-            level = choose_level(picture, scenario.controller)
+            level = with_fallback(choose_level(picture, scenario.controller), flags.inconsistent,
+                                  scenario.controller)
             commanded = level_speed(level, scenario.bus.nominal_speed_mps, scenario.controller)
             world.set_bus_speed(commanded, emergency=level is SpeedLevel.EMERGENCY)
+            if timer is not None:
+                timer.lap("control")
             on_step(
                 StepResult(
                     step, snapshot, observations, tracks, shared, unknown, fused, possible,
-                    picture, level, commanded, model,
+                    picture, level, commanded, model, screen, flags, faults.statuses(),
                 )
             )
+            if timer is not None:
+                timer.end_step("output")
         return SimulationInfo(n_steps, world.bus_arrived, world.roadmap)
 
 
-def _detections_of(node: str, observations: dict[str, SensorObservation]) -> dict[str, list]:
-    """Pedestrian id -> the strips of ``node``'s sensors that see it."""
-    result: dict[str, list] = {}
+def _detections_of(
+    node: str, observations: dict[str, SensorObservation]
+) -> dict[str, dict[str, Strips]]:
+    """Pedestrian id -> sensor name -> the strips of ``node``'s sensors that see it."""
+    result: dict[str, dict[str, Strips]] = {}
     for obs in observations.values():
         if obs.node == node:
             for person_id, detection in obs.detections.items():
-                result.setdefault(person_id, []).append(detection.strips)
+                result.setdefault(person_id, {})[obs.sensor] = detection.strips
     return result
 
 
@@ -164,21 +220,26 @@ def _share(
     observations: dict[str, SensorObservation],
     tracks: dict[str, dict[str, Track]],
     link: V2XLink,
+    faults: FaultInjector,
+    model: MotionModel,
 ) -> None:
-    """Every node other than the bus that is in the scene sends its picture to the bus."""
+    """Every node other than the bus that is in the scene sends its picture to the bus
+    (as its injected faults distort it, over a link with the injected losses and delays)."""
     bus_xy = snapshot.role(BUS_NODE).footprint.front.position
     for node, node_tracks in tracks.items():
         if node == BUS_NODE:
             continue
         node_obs = [o for o in observations.values() if o.node == node and o.pose is not None]
-        if not node_obs:
+        if not node_obs or faults.link_lost(node):
             continue
         position = node_obs[0].pose.position
         region = _union(o.visible for o in node_obs)
-        estimates = {pid: t.estimate for pid, t in node_tracks.items()}
+        estimates = faults.corrupt_estimates(
+            node, {pid: t.estimate for pid, t in node_tracks.items()}, snapshot, model)
         seen = frozenset(pid for o in node_obs for pid in o.detections)
-        message = Message(node, step, estimates, region, seen)
-        link.send(message, float(np.hypot(*(position - bus_xy))))
+        inconsistent = any(t.conflict or t.flagged for t in node_tracks.values())
+        message = Message(node, step, estimates, region, seen, inconsistent)
+        link.send(message, float(np.hypot(*(position - bus_xy))), faults.extra_latency(node))
 
 
 def _union(geometries) -> shapely.Geometry:

@@ -57,4 +57,6 @@ def _model_of(annotation) -> type[BaseModel] | None:
 
 
 def _key_name(field_name: str) -> str:
-    return {"sensors": "sensor name", "rsus": "unit id"}.get(field_name, "key")
+    names = {"sensors": "sensor name", "rsus": "unit id", "sensor": "fault name",
+             "node": "fault name", "link": "fault name"}
+    return names.get(field_name, "key")

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import copy
 import tomllib
+import typing
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -85,19 +87,23 @@ def _schema_has_table(parts: list[str]) -> bool:
     """Whether the schema has a table at ``parts`` (dict-valued fields accept any key)."""
     model: Any = Scenario
     for part in parts:
-        if model is dict:
-            model = _DICT_VALUE
+        if isinstance(model, _DictOf):
+            model = model.value  # any key: the entry has the dict's value type
             continue
         fields = getattr(model, "model_fields", None)
         if fields is None or part not in fields:
             return False
         annotation = fields[part].annotation
         origin = getattr(annotation, "__origin__", None)
-        model = dict if origin is dict else annotation
-    return model is dict or hasattr(model, "model_fields")
+        model = _DictOf(typing.get_args(annotation)[1]) if origin is dict else annotation
+    return isinstance(model, _DictOf) or hasattr(model, "model_fields")
 
 
-_DICT_VALUE = object()
+@dataclass(frozen=True)
+class _DictOf:
+    """A dict-valued schema field (``sensors``, ``faults.sensor``): its value type."""
+
+    value: Any
 
 
 def _load_merged(path: Path, chain: tuple[Path, ...]) -> dict[str, Any]:
@@ -165,6 +171,17 @@ _FIXES = {
     "less_than_equal": "use a smaller value",
     "literal_error": "use one of the values named",
     "too_short": "give at least one entry",
+    "float_parsing": "give a number (no quotes)",
+    "float_type": "give a number (no quotes)",
+    "int_parsing": "give a whole number (no quotes)",
+    "int_type": "give a whole number (no quotes)",
+    "bool_parsing": "write true or false",
+    "bool_type": "write true or false",
+    "string_type": "write it in quotes",
+    "list_type": "write a list, e.g. [1.0, 2.0]",
+    "tuple_type": "write a list, e.g. [1.0, 2.0]",
+    "model_type": "write it as a table ([name] or name = { ... })",
+    "dict_type": "write it as a table ([name] or name = { ... })",
 }
 
 
@@ -173,8 +190,11 @@ def _user_error(exc: ValidationError, source: str) -> UserError:
     err = exc.errors(include_url=False)[0]
     field = ".".join(str(part) for part in err["loc"])
     message = str(err["msg"]).removeprefix("Value error, ")
-    if err["type"] == "value_error" and ": " in message and not field:
-        field, message = message.split(": ", 1)
+    head, _, rest = message.partition(": ")
+    if err["type"] == "value_error" and rest and " " not in head:
+        # A model validator names the field it rejects: "field: problem" (dotted from the root
+        # when the root validates, relative to the model otherwise).
+        field, message = (f"{field}.{head}" if field else head), rest
     fix = _FIXES.get(err["type"], "")
     if "input" in err and err["type"] not in ("missing", "extra_forbidden", "value_error"):
         message += f" (got {err['input']!r})"

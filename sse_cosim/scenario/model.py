@@ -88,7 +88,7 @@ class Pedestrian(StrictModel):
     end_pos_m: NonNegativeFloat = Field(4.0, description="Arrival position along that edge (m).")
     walking_speed_mps: PositiveFloat = Field(1.2, le=3.0, description="Walking speed (m/s).")
     steps_onto_crossing_s: NonNegativeFloat = Field(
-        12.0, description="Time at which it reaches the crossing (s); its departure is derived."
+        14.1, description="Time at which it reaches the crossing (s); its departure is derived."
     )
     radius_m: PositiveFloat = Field(0.3, description="Body radius used for collisions (m).")
 
@@ -149,6 +149,11 @@ class Estimator(StrictModel):
     fusion_method: str = Field("strips", description="Proposition 2 fusion method (sets.fusion).")
     reduction_method: str = Field("girard", description="Order reduction method (sets.reduction).")
     max_generators: int = Field(8, ge=2, le=64, description="Generators kept after reduction.")
+    filter: Literal["zonotope", "kalman"] = Field(
+        "zonotope",
+        description="Pedestrian regions the controller uses: the zonotopes refined with negative "
+        "information, or a Kalman filter's 3-sigma ellipses (baseline, not guaranteed).",
+    )
 
     @field_validator("gain_method")
     @classmethod
@@ -192,6 +197,11 @@ class Controller(StrictModel):
     stopping_margin_m: NonNegativeFloat = Field(
         2.0, description="Extra distance kept to a pedestrian set when stopping (m)."
     )
+    inconsistent_level: Literal["cautious", "slow", "very slow"] = Field(
+        "slow",
+        description="Least severe level while the bus's picture is inconsistent (a source "
+        "left out or an unresolved conflict; docs/faults.md).",
+    )
 
     @model_validator(mode="after")
     def _ordered_levels(self) -> Controller:
@@ -200,6 +210,119 @@ class Controller(StrictModel):
                 "speed factors must satisfy very_slow_factor <= slow_factor <= cautious_factor"
             )
         return self
+
+
+class FaultWindow(StrictModel):
+    """When a fault is active: from ``start_s`` until ``end_s`` (or the end of the run)."""
+
+    start_s: NonNegativeFloat = Field(0.0, description="Time the fault starts (s).")
+    end_s: PositiveFloat | None = Field(
+        None, description="Time the fault ends (s); unset: it lasts to the end of the run."
+    )
+
+    @model_validator(mode="after")
+    def _ordered_window(self) -> FaultWindow:
+        if self.end_s is not None and self.end_s <= self.start_s:
+            raise ValueError("end_s: must be later than start_s; move it, or remove it to last "
+                             "to the end of the run")
+        return self
+
+    def _only_for(self, kind: str, fields: dict[str, str]) -> None:
+        """Reject a field set explicitly for a kind other than ``kind`` (field -> its kind)."""
+        for name, owner in fields.items():
+            if owner != kind and name in self.model_fields_set:
+                raise ValueError(f"{name}: only used with kind = {owner!r}; remove it")
+
+
+class SensorFault(FaultWindow):
+    sensor: str = Field(description="The faulty sensor (a name under [sensors]).")
+    kind: Literal["bias", "stuck", "dropout", "phantom"] = Field(
+        description="bias: offset measurements; stuck: the measurement freezes; dropout: frames "
+        "are lost; phantom: a pedestrian that is not there is reported."
+    )
+    bias_m: tuple[float, float] = Field(
+        (0.0, 0.0), description="bias: offset added along the sensor's forward and lateral "
+        "axes (m); beyond the noise bound it contradicts the other sources."
+    )
+    within_bound: bool = Field(
+        False, description="bias: clip the biased error to the noise bound, so the strip still "
+        "holds the truth (a fault inside the sensor's specification)."
+    )
+    dropout_probability: float = Field(
+        0.5, gt=0, le=1, description="dropout: probability that a step's frame is lost (seeded)."
+    )
+    phantom_id: str = Field(
+        "phantom", min_length=1, description="phantom: the person id it is reported under (the "
+        "real pedestrian's id, 'pedestrian', makes it a wrong association)."
+    )
+    phantom_xy_m: tuple[float, float] | None = Field(
+        None, description="phantom: its position at start_s (m, network coordinates)."
+    )
+    phantom_velocity_mps: tuple[float, float] = Field(
+        (0.0, 0.0), description="phantom: its velocity (m/s, network x and y)."
+    )
+
+    @model_validator(mode="after")
+    def _kind_fields(self) -> SensorFault:
+        self._only_for(self.kind, {"bias_m": "bias", "within_bound": "bias",
+                                   "dropout_probability": "dropout", "phantom_id": "phantom",
+                                   "phantom_xy_m": "phantom", "phantom_velocity_mps": "phantom"})
+        if self.kind == "bias" and not any(self.bias_m):
+            raise ValueError("bias_m: a bias fault needs a non-zero offset, e.g. [3.0, 0.0]")
+        if self.kind == "phantom" and self.phantom_xy_m is None:
+            raise ValueError("phantom_xy_m: a phantom needs a position, e.g. [200.0, 0.0]")
+        return self
+
+
+class NodeFault(FaultWindow):
+    node: str = Field(description="The misbehaving connected node (the car or a unit id).")
+    kind: Literal["shift", "shrink"] = Field(
+        description="shift: the estimates it sends are moved; shrink: they are scaled down "
+        "about their centres (a spoofed, over-confident sender)."
+    )
+    shift_m: tuple[float, float] = Field(
+        (0.0, 0.0), description="shift: offset added to every estimate it sends (m, network "
+        "x and y)."
+    )
+    scale: float = Field(
+        0.2, gt=0, lt=1, description="shrink: factor applied to the generators of every "
+        "estimate it sends."
+    )
+
+    @model_validator(mode="after")
+    def _kind_fields(self) -> NodeFault:
+        self._only_for(self.kind, {"shift_m": "shift", "scale": "shrink"})
+        if self.kind == "shift" and not any(self.shift_m):
+            raise ValueError("shift_m: a shift fault needs a non-zero offset, e.g. [4.0, 0.0]")
+        return self
+
+
+class LinkFault(FaultWindow):
+    node: str = Field(description="Sender whose V2X link to the bus fails (the car or a unit).")
+    kind: Literal["loss", "latency"] = Field(
+        description="loss: every message sent in the window is lost (a burst); latency: they "
+        "arrive later."
+    )
+    extra_latency_steps: int = Field(
+        5, ge=1, le=100, description="latency: steps added to the link's latency."
+    )
+
+    @model_validator(mode="after")
+    def _kind_fields(self) -> LinkFault:
+        self._only_for(self.kind, {"extra_latency_steps": "latency"})
+        return self
+
+
+class Faults(StrictModel):
+    sensor: dict[str, SensorFault] = Field(
+        default_factory=dict, description="Sensor faults by fault name."
+    )
+    node: dict[str, NodeFault] = Field(
+        default_factory=dict, description="Connected-node faults by fault name."
+    )
+    link: dict[str, LinkFault] = Field(
+        default_factory=dict, description="V2X link faults by fault name."
+    )
 
 
 class Scenario(StrictModel):
@@ -220,6 +343,7 @@ class Scenario(StrictModel):
     v2x: V2X = Field(default_factory=V2X)
     estimator: Estimator = Field(default_factory=Estimator)
     controller: Controller = Field(default_factory=Controller)
+    faults: Faults = Field(default_factory=Faults)
 
     @model_validator(mode="after")
     def _sensors_on_existing_nodes(self) -> Scenario:
@@ -232,7 +356,23 @@ class Scenario(StrictModel):
                 )
         if BUS_NODE in self.rsus or CAR_NODE in self.rsus:
             raise ValueError("rsus: the ids 'bus' and 'car' are reserved for the vehicles")
+        self._faults_on_existing_targets()
         return self
+
+    def _faults_on_existing_targets(self) -> None:
+        """Every fault names a sensor of the scenario, or a node that sends to the bus."""
+        for name, fault in self.faults.sensor.items():
+            if fault.sensor not in self.sensors:
+                raise ValueError(f"faults.sensor.{name}.sensor: no sensor {fault.sensor!r}; "
+                                 f"use one of {', '.join(self.sensors) or '(none)'}")
+        senders = [n for n in self.node_ids() if n != BUS_NODE]
+        use = f"use one of {', '.join(senders)}" if senders else \
+            "this scenario has none: add the car or a road-side unit"
+        for table, faults in (("node", self.faults.node), ("link", self.faults.link)):
+            for name, fault in faults.items():
+                if fault.node not in senders:
+                    raise ValueError(f"faults.{table}.{name}.node: {fault.node!r} is no node "
+                                     f"that sends to the bus; {use}")
 
     def node_ids(self) -> list[str]:
         """Nodes that can carry sensors: the bus, the car (if present) and the units."""

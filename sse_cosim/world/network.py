@@ -20,6 +20,7 @@ import tempfile
 from pathlib import Path
 
 from sse_cosim.errors import UserError
+from sse_cosim.files import write_text_atomic
 
 NET_FILE_NAME = "road.net.xml"
 BUILD_DIR_NAME = "build"
@@ -33,6 +34,11 @@ SOURCE_KINDS = {
 }
 REQUIRED_KINDS = (".nod.xml", ".edg.xml")
 NETCONVERT_TIMEOUT_S = 120
+
+
+class NetworkBuildError(UserError):
+    """netconvert rejected the sources: the network does not build (a run reports it as a
+    simulation failure naming the scenario)."""
 
 
 def build_network(sources_dir: str | os.PathLike[str]) -> Path:
@@ -156,11 +162,12 @@ def _run_netconvert(netconvert: Path, sources: dict[str, Path], out: Path,
     except (OSError, subprocess.TimeoutExpired) as exc:
         raise UserError(str(sources_dir), "", f"netconvert could not run ({exc})",
                         "check the SUMO installation (pip install eclipse-sumo)") from None
-    (out.parent / "netconvert.log").write_text(
-        f"$ {' '.join(cmd)}\n{result.stdout}{result.stderr}", encoding="utf-8")
+    write_text_atomic(out.parent / "netconvert.log",
+                      f"$ {' '.join(cmd)}\n{result.stdout}{result.stderr}")
     if result.returncode != 0 or not out.is_file():
-        raise UserError(str(sources_dir), "", f"netconvert failed: {_first_error(result)}",
-                        "fix the network sources (run netconvert on them by hand for the full log)")
+        raise NetworkBuildError(
+            str(sources_dir), "", f"netconvert failed: {_first_error(result)}",
+            "fix the network sources (run netconvert on them by hand for the full log)")
 
 
 def _first_error(result: subprocess.CompletedProcess[str]) -> str:

@@ -54,7 +54,7 @@ from sse_cosim.files import write_text_atomic
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.world import demand
 from sse_cosim.world.demand import BUS_ID, PEDESTRIAN_ID, ROLES, ActorPlan, PedestrianPlan
-from sse_cosim.world.network import build_network
+from sse_cosim.world.network import NetworkBuildError, build_network
 from sse_cosim.world.roadmap import RoadMap, load_roadmap
 from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
 
@@ -130,7 +130,17 @@ class SumoWorld:
                                   "this process; libsumo runs one at a time -- close it first, "
                                   "or run each simulation in its own process")
         self._entered = True
-        self._net_path = build_network(self.scenario.network.sources_dir)
+        sources = self.scenario.network.sources_dir
+        try:
+            self._net_path = build_network(sources)
+        except NetworkBuildError as exc:
+            raise SimulationError(self.scenario_name, "the road network does not build: "
+                                  f"{exc.one_line()}") from exc
+        except UserError as exc:
+            if exc.source != str(sources):
+                raise
+            raise UserError(self.scenario_name, "network.sources_dir",
+                            f"{sources}: {exc.problem}", exc.fix) from None
         self._roadmap = load_roadmap(self._net_path)
         self._plan = demand.plan_actors(self.scenario, self._net_path, self._roadmap,
                                         source=self.scenario_name)
@@ -251,6 +261,11 @@ class SumoWorld:
     def bus_route_position(self) -> float:
         """The bus front's position (m) along its route, same frame as ``bus_route_length``."""
         return self.scenario.bus.depart_pos_m + self._bus_distance
+
+    @property
+    def bus_departed(self) -> bool:
+        """Whether SUMO has inserted the bus (it may wait for room at its departure)."""
+        return self._bus_seen
 
     @property
     def bus_arrived(self) -> bool:

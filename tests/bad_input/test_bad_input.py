@@ -1,0 +1,182 @@
+"""Bad input of every kind ends with exit status 2 and one line: the file or argument, the field
+and what to do -- never a traceback.
+
+Each case writes its files into a temporary folder and runs the CLI in-process
+(``sse_cosim.cli.main.main``); a few run it as a subprocess, as a user would. Cases that get
+as far as the road network (actors off the network or off the sidewalk) stop before SUMO
+starts: the checks run on the built network.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from sse_cosim.cli.main import EXIT_BAD_INPUT, main
+
+ROOT = Path(__file__).resolve().parents[2]
+S1 = ROOT / "scenarios" / "_s1.toml"  # a complete scenario to extend (absolute path)
+S1_RUN = ROOT / "scenarios" / "s1_pedestrian.toml"
+
+
+@dataclass(frozen=True)
+class Case:
+    """A bad scenario ``text`` (written to bad.toml, or none) and the command around it.
+
+    ``args`` may use ``{file}`` (the scenario), ``{tmp}`` (the folder) and ``{s1}`` (a good
+    scenario); ``words`` must all appear in the one line, besides the file's name.
+    """
+
+    id: str
+    text: str | None
+    words: tuple[str, ...]
+    args: tuple[str, ...] = ("run", "{file}", "--out", "{tmp}/out")
+    named: str = "bad.toml"  # the name the line must contain
+
+
+def extend(body: str) -> str:
+    return f'extends = "{S1.as_posix()}"\n{body}'
+
+
+CASES = [
+    # --- the scenario file: syntax and schema ---
+    Case("syntax", 'name = "x"\n[bus\n', ("syntax",)),
+    Case("unknown key", extend("[bus]\nnominal_speed = 3\n"), ("bus.nominal_speed", "remove")),
+    Case("wrong type", extend('[bus]\nnominal_speed_mps = "fast"\n'),
+         ("bus.nominal_speed_mps", "number")),
+    Case("negative noise bound", extend("[sensors.bus_front]\nnoise_bound_m = [-0.5, 0.5]\n"),
+         ("sensors.bus_front.noise_bound_m", "greater than 0")),
+    Case("zero noise bound", extend("[sensors.bus_front]\nnoise_bound_m = [0.5, 0.0]\n"),
+         ("sensors.bus_front.noise_bound_m", "greater than 0")),
+    Case("fov beyond 360", extend("[sensors.bus_front]\nfov_deg = 400\n"),
+         ("sensors.bus_front.fov_deg", "360")),
+    Case("zero range", extend("[sensors.bus_front]\nrange_m = 0\n"),
+         ("sensors.bus_front.range_m", "greater than 0")),
+    Case("sensor on a missing node", extend('[sensors.side]\nnode = "drone"\n'),
+         ("sensors.side.node", "drone", "use one of")),
+    Case("unknown method", extend('[estimator]\ngain_method = "magic"\n'),
+         ("estimator.gain_method", "frobenius")),
+    Case("speed levels out of order", extend("[controller]\nvery_slow_factor = 0.9\n"),
+         ("controller", "very_slow_factor")),
+    Case("no name", "[bus]\nnominal_speed_mps = 10\n", ("name", "add this field")),
+    Case("missing parent", 'extends = "missing.toml"\nname = "x"\n', ("extends", "not found")),
+    Case("extends cycle", 'extends = "bad.toml"\nname = "x"\n', ("extends", "cycle")),
+    Case("extends not a name", "extends = 3\n", ("extends", 'extends = "base.toml"')),
+    # --- faults ---
+    Case("fault on a missing sensor",
+         extend('[faults.sensor.f]\nsensor = "radar"\nkind = "stuck"\n'),
+         ("faults.sensor.f.sensor", "radar", "bus_front")),
+    Case("fault ends before it starts",
+         extend('[faults.sensor.f]\nsensor = "bus_front"\nkind = "stuck"\nstart_s = 5\n'
+                "end_s = 4\n"), ("faults.sensor.f.end_s", "later than start_s")),
+    Case("bias without offset", extend('[faults.sensor.f]\nsensor = "bus_front"\nkind = "bias"\n'),
+         ("faults.sensor.f.bias_m", "non-zero")),
+    Case("field of another fault kind",
+         extend('[faults.sensor.f]\nsensor = "bus_front"\nkind = "dropout"\nbias_m = [1, 0]\n'),
+         ("faults.sensor.f.bias_m", "only used with kind = 'bias'")),
+    Case("dropout probability above 1",
+         extend('[faults.sensor.f]\nsensor = "bus_front"\nkind = "dropout"\n'
+                "dropout_probability = 1.5\n"), ("faults.sensor.f.dropout_probability",)),
+    Case("node fault on the bus", extend('[faults.node.n]\nnode = "bus"\nkind = "shrink"\n'),
+         ("faults.node.n.node", "sends to the bus", "add the car")),
+    # --- the scenario against the road network ---
+    Case("actor off the network", extend('[bus]\nroute_edges = ["WC", "XX"]\n'),
+         ("bus.route_edges", "no edge 'XX'")),
+    Case("bus beyond its edge", extend("[bus]\ndepart_pos_m = 500\n"),
+         ("bus.depart_pos_m", "beyond the end")),
+    Case("pedestrian beyond its edge", extend("[pedestrian]\nstart_pos_m = 450\n"),
+         ("pedestrian.start_pos_m", "beyond the end")),
+    Case("pedestrian off the network", extend('[pedestrian]\nstart_edge = "NOPE"\n'),
+         ("pedestrian.start_edge", "no edge 'NOPE'")),
+    Case("truck off the parking strip", extend("[truck]\nlane_index = 2\n"),
+         ("truck.lane_index", "not a parking strip")),
+    Case("missing network sources", extend('[network]\nsources_dir = "no_such_folder"\n'),
+         ("network.sources_dir", "does not exist")),
+    # --- the command line ---
+    Case("set a path that does not exist", None, ("bad.path", "no table"),
+         ("run", "{s1}", "--out", "{tmp}/out", "--set", "bad.path=1"), named="s1_pedestrian"),
+    Case("set without a value", None, ("--set", "PATH=VALUE"),
+         ("run", "{s1}", "--out", "{tmp}/out", "--set", "nonsense"), named="command line"),
+    Case("set an invalid value", None, ("bus.nominal_speed_mps", "greater than 0"),
+         ("run", "{s1}", "--out", "{tmp}/out", "--set", "bus.nominal_speed_mps=-3"),
+         named="s1_pedestrian"),
+    Case("output folder is a file", None, ("--out", "is a file"),
+         ("run", "{s1}", "--out", "{tmp}/a_file"), named="a_file"),
+    Case("output folder cannot be made", None, ("--out", "cannot write"),
+         ("run", "{s1}", "--out", "/proc/sse-cosim-out"), named="/proc/sse-cosim-out"),
+    Case("scenario file not found", None, ("not found",),
+         ("run", "{tmp}/nothere.toml", "--out", "{tmp}/out"), named="nothere.toml"),
+    Case("scheduler without dask", None, ("--scheduler", "--executor dask"),
+         ("batch", "{s1}", "--out", "{tmp}/out", "--scheduler", "tcp://x:1"),
+         named="command line"),
+    Case("batch over nothing", None, ("no such file",),
+         ("batch", "{tmp}/nowhere", "--out", "{tmp}/out"), named="nowhere"),
+    Case("sweep over a path that does not exist", None, ("bad.path",),
+         ("sweep", "{s1}", "--param", "bad.path=[1,2]", "--out", "{tmp}/out"),
+         named="bad.path"),
+    Case("option with a wrong value", None, ("--workers",),
+         ("batch", "{s1}", "--workers", "0"), named="sse-cosim batch"),
+]
+
+
+def materialize(case: Case, tmp: Path) -> list[str]:
+    """Write the case's files into ``tmp``; its command line with the placeholders filled."""
+    bad = tmp / "bad.toml"
+    if case.text is not None:
+        bad.write_text(case.text, encoding="utf-8")
+    (tmp / "a_file").write_text("", encoding="utf-8")
+    return [a.format(file=bad, tmp=tmp, s1=S1_RUN) for a in case.args]
+
+
+def check_line(stderr: str, case: Case) -> None:
+    assert "Traceback" not in stderr, stderr
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1, stderr
+    line = lines[0]
+    for word in (case.named, *case.words):
+        assert word in line, (word, line)
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
+def test_bad_input_is_one_line_and_exit_status_2(case, tmp_path, capsys):
+    args = materialize(case, tmp_path)
+    with pytest.raises(SystemExit) as info:
+        main(args)
+    assert info.value.code == EXIT_BAD_INPUT, capsys.readouterr()
+    check_line(capsys.readouterr().err, case)
+
+
+def test_a_pedestrian_on_an_edge_without_sidewalk(tmp_path, capsys):
+    """A network whose extra edge has no sidewalk: starting the pedestrian there is refused."""
+    net = tmp_path / "net"
+    shutil.copytree(ROOT / "sumo_net", net, ignore=shutil.ignore_patterns("build", "*.md"))
+    nodes = (net / "road.nod.xml").read_text(encoding="utf-8")
+    (net / "road.nod.xml").write_text(nodes.replace(
+        "</nodes>", '    <node id="X" x="300.0" y="100.0" type="dead_end"/>\n</nodes>'))
+    edges = (net / "road.edg.xml").read_text(encoding="utf-8")
+    (net / "road.edg.xml").write_text(edges.replace("</edges>", (
+        '    <edge id="EX" from="E" to="X" numLanes="1" speed="13.9">\n'
+        '        <lane index="0" width="3.5" allow="passenger"/>\n    </edge>\n</edges>')))
+    case = Case("no sidewalk", extend(f'[network]\nsources_dir = "{net.as_posix()}"\n'
+                                      '[pedestrian]\nstart_edge = "EX"\n'),
+                ("pedestrian.start_edge", "no sidewalk"))
+    with pytest.raises(SystemExit) as info:
+        main(materialize(case, tmp_path))
+    assert info.value.code == EXIT_BAD_INPUT
+    check_line(capsys.readouterr().err, case)
+
+
+@pytest.mark.parametrize("case", [c for c in CASES if c.id in (
+    "syntax", "set a path that does not exist")], ids=lambda c: c.id)
+def test_as_a_user_runs_it(case, tmp_path):
+    """The installed command, in its own process: the same one line, exit status 2."""
+    args = materialize(case, tmp_path)
+    proc = subprocess.run([sys.executable, "-m", "sse_cosim", *args], capture_output=True,
+                          text=True, cwd=tmp_path, check=False)
+    assert proc.returncode == EXIT_BAD_INPUT, proc.stderr
+    check_line(proc.stderr, case)
