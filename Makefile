@@ -1,5 +1,5 @@
 # Two commands set everything up on a fresh machine (Python 3.11, pip, make):
-#   make run   -- all paper scenarios, reports into results/
+#   make run   -- all paper scenarios and a noise sweep, reports into results/ (report.html)
 #   make test  -- ruff + pytest
 PYTHON ?= python3
 VENV   := .venv
@@ -23,6 +23,8 @@ $(DEVSTAMP): pyproject.toml | $(BIN)/python
 
 run: $(STAMP)
 	$(BIN)/sse-cosim batch scenarios/ --out results/
+	$(BIN)/sse-cosim sweep --file sweeps/noise.toml --out results/sweep/ --summaries-only
+	$(BIN)/sse-cosim report results/ --out results/
 
 test: $(DEVSTAMP)
 	$(BIN)/ruff check .

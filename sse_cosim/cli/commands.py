@@ -7,23 +7,7 @@ from pathlib import Path
 import click
 
 from sse_cosim.cli.main import cli
-from sse_cosim.errors import UserError
-
-OUT_HELP = "Output folder (created if missing)."
-WORKERS_HELP = "Worker processes (default: the number of cores)."
-
-
-def _writable_folder(path: Path, option: str) -> Path:
-    """``path`` created if needed; a one-line error if it cannot be written."""
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        probe = path / ".sse-cosim-write-test"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as exc:
-        raise UserError(str(path), option, f"cannot write there ({exc.strerror})",
-                        "choose a folder you can write to") from None
-    return path
+from sse_cosim.cli.options import OUT_HELP, WORKERS_HELP, check_scheduler, writable_folder
 
 
 @cli.command()
@@ -46,7 +30,7 @@ def run(scenario: Path, out_dir: Path | None, scene_times: tuple[float, ...],
     from sse_cosim.runner.parameters import parse_assignment
     from sse_cosim.runner.run import run_scenario_file
 
-    out_dir = _writable_folder(out_dir or Path("runs") / scenario.stem, "--out")
+    out_dir = writable_folder(out_dir or Path("runs") / scenario.stem, "--out")
     values = dict(parse_assignment(text, "--set") for text in overrides)
     summary = run_scenario_file(scenario, out_dir, values, scene_times=scene_times)
     _echo_summary(summary, out_dir)
@@ -74,19 +58,13 @@ def batch(paths: tuple[Path, ...], out_dir: Path, workers: int | None, executor:
     from sse_cosim.reporting.paper import read_run_folders, write_paper_report
     from sse_cosim.runner.batch import RUNS_FOLDER, run_batch
 
-    _check_scheduler(executor, scheduler)
-    out_dir = _writable_folder(out_dir, "--out")
+    check_scheduler(executor, scheduler)
+    out_dir = writable_folder(out_dir, "--out")
     outcomes = run_batch(list(paths) or [Path("scenarios")], out_dir, workers, executor,
                          scheduler, resume, scene_times)
     runs = read_run_folders([out_dir / RUNS_FOLDER / o.key for o in outcomes if o.ok])
     written = write_paper_report(out_dir, runs)
     _echo_outcomes(outcomes, written)
-
-
-def _check_scheduler(executor: str, scheduler: str | None) -> None:
-    if scheduler and executor != "dask":
-        raise UserError("command line", "--scheduler", "is only used with --executor dask",
-                        "add --executor dask or drop --scheduler")
 
 
 def _echo_summary(summary: dict, out_dir: Path) -> None:

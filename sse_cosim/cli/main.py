@@ -27,7 +27,7 @@ def cli() -> None:
 
 def register_commands() -> None:
     """Attach every sub-command module (each adds itself to :data:`cli`)."""
-    from sse_cosim.cli import commands  # noqa: F401  (import registers the commands)
+    from sse_cosim.cli import bench_commands, commands, sweep_commands  # noqa: F401
 
 
 def main(argv: list[str] | None = None) -> None:

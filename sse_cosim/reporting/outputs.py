@@ -1,7 +1,8 @@
 """A run's folder: ``trace.csv``, ``sets.jsonl``, ``summary.json``, ``scenario.json`` and plots.
 
 Every file is written whole or not at all (:mod:`sse_cosim.files`); ``summary.json`` is
-written last, so a folder with a summary is a finished run.
+written last, so a folder with a summary is a finished run. With ``summary_only`` (large
+sweeps) a run writes ``scenario.json`` and ``summary.json`` only.
 """
 
 from __future__ import annotations
@@ -25,18 +26,19 @@ SCENARIO = "scenario.json"
 
 def write_run(
     out_dir: Path, scenario: Scenario, recorder: RunRecorder, roadmap: RoadMap, source: str,
-    plots_wanted: bool = True,
+    plots_wanted: bool = True, summary_only: bool = False,
 ) -> dict:
     """Write every output of one run into ``out_dir``; returns the summary."""
     out_dir.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out_dir / SCENARIO, {"source": source, **scenario.model_dump(mode="json")})
     trace = pd.DataFrame(recorder.rows)
-    with atomic_path(out_dir / TRACE) as tmp:
-        trace.to_csv(tmp, index=False, float_format="%.6g")
-    write_text_atomic(
-        out_dir / SETS, "".join(json.dumps(line) + "\n" for line in recorder.set_lines)
-    )
-    if plots_wanted and not trace.empty:
+    if not summary_only:
+        with atomic_path(out_dir / TRACE) as tmp:
+            trace.to_csv(tmp, index=False, float_format="%.6g")
+        write_text_atomic(
+            out_dir / SETS, "".join(json.dumps(line) + "\n" for line in recorder.set_lines)
+        )
+    if plots_wanted and not summary_only and not trace.empty:
         _write_plots(out_dir, scenario, recorder, trace, roadmap)
     summary = {"source": source, **recorder.summary()}
     write_json_atomic(out_dir / SUMMARY, summary)

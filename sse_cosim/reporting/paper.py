@@ -52,17 +52,26 @@ class RunFolder:
     def label(self) -> str:
         return f"{self.name} {'with' if self.pedestrian else 'without'} pedestrian"
 
+    @property
+    def faults(self) -> bool:
+        """Whether the scenario injects any fault."""
+        return any(self.scenario.get("faults", {}).values())
+
     def trace(self) -> pd.DataFrame:
         return pd.read_csv(self.path / TRACE)
 
 
 def read_run_folders(folders: Sequence[Path]) -> list[RunFolder]:
-    """Every folder among ``folders`` (searched recursively) that holds a finished run."""
+    """Every folder among ``folders`` (searched recursively) that holds a finished run.
+
+    Hidden folders (a run's ``.<name>.tmp`` staging folder) are not runs yet.
+    """
     runs = []
     for root in folders:
         for summary_path in sorted(Path(root).rglob(SUMMARY)):
             folder = summary_path.parent
-            if not (folder / SCENARIO).is_file():
+            hidden = any(p.startswith(".") for p in folder.relative_to(root).parts)
+            if hidden or not (folder / SCENARIO).is_file():
                 continue
             runs.append(RunFolder(
                 folder,
@@ -75,7 +84,8 @@ def read_run_folders(folders: Sequence[Path]) -> list[RunFolder]:
 def table1(runs: Sequence[RunFolder]) -> pd.DataFrame:
     """One row per paper scenario run: our average speed beside the paper's."""
     rows = []
-    for run in sorted(runs, key=lambda r: (r.name, not r.pedestrian)):
+    paper_runs = [r for r in runs if (r.name, r.pedestrian) in PAPER_TABLE1 and not r.faults]
+    for run in sorted(paper_runs, key=lambda r: (r.name, not r.pedestrian)):
         s = run.summary
         nodes = s["nodes"]
         paper = PAPER_TABLE1.get((run.name, run.pedestrian))
@@ -101,13 +111,33 @@ def fig7(runs: Sequence[RunFolder]) -> pd.DataFrame:
     rows = []
     for run in runs:
         shared = run.summary.get("first_shared_fusion")
-        if not run.pedestrian or not shared:
+        if not run.pedestrian or not shared or run.faults:
             continue
         paper = PAPER_FIG7.get(run.name, {})
         areas = {**shared["input_areas_m2"], "fused": shared["fused_area_m2"]}
         for node, area in areas.items():
             rows.append({"scenario": run.name, "t": shared["t"], "set": node,
                          "area_m2": round(area, 2), "paper_area": paper.get(node)})
+    return pd.DataFrame(rows)
+
+
+def fault_table(runs: Sequence[RunFolder]) -> pd.DataFrame:
+    """One row per injected fault: when it was noticed and whether the fused set held."""
+    rows = []
+    for run in sorted((r for r in runs if r.faults), key=lambda r: r.name):
+        s = run.summary
+        for fault in s.get("faults", []):
+            rows.append({
+                "scenario": run.name,
+                "fault": fault["fault"],
+                "kind": fault["kind"],
+                "target": fault["target"],
+                "detection_delay_steps": fault["detection_delay_steps"],
+                "fused_violations_after_detection": fault["fused_violations_after_detection"],
+                "containment_violations": s["containment_violations"],
+                "average_speed_mps": round(s["average_speed_mps"], 2),
+                "collisions": s["collisions"],
+            })
     return pd.DataFrame(rows)
 
 
@@ -119,6 +149,10 @@ def write_paper_report(out_dir: Path, runs: Sequence[RunFolder]) -> list[Path]:
         written.append(_csv(table, out_dir / "table1.csv"))
         written.append(write_text_atomic(out_dir / "table1.md", table1_markdown(table)))
         written.append(plots.save_figure(_speed_panels(runs), out_dir / "speed_profiles.png"))
+    faults = fault_table(runs)
+    if not faults.empty:
+        written.append(_csv(faults, out_dir / "faults.csv"))
+        written.append(write_text_atomic(out_dir / "faults.md", _faults_markdown(faults)))
     sizes = fig7(runs)
     if not sizes.empty:
         written.append(_csv(sizes, out_dir / "fig7_set_sizes.csv"))
@@ -156,9 +190,26 @@ def table1_markdown(table: pd.DataFrame) -> str:
     return text
 
 
+def _faults_markdown(faults: pd.DataFrame) -> str:
+    """The fault table as Markdown; 'never' where a fault was not (or cannot be) detected."""
+    lines = ["# Injected faults\n",
+             "| Scenario | Fault | Kind | Target | Detected after (steps) "
+             "| Fused misses after detection | Violations (run) | Avg. speed (m/s) | Collisions |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for row in faults.itertuples(index=False):
+        delay = "never" if pd.isna(row.detection_delay_steps) else int(row.detection_delay_steps)
+        after = ("–" if pd.isna(row.fused_violations_after_detection)
+                 else int(row.fused_violations_after_detection))
+        lines.append(f"| {row.scenario} | {row.fault} | {row.kind} | {row.target} | {delay} "
+                     f"| {after} | {row.containment_violations} | {row.average_speed_mps:.1f} "
+                     f"| {row.collisions} |")
+    return "\n".join(lines) + "\n\nWhat can and cannot be detected: `docs/faults.md`.\n"
+
+
 def _speed_panels(runs: Sequence[RunFolder]):
-    with_ped = {r.label: r.trace() for r in sorted(runs, key=lambda r: r.name) if r.pedestrian}
-    without = {r.label: r.trace() for r in sorted(runs, key=lambda r: r.name) if not r.pedestrian}
+    paper = sorted((r for r in runs if not r.faults), key=lambda r: r.name)
+    with_ped = {r.label: r.trace() for r in paper if r.pedestrian}
+    without = {r.label: r.trace() for r in paper if not r.pedestrian}
     return plots.speed_panels(with_ped, without)
 
 

@@ -68,7 +68,10 @@ def set_areas(trace: pd.DataFrame, nodes: Sequence[str], title: str) -> Figure:
     ax.set_ylabel("position set area (m²)")
     ax.set_title(title)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=8)
+    else:
+        ax.text(0.5, 0.5, "no pedestrian set", transform=ax.transAxes, ha="center")
     return fig
 
 

@@ -67,11 +67,18 @@ def _runner(executor: ExecutorName, workers: int, scheduler: str | None):
 
 
 def _local(todo: Sequence[RunTask], workers: int) -> Iterator[TaskOutcome]:
-    """Threads that each supervise one worker process at a time."""
+    """Threads that each supervise one worker process at a time.
+
+    If the caller stops early (Ctrl-C), tasks not yet started are cancelled rather than
+    run to the end of the queue; only the runs in flight finish.
+    """
     with ThreadPoolExecutor(max_workers=workers) as pool:
         futures = [pool.submit(run_in_subprocess, task) for task in todo]
-        for future in as_completed(futures):
-            yield future.result()
+        try:
+            for future in as_completed(futures):
+                yield future.result()
+        finally:
+            pool.shutdown(wait=False, cancel_futures=True)
 
 
 @contextmanager

@@ -19,10 +19,11 @@ def run_scenario_file(
     overrides: Mapping[str, Any] | None = None,
     scene_times: Sequence[float] = (),
     plots: bool = True,
+    summary_only: bool = False,
 ) -> dict:
     """Load ``path`` (with dotted ``overrides``), run it and write ``out_dir``; the summary."""
     scenario = load_scenario(path, overrides)
-    return run_scenario(scenario, str(path), out_dir, scene_times, plots)
+    return run_scenario(scenario, str(path), out_dir, scene_times, plots, summary_only)
 
 
 def run_scenario(
@@ -31,8 +32,9 @@ def run_scenario(
     out_dir: Path,
     scene_times: Sequence[float] = (),
     plots: bool = True,
+    summary_only: bool = False,
 ) -> dict:
     """Simulate ``scenario`` (read from ``source``) and write its outputs to ``out_dir``."""
     recorder = RunRecorder(scenario, tuple(scene_times))
     info = simulate(scenario, out_dir / "sumo", source, recorder)
-    return write_run(out_dir, scenario, recorder, info.roadmap, source, plots)
+    return write_run(out_dir, scenario, recorder, info.roadmap, source, plots, summary_only)

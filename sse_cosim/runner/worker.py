@@ -20,7 +20,7 @@ def main(argv: list[str]) -> int:
     try:
         run_scenario_file(
             Path(task.scenario), Path(task.out_dir), task.overrides,
-            scene_times=task.scene_times, plots=task.plots,
+            scene_times=task.scene_times, plots=task.plots, summary_only=task.summary_only,
         )
     except (UserError, SimulationError) as exc:
         write_json_atomic(Path(task.out_dir) / ERROR, {"key": task.key, "error": str(exc)})

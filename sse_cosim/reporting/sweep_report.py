@@ -1,0 +1,313 @@
+"""A sweep's table and figures, rebuilt from its plan (``sweep.json``) and its run folders.
+
+``sweep.csv`` (and ``sweep.parquet`` when pyarrow imports) has one row per planned run, in
+plan order, read from the finished run folders: it never depends on the order in which
+runs finished, on the executor or on the number of workers. ``sweep_<figure>.png`` shows
+each figure against the swept parameters (see :func:`sweep_figure`).
+
+Parameter values that are lists (a noise bound ``[0.5, 0.5]``) are JSON strings in the
+table, and are plotted at their largest absolute component (the infinity norm: for a
+noise box ``[r, r]`` that is ``r``), labelled with the list itself.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+from matplotlib import pyplot as plt
+from matplotlib.figure import Figure
+
+from sse_cosim.errors import UserError
+from sse_cosim.files import atomic_path
+from sse_cosim.reporting import plots
+from sse_cosim.runner.batch import RUNS_FOLDER
+from sse_cosim.runner.tasks import RunTask, TaskOutcome, finished_outcome
+
+SWEEP_PLAN = "sweep.json"
+SWEEP_TABLE = "sweep.csv"
+SWEEP_PARQUET = "sweep.parquet"
+
+# Table column -> where the figure sits in a run's summary.json.
+FIGURES: dict[str, tuple[str, ...]] = {
+    "average_speed_mps": ("average_speed_mps",),
+    "travel_time_s": ("travel_time_s",),
+    "distance_travelled_m": ("distance_travelled_m",),
+    "min_distance_bus_pedestrian_m": ("min_distance_bus_pedestrian_m",),
+    "first_detection_fused_t_s": ("first_detection", "fused", "t"),
+    "first_detection_fused_bus_to_crossing_m":
+        ("first_detection", "fused", "bus_distance_to_crossing_m"),
+    "fused_area_mean_m2": ("set_area_m2", "fused", "mean"),
+    "fused_area_max_m2": ("set_area_m2", "fused", "max"),
+    "first_shared_fusion_t_s": ("first_shared_fusion", "t"),
+    "first_shared_fusion_area_m2": ("first_shared_fusion", "fused_area_m2"),
+    "containment_violations": ("containment_violations",),
+    "fusion_larger_than_input": ("fusion_larger_than_input",),
+    "collisions": ("collisions",),
+    "steps": ("steps",),
+}
+COUNTS = ("containment_violations", "fusion_larger_than_input", "collisions", "steps")
+LEVEL_SHARE = "level_share"  # one column per speed level: level_share_<level>
+PLOTTED = (
+    "average_speed_mps", "travel_time_s", "min_distance_bus_pedestrian_m",
+    "first_detection_fused_bus_to_crossing_m", "fused_area_mean_m2", "fused_area_max_m2",
+    "containment_violations", "collisions",
+)
+# The short table (terminal, report): figure -> how runs of one combination are combined.
+SUMMARY_COLUMNS = {
+    "average_speed_mps": "mean", "travel_time_s": "mean",
+    "min_distance_bus_pedestrian_m": "min", "first_detection_fused_bus_to_crossing_m": "mean",
+    "fused_area_mean_m2": "mean", "containment_violations": "sum", "collisions": "sum",
+}
+
+
+@dataclass(frozen=True)
+class SweepFolder:
+    """A sweep's output folder and its plan."""
+
+    path: Path
+    plan: dict[str, Any]
+
+    @property
+    def parameters(self) -> list[dict[str, Any]]:
+        """``{"column", "path", "values"}`` per swept parameter, in order."""
+        return self.plan["parameters"]
+
+    @property
+    def columns(self) -> list[str]:
+        return [p["column"] for p in self.parameters]
+
+    @property
+    def runs(self) -> list[dict[str, Any]]:
+        return self.plan["runs"]
+
+    def run_folder(self, key: str) -> Path:
+        return self.path / RUNS_FOLDER / key
+
+    def outcome(self, run: Mapping[str, Any]) -> TaskOutcome | None:
+        """The run's recorded outcome; ``None`` while it has not finished."""
+        folder = self.run_folder(run["key"])
+        return finished_outcome(RunTask(run["key"], run["source"], str(folder)))
+
+
+def read_sweep(folder: Path) -> SweepFolder:
+    """The sweep in ``folder`` (its ``sweep.json``)."""
+    try:
+        plan = json.loads((folder / SWEEP_PLAN).read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise UserError(str(folder / SWEEP_PLAN), "", f"cannot be read ({exc})",
+                        "name a folder written by `sse-cosim sweep`") from None
+    return SweepFolder(folder, plan)
+
+
+def find_sweeps(folders: Sequence[Path]) -> list[SweepFolder]:
+    """Every sweep folder among ``folders`` (searched recursively, hidden folders skipped)."""
+    found = {
+        plan.parent.resolve(): plan.parent
+        for root in folders for plan in sorted(Path(root).rglob(SWEEP_PLAN))
+        if not any(part.startswith(".") for part in plan.parent.relative_to(root).parts)
+    }
+    return [read_sweep(path) for path in found.values()]
+
+
+def summary_figures(summary: Mapping[str, Any] | None) -> dict[str, Any]:
+    """A run's summary flattened into the table's figure columns (``None`` where absent)."""
+    summary = summary or {}
+    row: dict[str, Any] = {}
+    for column, where in FIGURES.items():
+        value: Any = summary
+        for part in where:
+            value = value.get(part) if isinstance(value, Mapping) else None
+        row[column] = value
+    for level, share in (summary.get(LEVEL_SHARE) or {}).items():
+        row[f"{LEVEL_SHARE}_{level.replace(' ', '_')}"] = share
+    return row
+
+
+def sweep_table(sweep: SweepFolder) -> pd.DataFrame:
+    """One row per planned run: scenario, seed, parameters, status, error, figures."""
+    cells = {p["column"]: _cells(p["values"]) for p in sweep.parameters}
+    rows = []
+    for run in sweep.runs:
+        outcome = sweep.outcome(run)
+        status = "missing" if outcome is None else "ok" if outcome.ok else "failed"
+        rows.append({
+            "key": run["key"], "scenario": run["scenario"], "seed": run["seed"],
+            **{col: cells[col][_identity(v)] for col, v in run["values"].items()},
+            "status": status,
+            "error": (outcome.error if outcome is not None else None) or "",
+            **summary_figures(outcome.summary if outcome is not None else None),
+        })
+    table = pd.DataFrame(rows)
+    for column in COUNTS:
+        if column in table:
+            table[column] = table[column].astype("Int64")
+    return table
+
+
+def summary_table(table: pd.DataFrame, columns: Sequence[str]) -> pd.DataFrame:
+    """Runs of each scenario x parameter combination combined: counts and key figures."""
+    keys = ["scenario", *columns]
+    figures = {f: (f, how) for f, how in SUMMARY_COLUMNS.items() if f in table}
+    grouped = table.groupby(keys, sort=False, dropna=False)
+    return grouped.agg(
+        runs=("key", "size"), failed=("status", lambda s: int((s != "ok").sum())), **figures
+    ).reset_index()
+
+
+def write_sweep_report(folder: Path) -> list[Path]:
+    """Rebuild ``sweep.csv``, ``sweep.parquet`` (if pyarrow imports) and the sweep figures."""
+    sweep = read_sweep(folder)
+    table = sweep_table(sweep)
+    written = []
+    with atomic_path(folder / SWEEP_TABLE) as tmp:
+        table.to_csv(tmp, index=False)
+    written.append(folder / SWEEP_TABLE)
+    if _pyarrow_imports():
+        with atomic_path(folder / SWEEP_PARQUET) as tmp:
+            table.to_parquet(tmp, index=False)
+        written.append(folder / SWEEP_PARQUET)
+    for figure in PLOTTED:
+        fig = sweep_figure(sweep, table, figure)
+        if fig is not None:
+            written.append(plots.save_figure(fig, folder / f"sweep_{figure}.png"))
+    return written
+
+
+def sweep_figure(sweep: SweepFolder, table: pd.DataFrame, figure: str) -> Figure | None:
+    """``figure`` against the swept parameters; ``None`` without parameters or data.
+
+    Two parameters: one heat map per scenario (mean over seeds). Otherwise one panel per
+    parameter, one line per scenario: the mean over the other runs (seeds and any other
+    parameter) with a band from their minimum to their maximum.
+    """
+    if not sweep.parameters or figure not in table or table[figure].dropna().empty:
+        return None
+    axes = [_Axis.of(p, sweep.runs) for p in sweep.parameters]
+    frame = table.assign(**{axis.x: axis.positions for axis in axes})
+    if len(axes) == 2:
+        return _heat_maps(frame, axes[0], axes[1], figure)
+    return _lines(frame, axes, figure)
+
+
+def parameter_scalar(value: Any) -> float | None:
+    """Where a parameter value sits on a plot axis: numbers as they are, lists at their
+    largest absolute component, anything else ``None`` (the axis is then categorical)."""
+    if isinstance(value, bool | int | float):
+        return float(value)
+    if isinstance(value, list) and value and all(
+            isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+        return float(max(abs(v) for v in value))
+    return None
+
+
+@dataclass(frozen=True)
+class _Axis:
+    """A parameter on a plot axis: each run's position, and tick labels by position."""
+
+    column: str
+    x: str
+    positions: list[float]
+    ticks: dict[float, str]
+
+    @classmethod
+    def of(cls, parameter: Mapping[str, Any], runs: Sequence[Mapping[str, Any]]) -> _Axis:
+        values = parameter["values"]
+        scalars = [parameter_scalar(v) for v in values]
+        categorical = any(s is None for s in scalars) or len(set(scalars)) < len(scalars)
+        place = {_identity(v): float(i) if categorical else scalars[i]
+                 for i, v in enumerate(values)}
+        ticks = {place[_identity(v)]: _tick(v) for v in values}
+        column = parameter["column"]
+        return cls(column, f"__x_{column}",
+                   [place[_identity(run["values"][column])] for run in runs], ticks)
+
+    def decorate(self, ax) -> None:
+        """Label the x axis with the parameter and (up to 12) its values."""
+        if len(self.ticks) <= 12:
+            ax.set_xticks(list(self.ticks), list(self.ticks.values()), fontsize=8)
+        ax.set_xlabel(self.column, fontsize=9)
+
+
+def _lines(frame: pd.DataFrame, axes: Sequence[_Axis], figure: str) -> Figure:
+    fig, grid = plt.subplots(1, len(axes), figsize=(5.5 * len(axes), 4), squeeze=False)
+    for ax, axis in zip(grid[0], axes, strict=True):
+        for i, (scenario, runs) in enumerate(frame.groupby("scenario", sort=False)):
+            stats = runs.groupby(axis.x)[figure].agg(["mean", "min", "max"]).dropna()
+            if stats.empty:
+                continue
+            ax.plot(stats.index, stats["mean"], "o-", color=f"C{i}", label=scenario)
+            ax.fill_between(stats.index, stats["min"].astype(float),
+                            stats["max"].astype(float), color=f"C{i}", alpha=0.2)
+        axis.decorate(ax)
+        ax.set_ylabel(figure_label(figure))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(f"{figure_label(figure)}: mean over seeds, band from min to max", fontsize=11)
+    fig.tight_layout()
+    return fig
+
+
+def _heat_maps(frame: pd.DataFrame, across: _Axis, down: _Axis, figure: str) -> Figure:
+    scenarios = list(dict.fromkeys(frame["scenario"]))
+    fig, grid = plt.subplots(1, len(scenarios), figsize=(5.5 * len(scenarios), 4.2),
+                             squeeze=False)
+    for ax, scenario in zip(grid[0], scenarios, strict=True):
+        runs = frame[frame["scenario"] == scenario]
+        means = (runs.groupby([down.x, across.x])[figure].mean().astype(float)
+                 .unstack().reindex(index=sorted(down.ticks), columns=sorted(across.ticks)))
+        image = ax.imshow(means.to_numpy(), origin="lower", aspect="auto", cmap="viridis")
+        for (row, col), value in pd.DataFrame(means.to_numpy()).stack().items():
+            ax.text(col, row, f"{value:.3g}", ha="center", va="center", fontsize=8,
+                    color="black" if image.norm(value) > 0.6 else "white")
+        ax.set_xticks(range(len(across.ticks)), [across.ticks[x] for x in means.columns],
+                      fontsize=8)
+        ax.set_yticks(range(len(down.ticks)), [down.ticks[y] for y in means.index], fontsize=8)
+        ax.set_xlabel(across.column, fontsize=9)
+        ax.set_ylabel(down.column, fontsize=9)
+        ax.set_title(scenario, fontsize=10)
+        fig.colorbar(image, ax=ax, label=figure_label(figure))
+    fig.suptitle(f"{figure_label(figure)}: mean over seeds", fontsize=11)
+    fig.tight_layout()
+    return fig
+
+
+def _cells(values: Sequence[Any]) -> dict[str, Any]:
+    """How a parameter's values appear in the table: numbers, strings or booleans as they
+    are when all values are of one such kind, JSON text otherwise (lists, mixtures)."""
+    kinds = {bool if isinstance(v, bool) else float if isinstance(v, int | float) else type(v)
+             for v in values}
+    plain = len(kinds) == 1 and kinds <= {bool, float, str}
+    return {_identity(v): v if plain else json.dumps(v) for v in values}
+
+
+def _identity(value: Any) -> str:
+    return json.dumps(value, sort_keys=True)
+
+
+def _tick(value: Any) -> str:
+    return value if isinstance(value, str) else json.dumps(value)
+
+
+_UNITS = {"_mps": "m/s", "_m2": "m²", "_m": "m", "_s": "s"}
+
+
+def figure_label(figure: str) -> str:
+    """``travel_time_s`` -> ``travel time (s)``."""
+    for suffix, unit in _UNITS.items():
+        if figure.endswith(suffix):
+            return f"{figure.removesuffix(suffix).replace('_', ' ')} ({unit})"
+    return figure.replace("_", " ")
+
+
+def _pyarrow_imports() -> bool:
+    """Parquet is optional (extra ``parquet``): write it only where pyarrow imports."""
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        return False
+    return True
