@@ -1,0 +1,121 @@
+"""Item 1: cost per step of the co-simulation against bare SUMO, stage by stage.
+
+All configurations run in this process, one after another and interleaved over the repeats
+(libsumo allows one open simulation at a time; closing it allows the next), so each ratio
+is measured side by side on the same machine state.
+"""
+
+from __future__ import annotations
+
+import cProfile
+import io
+import pstats
+import tempfile
+import time
+from pathlib import Path
+
+from benchmarks.common import median
+from sse_cosim.reporting.recorder import RunRecorder
+from sse_cosim.runner.simulation import simulate
+from sse_cosim.runner.timing import STAGES, StageTimer
+from sse_cosim.scenario.loader import load_scenario
+from sse_cosim.scenario.model import BUS_NODE, Scenario
+from sse_cosim.world.sumo import SumoWorld
+
+SCENARIO = "scenarios/s3_pedestrian.toml"
+FUSION = "strips"  # the scenarios' default fusion, the same in every configuration
+CONFIGS = {
+    "a_frobenius": "frobenius",
+    "b_cvxpy_frobenius": "cvxpy-frobenius",
+    "b_cvxpy_volume": "cvxpy-volume",
+    "default_volume": "volume",
+}
+
+
+def bare_sumo(scenario: Scenario, steps: int, folder: Path) -> float:
+    """Seconds per step of SUMO alone: same network, routes and steps, the bus at its nominal
+    speed, the snapshot built every step, no sensor layer."""
+    with SumoWorld(scenario, folder, "bare") as world:
+        elapsed, counted = 0.0, 0
+        for _ in range(steps):
+            start = time.perf_counter()
+            snapshot = world.step()
+            bus = snapshot.role(BUS_NODE)
+            if bus is not None:
+                world.set_bus_speed(scenario.bus.nominal_speed_mps)
+            if bus is None and world.bus_arrived:
+                break
+            elapsed += time.perf_counter() - start
+            counted += bus is not None
+    return elapsed / max(counted, 1)
+
+
+def cosim(scenario: Scenario, folder: Path) -> tuple[float, dict[str, float], int]:
+    """Seconds per step of the full loop (recorder included), µs per stage, steps."""
+    timer = StageTimer()
+    simulate(scenario, folder, "bench", RunRecorder(scenario), timer=timer)
+    return sum(timer.totals.values()) / timer.steps, timer.per_step_us(), timer.steps
+
+
+def profile_run(scenario: Scenario, folder: Path, top: int = 15) -> str:
+    """cProfile of one full run: the functions with the largest cumulative time."""
+    profiler = cProfile.Profile()
+    profiler.enable()
+    simulate(scenario, folder, "profile", RunRecorder(scenario))
+    profiler.disable()
+    out = io.StringIO()
+    pstats.Stats(profiler, stream=out).sort_stats("cumulative").print_stats(top)
+    lines = [line for line in out.getvalue().splitlines() if line.strip()]
+    start = next(i for i, line in enumerate(lines) if "ncalls" in line)
+    return "\n".join(lines[start:])
+
+
+def run(repeats: int = 3, configs: dict[str, str] | None = None, duration_s: float | None = None,
+        profile: bool = True) -> dict:
+    configs = CONFIGS if configs is None else configs
+    overrides = {"estimator.fusion_method": FUSION}
+    if duration_s is not None:
+        overrides["simulation.duration_s"] = duration_s
+    base = load_scenario(Path(SCENARIO), overrides)
+    samples: dict[str, list[float]] = {"bare": [], **{name: [] for name in configs}}
+    stages: dict[str, list[dict[str, float]]] = {name: [] for name in configs}
+    steps = 0
+    with tempfile.TemporaryDirectory(prefix="sse-bench-loop-") as tmp:
+        folder = Path(tmp)
+        for _ in range(repeats):
+            for name, gain in configs.items():
+                scenario = load_scenario(Path(SCENARIO),
+                                         {**overrides, "estimator.gain_method": gain})
+                per_step, per_stage, steps = cosim(scenario, folder / name)
+                samples[name].append(per_step)
+                stages[name].append(per_stage)
+            samples["bare"].append(bare_sumo(base, steps, folder / "bare"))
+        text = profile_run(base.model_copy(deep=True), folder / "profile") if profile else ""
+    dt = base.simulation.step_length_s
+    bare = median(samples["bare"])
+    result = {
+        "scenario": SCENARIO,
+        "fusion_method": FUSION,
+        "steps": steps,
+        "repeats": repeats,
+        "bare_us_per_step": 1e6 * bare,
+        "bare_real_time_factor": dt / bare,
+        "configs": {},
+        "profile_default_gain": text,
+    }
+    for name, gain in configs.items():
+        per_step = median(samples[name])
+        result["configs"][name] = {
+            "gain_method": gain,
+            "us_per_step": 1e6 * per_step,
+            "ratio_to_bare": per_step / bare,
+            "real_time_factor": dt / per_step,
+            "stages_us": {s: median([d.get(s, 0.0) for d in stages[name]]) for s in STAGES},
+            "samples_us": [1e6 * v for v in samples[name]],
+        }
+    if "a_frobenius" in configs:
+        a = result["configs"]["a_frobenius"]["us_per_step"]
+        for name in configs:
+            if name.startswith("b_"):
+                result["configs"][name]["ratio_to_a"] = result["configs"][name]["us_per_step"] / a
+    return result

@@ -1,0 +1,49 @@
+"""Item 4: sweep throughput, runs per minute, with 1 and 2 local workers and a Dask
+LocalCluster of 2 workers. Every run is its own process (``runner.tasks``), short (S3 with
+the pedestrian, ``simulation.duration_s`` cut), summary only, no plots."""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+from sse_cosim.runner.executors import execute
+from sse_cosim.runner.tasks import RunTask
+
+SCENARIO = "scenarios/s3_pedestrian.toml"
+
+
+def _tasks(folder: Path, runs: int, duration_s: float) -> list[RunTask]:
+    return [
+        RunTask(key=f"r{i}", scenario=SCENARIO, out_dir=str(folder / f"r{i}"),
+                overrides={"simulation.duration_s": duration_s, "simulation.seed": i + 1},
+                plots=False, summary_only=True)
+        for i in range(runs)
+    ]
+
+
+def _timed(runs: int, duration_s: float, workers: int, executor: str) -> dict:
+    with tempfile.TemporaryDirectory(prefix="sse-bench-sweep-") as tmp:
+        tasks = _tasks(Path(tmp), runs, duration_s)
+        start = time.perf_counter()
+        outcomes = execute(tasks, workers=workers, executor=executor, progress=False)
+        elapsed = time.perf_counter() - start
+    failed = [o.error for o in outcomes if not o.ok]
+    if failed:
+        raise RuntimeError(f"sweep benchmark runs failed: {failed[:2]}")
+    return {"workers": workers, "executor": executor, "runs": runs, "seconds": elapsed,
+            "runs_per_minute": 60.0 * runs / elapsed}
+
+
+def run(runs: int = 8, duration_s: float = 4.0, dask: bool = True) -> dict:
+    configs = {"local_1": (1, "local"), "local_2": (2, "local")}
+    if dask:
+        configs["dask_2"] = (2, "dask")
+    results = {name: _timed(runs, duration_s, w, ex) for name, (w, ex) in configs.items()}
+    base = results["local_1"]["runs_per_minute"]
+    for result in results.values():
+        result["speedup_vs_1_worker"] = result["runs_per_minute"] / base
+    return {"scenario": SCENARIO, "duration_s": duration_s, "configs": results,
+            "note": "wall time of execute() for the whole batch; the Dask figure includes "
+                    "starting and stopping the LocalCluster"}

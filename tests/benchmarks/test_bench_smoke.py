@@ -1,0 +1,67 @@
+"""The benchmarks' smoke test: a tiny version of each runs and writes both report files."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+from benchmarks.common import contains_lp, contains_lp_batch  # noqa: E402
+
+pytestmark = pytest.mark.sumo
+
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory) -> tuple[dict, Path]:
+    import os
+
+    from benchmarks.run import run_all
+
+    out = tmp_path_factory.mktemp("bench")
+    cwd = os.getcwd()
+    os.chdir(ROOT)
+    try:
+        results = run_all(out, quick=True, log=lambda text: None)
+    finally:
+        os.chdir(cwd)
+    return results, out
+
+
+def test_every_benchmark_runs_and_reports(quick):
+    _, out = quick
+    data = json.loads((out / "benchmarks.json").read_text())
+    for key in ("machine", "gain_methods", "loop_cost", "tightness", "baseline", "soundness",
+                "scaling", "throughput"):
+        assert key in data, key
+    assert {"cpu", "cores", "python", "sumo"} <= set(data["machine"])
+    assert data["command"].endswith("--quick")
+    text = (out / "benchmarks.md").read_text()
+    assert "## Targets" in text and "bare SUMO" in text
+
+
+def test_quick_figures_are_sane(quick):
+    results, _ = quick
+    loop = results["loop_cost"]
+    assert loop["bare_us_per_step"] > 0
+    assert set(loop["configs"]["a_frobenius"]["stages_us"]) >= {"sumo", "geometry", "output"}
+    assert results["soundness"]["violations"] == 0
+    assert results["soundness"]["node_steps"] >= 300
+    assert results["baseline"]["open_loop_total"]["zonotope_misses"] == 0
+    local = results["tightness"]["local"]["volume"]
+    assert local["count"] > 0 and local["mean"] >= 1.0 - 1e-9  # never below the exact set
+
+
+def test_independent_lp_catches_a_point_outside():
+    import numpy as np
+
+    c, g = np.zeros(2), np.array([[1.0, 0.5], [0.0, 1.0]])
+    inside, outside = np.array([1.2, 0.9]), np.array([1.6, 0.0])
+    assert contains_lp(c, g, inside) and not contains_lp(c, g, outside)
+    checks = [(c, g, inside)] * 70 + [(c, g, outside)] + [(c, g, inside)] * 5
+    answers = contains_lp_batch(checks)
+    assert answers.count(False) == 1 and answers[70] is False
