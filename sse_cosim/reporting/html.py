@@ -28,6 +28,7 @@ from sse_cosim.files import write_text_atomic
 from sse_cosim.reporting.paper import (
     DIFFERENCE_NOTE,
     RunFolder,
+    fault_table,
     fig7,
     read_run_folders,
     table1,
@@ -100,6 +101,8 @@ def _headings(runs: Sequence[RunFolder],
     if runs:
         yield "table1", "Table I: average bus speed"
         yield "fig7", "Fig. 7: set sizes at the first shared fusion"
+        if any(r.faults for r in runs):
+            yield "faults", "Injected faults"
         yield "runs", "Runs"
     for i, sweep in enumerate(sweeps, 1):
         yield f"sweep{i}", f"Sweep: {_shown(sweep.path)}"
@@ -127,6 +130,20 @@ def _paper_section(runs: Sequence[RunFolder], out_dir: Path) -> str:
         '<h2 id="fig7">Fig. 7: set sizes at the first shared fusion</h2>',
         _table(sizes) + _image(out_dir / "fig7_set_sizes.png", "Set sizes")
         if not sizes.empty else "<p>No run with a pedestrian and shared estimates.</p>",
+        _faults_section(runs),
+    ])
+
+
+def _faults_section(runs: Sequence[RunFolder]) -> str:
+    faults = fault_table(runs)
+    if faults.empty:
+        return ""
+    return "\n".join([
+        '<h2 id="faults">Injected faults</h2>',
+        "<p>Per injected fault: the steps from its start to its flag (empty: never flagged, "
+        "as for faults within the bounds or a shrunk sender, which consistency cannot "
+        "reveal), and the fused set's misses after the flag. See docs/faults.md.</p>",
+        _table(faults),
     ])
 
 
