@@ -36,7 +36,7 @@ from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver, Track
 from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea
 from sse_cosim.estimation.shared import fuse_at_bus
 from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
-from sse_cosim.runner.timing import StageTimer
+from sse_cosim.runner.timing import NoTimer, StageTimer
 from sse_cosim.scenario.model import BUS_NODE, Scenario
 from sse_cosim.sensors import SensorObservation, observe, specs_from_scenario
 from sse_cosim.sensors.faults import FaultInjector, FaultStatus
@@ -84,7 +84,7 @@ class SimulationInfo:
 
 def simulate(
     scenario: Scenario, run_dir: Path, scenario_name: str, on_step: StepCallback,
-    timer: StageTimer | None = None,
+    timer: StageTimer | NoTimer | None = None,
 ) -> SimulationInfo:
     """Run ``scenario`` in SUMO, calling ``on_step`` after every step.
 
@@ -92,6 +92,7 @@ def simulate(
     its route) or the scenario's duration ends the run. ``timer`` (optional) is charged the
     time of each stage of each step (:mod:`sse_cosim.runner.timing`).
     """
+    timer = timer or NoTimer()
     dt = scenario.simulation.step_length_s
     noise_rng, v2x_rng, fault_rng = (
         np.random.default_rng(s) for s in np.random.SeedSequence(scenario.simulation.seed).spawn(3)
@@ -118,8 +119,7 @@ def simulate(
         )
         unobserved = UnobservedArea(context.walkable, model, dt, scenario.v2x.latency_steps)
         for step in range(n_steps):
-            if timer is not None:
-                timer.start()
+            timer.start()
             snapshot = world.step()
             bus = snapshot.role(BUS_NODE)
             if bus is None:
@@ -129,19 +129,16 @@ def simulate(
                     raise SimulationError(scenario_name, "SUMO could not insert the bus in "
                                           f"{INSERTION_WAIT_S:g} s (see {run_dir / 'sumo.log'})")
                 continue
-            if timer is not None:
-                timer.lap("sumo")
+            timer.lap("sumo")
             faults.begin_step(snapshot.time)
             observations = faults.corrupt_observations(
                 snapshot, observe(snapshot, specs, noise_rng, want_regions=True))
-            if timer is not None:
-                timer.lap("geometry")
+            timer.lap("geometry")
             tracks = {
                 node: observer.step(step, _detections_of(node, observations))
                 for node, observer in observers.items()
             }
-            if timer is not None:
-                timer.lap("local_fusion")
+            timer.lap("local_fusion")
             _share(step, snapshot, scenario, observations, tracks, link, faults, model)
             delivered = link.deliver(step)
             shared = link.picture(step, model)
@@ -162,8 +159,7 @@ def simulate(
             if flags.inconsistent and not was_inconsistent:
                 occupancy = OccupancyTracker(model, dt)  # its history may hold a faulty source
             was_inconsistent = flags.inconsistent
-            if timer is not None:
-                timer.lap("sharing_fusion")
+            timer.lap("sharing_fusion")
             possible = occupancy.update(step, fused, clear)
             if kalman is not None:  # the baseline: the controller gets the KF's 3-sigma ellipses
                 kalman.step(step, all_detections(observations.values()))
@@ -174,8 +170,7 @@ def simulate(
                 [m.visible_region for m in delivered
                  if step - m.sent_step == scenario.v2x.latency_steps],
             )
-            if timer is not None:
-                timer.lap("occupancy")
+            timer.lap("occupancy")
             picture = assess(
                 context,
                 bus.footprint.front.position,
@@ -188,16 +183,14 @@ def simulate(
                                   scenario.controller)
             commanded = level_speed(level, scenario.bus.nominal_speed_mps, scenario.controller)
             world.set_bus_speed(commanded, emergency=level is SpeedLevel.EMERGENCY)
-            if timer is not None:
-                timer.lap("control")
+            timer.lap("control")
             on_step(
                 StepResult(
                     step, snapshot, observations, tracks, shared, unknown, fused, possible,
                     picture, level, commanded, model, screen, flags, faults.statuses(),
                 )
             )
-            if timer is not None:
-                timer.end_step("output")
+            timer.end_step("output")
         return SimulationInfo(n_steps, world.bus_arrived, world.roadmap)
 
 
