@@ -44,9 +44,10 @@ import numpy as np
 from scipy.optimize import linprog
 
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.occupancy import ARC_SAFETY, QUAD_SEGMENTS, ClearRegion, zonotope_polygon
+from sse_cosim.estimation.occupancy import ARC_SAFETY, QUAD_SEGMENTS, ClearRegion
 from sse_cosim.scenario.model import BUS_NODE
 from sse_cosim.sets import Strips, Zonotope, intersect_strips, zonotopes_disjoint
+from sse_cosim.sets.exact import zonotope_polygon
 
 CONSISTENCY_TOL = 1e-6  # m: sets closer than this count as meeting
 HULL_SOURCE = "conflict hull"  # the bus's single fusion input when its sources cannot agree

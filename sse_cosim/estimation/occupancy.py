@@ -28,6 +28,7 @@ import shapely
 
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.sets import Zonotope
+from sse_cosim.sets.exact import zonotope_polygon
 
 EMPTY = shapely.Polygon()
 QUAD_SEGMENTS = 2  # polygon arcs: 2 segments per quarter circle
@@ -147,11 +148,3 @@ def _apart(first: shapely.Geometry, second: shapely.Geometry, margin: float) -> 
     a, b = first.bounds, second.bounds
     return (a[0] - margin > b[2] or b[0] > a[2] + margin
             or a[1] - margin > b[3] or b[1] > a[3] + margin)
-
-
-def zonotope_polygon(position_set: Zonotope) -> shapely.Geometry:
-    """A 2-D zonotope as a shapely geometry (a segment or point when degenerate)."""
-    vertices = position_set.vertices()
-    if len(vertices) >= 3:
-        return shapely.Polygon(vertices)
-    return shapely.MultiPoint(vertices).convex_hull

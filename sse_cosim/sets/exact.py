@@ -16,8 +16,15 @@ from sse_cosim.sets.zonotope import Zonotope
 
 
 def zonotope_polygon(zonotope: Zonotope) -> BaseGeometry:
-    """The 2-D zonotope as the convex hull of its vertices (a Polygon when full-dimensional)."""
-    return MultiPoint(zonotope.vertices()).convex_hull
+    """The 2-D zonotope as a Polygon, or a LineString / Point when degenerate.
+
+    ``vertices()`` are already the convex polygon's corners in order, so a full-dimensional
+    set needs no hull; a degenerate one has at most two distinct vertices.
+    """
+    vertices = zonotope.vertices()
+    if len(vertices) >= 3:
+        return Polygon(vertices)
+    return MultiPoint(vertices).convex_hull
 
 
 def predict_exact(geometry: BaseGeometry, state_matrix: ArrayLike, noise: Zonotope) -> BaseGeometry:
