@@ -10,10 +10,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import pandas as pd
-
 from sse_cosim.files import atomic_path, write_json_atomic, write_text_atomic
-from sse_cosim.reporting import plots
 from sse_cosim.reporting.recorder import RunRecorder
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.world.roadmap import RoadMap
@@ -31,15 +28,18 @@ def write_run(
     """Write every output of one run into ``out_dir``; returns the summary."""
     out_dir.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out_dir / SCENARIO, {"source": source, **scenario.model_dump(mode="json")})
-    trace = pd.DataFrame(recorder.rows)
     if not summary_only:
+        # pandas and matplotlib load only here: a sweep's summary-only runs skip ~1 s of imports
+        import pandas as pd
+
+        trace = pd.DataFrame(recorder.rows)
         with atomic_path(out_dir / TRACE) as tmp:
             trace.to_csv(tmp, index=False, float_format="%.6g")
         write_text_atomic(
             out_dir / SETS, "".join(json.dumps(line) + "\n" for line in recorder.set_lines)
         )
-    if plots_wanted and not summary_only and not trace.empty:
-        _write_plots(out_dir, scenario, recorder, trace, roadmap)
+        if plots_wanted and not trace.empty:
+            _write_plots(out_dir, scenario, recorder, trace, roadmap)
     summary = {"source": source, **recorder.summary()}
     write_json_atomic(out_dir / SUMMARY, summary)
     return summary
@@ -51,6 +51,8 @@ def label(scenario: Scenario) -> str:
 
 
 def _write_plots(out_dir, scenario, recorder, trace, roadmap) -> None:
+    from sse_cosim.reporting import plots
+
     nodes = scenario.node_ids()
     title = label(scenario)
     plots.save_figure(plots.speed_profile({title: trace}, f"Bus speed: {title}"),

@@ -8,18 +8,25 @@
 It is sound for ANY Λ: if x = c + Gβ ∈ Z and y - Hx = diag(r)δ with |δ|∞ <= 1, then
 x = c' + (I - ΛH)Gβ - Λ diag(r)δ ∈ ⟨c', G'⟩. Every method in :data:`GAIN_METHODS` therefore
 only chooses Λ.
+
+:data:`CORRECTION_METHODS` holds every method :func:`intersect_strips` accepts: each gain of
+:data:`GAIN_METHODS` applied by :func:`apply_gain`, and ``enclose`` (:func:`enclose_correction`),
+which is not a gain: in 2-D it intersects exactly (a convex polygon) and encloses the polygon
+in a zonotope (:mod:`sse_cosim.sets.enclosure`), keeping the ``volume`` result where that is
+smaller.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import cvxpy as cp
 import numpy as np
 from numpy.typing import ArrayLike
 
 from sse_cosim.sets._registry import lookup
+from sse_cosim.sets.enclosure import clip_to_strips, enclose_polygon, unit_directions
 from sse_cosim.sets.strips import Strips
 from sse_cosim.sets.zonotope import (
     FloatArray,
@@ -29,8 +36,14 @@ from sse_cosim.sets.zonotope import (
     generator_volume,
 )
 
+if TYPE_CHECKING:  # cvxpy loads on first use: runs with closed-form gains skip its ~1 s import
+    import cvxpy as cp
+
 GainMethod = Callable[[Zonotope, Strips], FloatArray]
 """Chooses Λ (n, m) for Z and m strips with unit normals."""
+
+Correction = Callable[[Zonotope, Strips], Zonotope]
+"""Encloses Z ∩ S_1 ∩ ... ∩ S_m (strips with unit normals, Z with generators) in a zonotope."""
 
 StripGain = Callable[[FloatArray, FloatArray, float], FloatArray]
 """Chooses λ (n,) for generators G (n, e) of a full-rank zonotope and one strip (h, r)."""
@@ -91,6 +104,8 @@ def _solve(compiled: CompiledProblem, solver: str, **values: object) -> FloatArr
     return the variable's value, or None unless the solver reports an optimum."""
     for name, value in values.items():
         compiled.parameters[name].value = value
+    import cvxpy as cp
+
     try:
         compiled.problem.solve(solver=solver, warm_start=False)
     except cp.error.SolverError:
@@ -101,6 +116,8 @@ def _solve(compiled: CompiledProblem, solver: str, **values: object) -> FloatArr
 
 
 def _build_frobenius(n: int, m: int, e: int) -> CompiledProblem:
+    import cvxpy as cp
+
     gain = cp.Variable((n, m))
     g, hg, r = cp.Parameter((n, e)), cp.Parameter((m, e)), cp.Parameter((m, m))
     objective = cp.sum_squares(g - gain @ hg) + cp.sum_squares(gain @ r)
@@ -115,7 +132,7 @@ def cvxpy_frobenius_gain(zonotope: Zonotope, strips: Strips) -> FloatArray:
     compiled = _compiled(("frobenius", n, len(strips), e), _build_frobenius)
     gain = _solve(
         compiled,
-        cp.CLARABEL,
+        "CLARABEL",
         g=g / scale,
         hg=strips.normals @ g / scale,
         r=np.diag(strips.radii / scale),
@@ -164,6 +181,8 @@ def volume_gain_vertices(generators: FloatArray, normal: FloatArray, radius: flo
 
 
 def _build_volume_lp(n: int, k: int) -> CompiledProblem:
+    import cvxpy as cp
+
     lam, t, s = cp.Variable(n), cp.Variable(), cp.Variable(k)
     h, d = cp.Parameter(n), cp.Parameter((k, n))
     base, radius = cp.Parameter(nonneg=True), cp.Parameter(nonneg=True)
@@ -187,7 +206,7 @@ def volume_gain_lp(generators: FloatArray, normal: FloatArray, radius: float) ->
     rows = max(8, 1 << (len(d) - 1).bit_length())
     compiled = _compiled(("volume", n, rows), _build_volume_lp)
     padded = np.vstack([d, np.zeros((rows - len(d), n))])
-    lam = _solve(compiled, cp.HIGHS, h=normal, d=padded, base=base, radius=radius / scale)
+    lam = _solve(compiled, "HIGHS", h=normal, d=padded, base=base, radius=radius / scale)
     zero = np.zeros(n)
     if lam is None:
         return zero
@@ -262,21 +281,64 @@ GAIN_METHODS: dict[str, GainMethod] = {
 }
 
 
+def _by_gain(choose: GainMethod) -> Correction:
+    def correct(zonotope: Zonotope, strips: Strips) -> Zonotope:
+        return apply_gain(zonotope, strips, choose(zonotope, strips))
+
+    return correct
+
+
+def enclose_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
+    """2-D: Z ∩ S exactly as a convex polygon P, enclosed in a zonotope along the directions of
+    Z's generators and of the strips' edges (⊥ their normals), the directions of P's edges;
+    the smaller in area of that and the ``volume`` gain's result (both contain Z ∩ S).
+
+    Falls back to the ``volume`` result when n != 2, when Z is not full-dimensional, when
+    Z ∩ S is empty (an inconsistent measurement: any set is sound, and
+    :mod:`sse_cosim.sets.consistency` is where that is detected, as for the gains), or when
+    the enclosure LP fails.
+    """
+    volume = apply_gain(zonotope, strips, GAIN_METHODS["volume"](zonotope, strips))
+    if zonotope.dim != 2 or not full_rank(zonotope.generators):
+        return volume
+    # Local coordinates about Z's center: the clipping and the LP see numbers of Z's size.
+    corners = Zonotope.unchecked(np.zeros(2), zonotope.generators).vertices()
+    values = strips.values - strips.normals @ zonotope.center
+    polygon = clip_to_strips(corners, strips.normals, values, strips.radii)
+    if len(polygon) == 0:
+        return volume
+    edges = np.stack([-strips.normals[:, 1], strips.normals[:, 0]])
+    directions = unit_directions(np.hstack([zonotope.generators, edges]))
+    enclosure = enclose_polygon(polygon, directions, float(np.abs(corners).max()))
+    if enclosure is None:
+        return volume
+    center, generators = enclosure
+    enclosed = Zonotope.unchecked(zonotope.center + center, generators)
+    return enclosed if enclosed.volume() < volume.volume() else volume
+
+
+CORRECTION_METHODS: dict[str, Correction] = {
+    **{name: _by_gain(choose) for name, choose in GAIN_METHODS.items()},
+    "enclose": enclose_correction,
+}
+
+
 def available_gain_methods() -> tuple[str, ...]:
-    """Names accepted by :func:`intersect_strips`."""
-    return tuple(GAIN_METHODS)
+    """Names accepted by :func:`intersect_strips` (the scenario's ``estimator.gain_method``):
+    the gains of :data:`GAIN_METHODS` and ``enclose``."""
+    return tuple(CORRECTION_METHODS)
 
 
 def intersect_strips(zonotope: Zonotope, strips: Strips, method: str = "frobenius") -> Zonotope:
-    """Zonotope ⊇ Z ∩ S_1 ∩ ... ∩ S_m by Prop. 1 with the gain of ``method``.
+    """Zonotope ⊇ Z ∩ S_1 ∩ ... ∩ S_m by Prop. 1 with the gain of ``method``, or by the exact
+    2-D enclosure (``enclose``, :func:`enclose_correction`).
 
     Strips are first rescaled to unit normals (same sets, same result for every method up to
     rounding). A point Z (no generators) or no strips returns Z.
     """
-    choose = lookup(GAIN_METHODS, method, "gain method")
+    correct = lookup(CORRECTION_METHODS, method, "gain method")
     if strips.dim != zonotope.dim:
         raise ValueError(f"{strips.dim}-D strips cannot cut a {zonotope.dim}-D zonotope")
     if len(strips) == 0 or zonotope.n_generators == 0:
         return zonotope
-    unit = strips.normalized()
-    return apply_gain(zonotope, unit, choose(zonotope, unit))
+    return correct(zonotope, strips.normalized())
