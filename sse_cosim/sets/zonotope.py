@@ -75,12 +75,17 @@ def cofactor_vectors(generators: FloatArray) -> FloatArray:
     return minors * (-1.0) ** (rows + n - 1)
 
 
+def _unit_rows(vectors: FloatArray) -> FloatArray:
+    """The nonzero rows of ``vectors`` (k, n), normalized."""
+    norms = np.sqrt((vectors * vectors).sum(axis=1))
+    keep = norms > 0
+    return vectors[keep] / norms[keep, None]
+
+
 def facet_normals(generators: FloatArray) -> FloatArray:
     """Unit normals (k, n) of all candidate facets of ⟨c, G⟩: the nonzero cofactor vectors,
     normalized, with parallel ones merged (sign fixed so the first nonzero entry is positive)."""
-    d = cofactor_vectors(generators)
-    norms = np.sqrt((d * d).sum(axis=1))
-    units = d[norms > 0] / norms[norms > 0, None]
+    units = _unit_rows(cofactor_vectors(generators))
     rounded = np.round(units, 12) + 0.0
     first = np.argmax(rounded != 0, axis=1)
     sign = np.sign(rounded[np.arange(len(units)), first])
@@ -252,7 +257,7 @@ class Zonotope:
             raise ValueError(f"points must have {self.dim} coordinates; got shape {x.shape}")
         g = self.generators
         if self.dim == 2 and full_rank(g):
-            normals = facet_normals(g)
+            normals = _unit_rows(cofactor_vectors(g))  # parallel repeats only repeat a test
             offsets = np.abs((points - self.center) @ normals.T)
             inside = (offsets <= np.abs(normals @ g).sum(axis=1) + tol).all(axis=1)
         else:
