@@ -16,6 +16,7 @@ from sse_cosim.sets.fusion import (
     fuse_with_weights,
 )
 from sse_cosim.sets.gains import (
+    CORRECTION_METHODS,
     GAIN_METHODS,
     apply_gain,
     available_gain_methods,
@@ -26,6 +27,7 @@ from sse_cosim.sets.strips import Strips, zonotope_facet_strips
 from sse_cosim.sets.zonotope import Zonotope
 
 __all__ = [
+    "CORRECTION_METHODS",
     "FUSION_METHODS",
     "GAIN_METHODS",
     "REDUCTION_METHODS",

@@ -2,8 +2,10 @@
 
 :func:`fuse_with_weights` implements the equations for given weights; the ``frobenius`` and
 ``volume`` methods only choose the weights. The ``strips`` method instead cuts the smallest
-input with the facet strips of the others through Prop. 1; it is the only method that can
-return a set smaller than every input (see :func:`volume_weights`).
+input with the facet strips of the others through Prop. 1. The ``enclose`` method (2-D)
+intersects the inputs exactly as a convex polygon and encloses it in a zonotope along the
+inputs' generator directions (:mod:`sse_cosim.sets.enclosure`). These two are the only
+methods that can return a set smaller than every input (see :func:`volume_weights`).
 """
 
 from __future__ import annotations
@@ -15,9 +17,10 @@ from numpy.typing import ArrayLike
 
 from sse_cosim.sets._registry import lookup
 from sse_cosim.sets.consistency import projection_interval, strip_covers
+from sse_cosim.sets.enclosure import clip_to_strips, enclose_polygon, unit_directions
 from sse_cosim.sets.gains import intersect_strips
 from sse_cosim.sets.strips import Strips, zonotope_facet_strips
-from sse_cosim.sets.zonotope import FloatArray, Zonotope
+from sse_cosim.sets.zonotope import FloatArray, Zonotope, full_rank
 
 FusionMethod = Callable[[Sequence[Zonotope]], Zonotope]
 WeightChooser = Callable[[Sequence[Zonotope]], FloatArray]
@@ -88,10 +91,44 @@ def strips_fusion(zonotopes: Sequence[Zonotope]) -> Zonotope:
     return intersect_strips(base, cutting.select(tightest_first), method="volume")
 
 
+def enclose_fusion(zonotopes: Sequence[Zonotope]) -> Zonotope:
+    """2-D: ∩_j Z_j exactly as a convex polygon P (the smallest input clipped by the facet
+    strips of the others), enclosed in a zonotope along the generator directions of all inputs
+    (the directions of P's edges); the smaller in area of that and the smallest input.
+
+    Sound: P is the exact intersection and the enclosure contains it (checked with a margin,
+    :func:`enclosure.enclose_polygon`); the smallest input contains it too. Falls back to the
+    smallest input (``volume`` fusion) when n != 2, when an input is not full-dimensional (it
+    is then the smallest: volume 0), when the inputs share no point (inconsistent sources,
+    which :mod:`sse_cosim.sets.consistency` detects; any set is sound), or when the LP fails.
+    """
+    index = _smallest(zonotopes)
+    base = zonotopes[index]
+    if base.dim != 2 or not all(full_rank(z.generators) for z in zonotopes):
+        return base
+    corners = Zonotope.unchecked(np.zeros(2), base.generators).vertices()
+    polygon = corners
+    for j, z in enumerate(zonotopes):
+        if j != index:
+            facets = zonotope_facet_strips(z)
+            polygon = clip_to_strips(polygon, facets.normals,
+                                     facets.values - facets.normals @ base.center, facets.radii)
+    if len(polygon) == 0:
+        return base
+    directions = unit_directions(np.hstack([z.generators for z in zonotopes]))
+    enclosure = enclose_polygon(polygon, directions, float(np.abs(corners).max()))
+    if enclosure is None:
+        return base
+    center, generators = enclosure
+    enclosed = Zonotope.unchecked(base.center + center, generators)
+    return enclosed if enclosed.volume() < base.volume() else base
+
+
 FUSION_METHODS: dict[str, FusionMethod] = {
     "frobenius": _weighted(frobenius_weights),
     "volume": _weighted(volume_weights),
     "strips": strips_fusion,
+    "enclose": enclose_fusion,
 }
 
 

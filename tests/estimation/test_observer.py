@@ -40,14 +40,15 @@ def sensor_strips(rng, truth: np.ndarray, bound: float, worst_case: bool) -> Str
 
 
 @pytest.mark.parametrize("state_model", ["position", "constant-velocity"])
-@pytest.mark.parametrize("gain", ["frobenius", "volume"])
+@pytest.mark.parametrize("gain", ["frobenius", "volume", "enclose"])
 @pytest.mark.parametrize("worst_case", [False, True])
 def test_local_observer_contains_truth_every_step(state_model, gain, worst_case):
     config = Estimator(state_model=state_model, gain_method=gain, max_pedestrian_speed_mps=2.0,
                        position_jitter_m=0.3, max_velocity_change_mps=4.0)
     model = MotionModel.from_config(config, DT)
     settings = EstimatorSettings(gain, "girard", 8)
-    slow_lp = state_model == "constant-velocity" and gain == "volume"  # a cvxpy LP per strip
+    # a cvxpy LP per strip (``enclose`` is the ``volume`` gain outside 2-D)
+    slow_lp = state_model == "constant-velocity" and gain in ("volume", "enclose")
     for seed in range(2 if slow_lp else 4):
         rng = np.random.default_rng(seed)
         truth = trajectory(rng, 90 if slow_lp else 120, speed=2.0, jitter=0.3)
@@ -76,7 +77,7 @@ def test_fused_estimate_contains_truth_and_is_never_larger_than_inputs():
     config = Estimator(position_jitter_m=0.3)
     model = MotionModel.from_config(config, DT)
     settings = EstimatorSettings("volume", "girard", 8)
-    for method in ("frobenius", "volume", "strips"):
+    for method in ("frobenius", "volume", "strips", "enclose"):
         rng = np.random.default_rng(7)
         truth = trajectory(rng, 60, speed=2.5, jitter=0.3)
         nodes = [NodeObserver(n, model, settings) for n in ("bus", "car", "rsu1")]

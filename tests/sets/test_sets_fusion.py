@@ -32,7 +32,7 @@ def exact_intersection_2d(sets):
 
 
 def test_registry_and_input_validation():
-    assert set(available_fusion_methods()) == {"frobenius", "volume", "strips"}
+    assert set(available_fusion_methods()) == {"frobenius", "volume", "strips", "enclose"}
     z = Zonotope([0.0, 0.0], np.eye(2))
     assert fuse([z], "volume") is z
     with pytest.raises(ValueError, match="unknown fusion method"):
@@ -73,9 +73,9 @@ def test_no_weights_beat_the_smallest_input(sets, seed):
 
 @SETTINGS
 @given(st.one_of(overlapping_zonotopes(2), overlapping_zonotopes(4, max_inputs=3)))
-def test_volume_and_strips_never_exceed_the_smallest_input(sets):
+def test_volume_strips_and_enclose_never_exceed_the_smallest_input(sets):
     smallest = min(z.volume() for z in sets)
-    for method in ("volume", "strips"):
+    for method in ("volume", "strips", "enclose"):
         assert fuse(sets, method).volume() <= smallest, method
 
 

@@ -25,12 +25,12 @@ from sse_cosim.sets import (
 )
 from sse_cosim.sets.exact import intersect_strips_exact, zonotope_polygon
 
-METHODS = sorted(GAIN_METHODS)
+METHODS = sorted(available_gain_methods())  # the gains and the ``enclose`` correction
 
 
-def test_registry_lists_the_four_methods():
-    assert set(available_gain_methods()) == {"frobenius", "cvxpy-frobenius", "volume",
-                                             "cvxpy-volume"}
+def test_registry_lists_the_four_gains_and_enclose():
+    assert set(GAIN_METHODS) == {"frobenius", "cvxpy-frobenius", "volume", "cvxpy-volume"}
+    assert set(available_gain_methods()) == {*GAIN_METHODS, "enclose"}
     with pytest.raises(ValueError, match="unknown gain method 'nope'"):
         intersect_strips(Zonotope([0.0, 0.0], np.eye(2)), Strips([1.0, 0.0], 0.0, 1.0), "nope")
 
