@@ -20,7 +20,7 @@ import shapely
 from benchmarks.common import PlainObserver, fuse_inputs, median
 from sse_cosim.control.picture import SceneContext, assess
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea
+from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea, dilate
 from sse_cosim.scenario.model import Bus, Controller, Estimator
 from sse_cosim.sensors import SensorSpec, observe
 from sse_cosim.world.network import build_network
@@ -69,7 +69,8 @@ def measure(pedestrians: int, sensors: int, steps: int, warmup: int, roadmap) ->
     observers = {n: PlainObserver(model, config.gain_method) for n in nodes}
     context = SceneContext.build(roadmap, ["WC", "CE"], Bus(), Controller(), model.max_speed)
     occupancy = OccupancyTracker(model, DT)
-    unobserved = UnobservedArea(context.walkable, model, DT, 1)
+    unobserved = UnobservedArea(context.walkable, model, DT, 1, window=dilate(
+        context.crossing, context.config.interest_radius_m))  # as in the loop
     people, velocity = _pedestrians(pedestrians, rng)
     inbox: dict[str, tuple[int, dict, shapely.Geometry]] = {}
     samples = []

@@ -16,6 +16,16 @@ and the pedestrian itself is in (U_k (+) disc(eps)) ∩ walkable, minus what the
 Shared views arrive ``latency`` steps late: U is kept exactly up to step k - latency (when
 those views were taken) and carried to step k with the bus's own views. Every buffer uses
 polygons that circumscribe their discs, so each step over-approximates.
+
+The picture asks about U only near the crossing, so U is tracked in a bounded area B around
+that window (B ⊇ window (+) disc(eps)) and the walkable ground outside B counts as possibly
+occupied at every step: with O = (walkable (+) disc(eps)) minus B,
+
+    Ũ_k = ((Ũ_{k-1} ∪ O) (+) disc(v dt)) ∩ ((walkable minus views_k) (+) disc(eps)) ∩ B
+
+contains U_k ∩ B whenever Ũ_{k-1} contains U_{k-1} ∩ B, since U_{k-1} ⊆ (U_{k-1} ∩ B) ∪ O.
+Only O's rim within v dt of B matters, and it moves the same way every step (its dilation is
+computed once), so the per-step polygons stay the size of the window, not of the whole road.
 """
 
 from __future__ import annotations
@@ -93,15 +103,24 @@ class OccupancyTracker:
 
 
 class UnobservedArea:
-    """Walkable area where an undetected pedestrian may be, as the bus knows it."""
+    """Walkable area where an undetected pedestrian may be, as the bus knows it: all of it, or
+    (with a ``window``) at least every such place inside the window."""
 
     def __init__(self, walkable: shapely.Geometry, model: MotionModel, step_length: float,
-                 latency_steps: int) -> None:
-        self.walkable = walkable
+                 latency_steps: int, window: shapely.Geometry | None = None) -> None:
         self.model = model
         self.reach = model.max_speed * step_length  # how far a path moves in one step
         self.latency = latency_steps
-        self._base = dilate(walkable, model.jitter)  # path region at step self._base_step
+        eps = model.jitter
+        self._bounds = None if window is None else dilate(window, eps)  # B
+        self._inflow = EMPTY  # O's rim moved one step: paths entering B from outside
+        if self._bounds is not None:
+            near = shapely.intersection(walkable, dilate(self._bounds, self.reach + eps))
+            rim = shapely.difference(dilate(near, eps), self._bounds)
+            self._inflow = dilate(rim, self.reach)
+            walkable = shapely.intersection(walkable, dilate(self._bounds, eps))
+        self.walkable = walkable  # the walkable ground whose views matter
+        self._base = self._clip(dilate(walkable, eps))  # path region at step self._base_step
         self._base_step: int | None = None
         self._own: dict[int, shapely.Geometry] = {}  # the bus's views not yet in the base
 
@@ -137,7 +156,11 @@ class UnobservedArea:
         seen = [v for v in views if not v.is_empty]
         unseen = shapely.difference(self.walkable, shapely.union_all(seen)) if seen \
             else self.walkable
-        return shapely.intersection(dilate(path, self.reach), dilate(unseen, self.model.jitter))
+        moved = shapely.union(dilate(path, self.reach), self._inflow)
+        return self._clip(shapely.intersection(moved, dilate(unseen, self.model.jitter)))
+
+    def _clip(self, region: shapely.Geometry) -> shapely.Geometry:
+        return region if self._bounds is None else shapely.intersection(region, self._bounds)
 
 
 def _apart(first: shapely.Geometry, second: shapely.Geometry, margin: float) -> bool:

@@ -33,7 +33,12 @@ from sse_cosim.estimation.consistency import BusScreen, BusScreener, StepFlags, 
 from sse_cosim.estimation.kalman import KalmanTracker, all_detections
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver, Track
-from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea
+from sse_cosim.estimation.occupancy import (
+    ClearRegion,
+    OccupancyTracker,
+    UnobservedArea,
+    dilate,
+)
 from sse_cosim.estimation.shared import fuse_at_bus
 from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
 from sse_cosim.runner.timing import NoTimer, StageTimer
@@ -117,7 +122,11 @@ def simulate(
             world.roadmap, scenario.bus.route_edges, scenario.bus, scenario.controller,
             model.max_speed,
         )
-        unobserved = UnobservedArea(context.walkable, model, dt, scenario.v2x.latency_steps)
+        # the picture asks about hidden ground within interest_radius_m of the crossing only
+        unobserved = UnobservedArea(
+            context.walkable, model, dt, scenario.v2x.latency_steps,
+            window=dilate(context.crossing, scenario.controller.interest_radius_m),
+        )
         for step in range(n_steps):
             timer.start()
             snapshot = world.step()

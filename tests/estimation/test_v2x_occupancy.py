@@ -91,3 +91,26 @@ def test_known_pedestrian_region_excludes_clear_regions_and_keeps_the_truth():
     region = tracker.update(0, fused, {"ped": [ClearRegion(view, 0)]})["ped"]
     assert not region.intersects(shapely.box(0, -2, 3.5, 2))
     assert region.covers(shapely.Point(6.0, 1.0))
+
+
+def test_windowed_unobserved_area_keeps_everything_the_full_tracker_has_inside_the_window():
+    """Tracking only around the window (ground outside counts as unseen) loses nothing inside
+    it: checked against the whole-walkable tracker on random views, with latency."""
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    walkable = shapely.union(shapely.box(0, 0, 60, 2), shapely.box(28, -8, 32, 10))
+    window = shapely.box(24, -6, 36, 8)
+    rng = np.random.default_rng(7)
+    for latency in (0, 2):
+        full = UnobservedArea(walkable, model, DT, latency)
+        windowed = UnobservedArea(walkable, model, DT, latency, window=window)
+        for step in range(40):
+            x, y = rng.uniform(0, 60), rng.uniform(-8, 10)
+            own = shapely.box(x, y, x + rng.uniform(2, 30), y + rng.uniform(2, 15))
+            shared = [shapely.box(20, -10, 40, 12)] if rng.random() < 0.5 else []
+            expected = full.update(step, own, shared).intersection(window)
+            got = windowed.update(step, own, shared)
+            assert expected.difference(got.buffer(1e-7)).area < 1e-9, (latency, step)
+        everything = shapely.box(-10, -20, 70, 20)
+        cleared = windowed.update(40 + latency, everything, [everything])
+        # seen everywhere now (latency 0): only paths just entering across the rim remain
+        assert latency or cleared.intersection(window.buffer(-1.5)).is_empty
