@@ -143,7 +143,7 @@ class RunRecorder:
     def _check_region(self, t: float, region: shapely.Geometry, truth) -> bool | None:
         if truth is None:
             return None
-        inside = bool(region.buffer(1e-7).covers(shapely.Point(truth)))
+        inside = bool(shapely.distance(region, shapely.Point(truth)) <= 1e-7)
         if not inside:
             self.violations.append({"t": t, "node": "possible", "truth": truth.tolist()})
         return inside
