@@ -182,9 +182,10 @@ def _scaling(s: dict, t: dict) -> list[str]:
 
 
 def _throughput(tp: dict, t: dict) -> list[str]:
+    length = "at full length" if tp["duration_s"] is None else f"cut to {tp['duration_s']} s"
     lines = ["## 4. Sweep throughput", "",
-             f"`{tp['scenario']}` cut to {tp['duration_s']} s, every run its own process, "
-             f"summary only; {tp['note']}.", "",
+             f"`{tp['scenario']}` {length}, seeds 1..n, summary only, in worker processes "
+             f"that start once and take run after run; {tp['note']}.", "",
              "| executor | workers | runs | s | runs/min | speed-up |", "|---|---|---|---|---|---|"]
     for c in tp["configs"].values():
         lines.append(f"| {c['executor']} | {c['workers']} | {c['runs']} | {c['seconds']:.1f} | "

@@ -85,8 +85,8 @@ def run_all(out: Path, quick: bool = False, log: Callable[[str], None] = print,
     stage("scaling", lambda: scaling.run(pedestrians=(1, 4) if quick else scaling.PEDESTRIANS,
                                          sensors=(1, 2) if quick else scaling.SENSORS,
                                          steps=1 if quick else 5, warmup=1 if quick else 2))
-    stage("throughput", lambda: throughput.run(runs=2 if quick else 8,
-                                               duration_s=1.0 if quick else 4.0,
+    stage("throughput", lambda: throughput.run(runs=2 if quick else 16,
+                                               duration_s=1.0 if quick else None,
                                                dask=not quick))
     results["total_seconds"] = time.perf_counter() - started
     out.mkdir(parents=True, exist_ok=True)

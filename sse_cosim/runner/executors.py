@@ -1,8 +1,8 @@
 """Where tasks run: a local pool of worker processes, or Dask distributed.
 
-Either way each task runs in its own fresh process (:func:`run_in_subprocess`) and is
-seeded by its scenario alone, so the outcomes do not depend on the executor, the number
-of workers or the order in which tasks finish. Outcomes come back in the tasks' order.
+Either way each task runs in a worker process (:mod:`sse_cosim.runner.tasks`) and is seeded
+by its scenario alone, so the outcomes do not depend on the executor, the number of workers
+or the order in which tasks finish. Outcomes come back in the tasks' order.
 """
 
 from __future__ import annotations
@@ -15,7 +15,13 @@ from typing import Literal
 
 from tqdm import tqdm
 
-from sse_cosim.runner.tasks import RunTask, TaskOutcome, finished_outcome, run_in_subprocess
+from sse_cosim.runner.tasks import (
+    RunTask,
+    TaskOutcome,
+    WorkerPool,
+    finished_outcome,
+    run_in_worker,
+)
 
 ExecutorName = Literal["local", "dask"]
 
@@ -67,18 +73,22 @@ def _runner(executor: ExecutorName, workers: int, scheduler: str | None):
 
 
 def _local(todo: Sequence[RunTask], workers: int) -> Iterator[TaskOutcome]:
-    """Threads that each supervise one worker process at a time.
+    """Threads that each keep one worker process busy.
 
     If the caller stops early (Ctrl-C), tasks not yet started are cancelled rather than
     run to the end of the queue; only the runs in flight finish.
     """
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        futures = [pool.submit(run_in_subprocess, task) for task in todo]
-        try:
-            for future in as_completed(futures):
-                yield future.result()
-        finally:
-            pool.shutdown(wait=False, cancel_futures=True)
+    processes = WorkerPool()
+    try:
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            futures = [pool.submit(processes.run, task) for task in todo]
+            try:
+                for future in as_completed(futures):
+                    yield future.result()
+            finally:
+                pool.shutdown(wait=False, cancel_futures=True)
+    finally:
+        processes.close()
 
 
 @contextmanager
@@ -97,7 +107,7 @@ def _dask_client(workers: int, scheduler: str | None):
 def _dask(client, todo: Sequence[RunTask]) -> Iterator[TaskOutcome]:
     from dask.distributed import as_completed as dask_as_completed
 
-    futures = [client.submit(run_in_subprocess, task, key=f"run-{task.key}", pure=False)
+    futures = [client.submit(run_in_worker, task, key=f"run-{task.key}", pure=False)
                for task in todo]
     for future in dask_as_completed(futures):
         yield future.result()

@@ -1,9 +1,14 @@
-"""Runs as tasks: one scenario file, its overrides, one output folder, one process each.
+"""Runs as tasks: one scenario file, its overrides, one output folder, run in a worker process.
 
-libsumo runs one simulation per process, so every task runs in a fresh Python process
-(``python -m sse_cosim.runner.worker``). A task that crashes, even by a signal, loses only
-itself; its folder then holds ``error.json`` instead of ``summary.json``. Executors
-(:mod:`sse_cosim.runner.executors`) only decide *where* those processes run.
+libsumo runs one simulation per process at a time, and a crash (even by a signal) must lose
+only the run it happened in, so tasks never run in the caller's process: each runs in a
+*worker process* (``python -m sse_cosim.runner.worker``) that stays up and takes the next
+task, which spares every run after the first the ~1 s of imports and start-up (most of a
+short run's cost). Runs do not depend on what ran before them in the same worker: each is
+seeded by its scenario alone, SUMO starts and closes per run, and a worker whose run failed
+exits, so the next task gets a fresh process. A worker is also replaced after
+:data:`TASKS_PER_WORKER` runs. Executors (:mod:`sse_cosim.runner.executors`) only decide
+*where* the worker processes run.
 
 A task writes into a hidden staging folder beside its run folder (``.<name>.tmp``) that
 replaces the run folder only once it holds ``summary.json`` or ``error.json``: a run folder
@@ -13,19 +18,24 @@ the next attempt clears.
 
 from __future__ import annotations
 
+import atexit
+import contextlib
 import json
 import os
 import shutil
 import subprocess
 import sys
+import tempfile
+import threading
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 from sse_cosim.files import write_json_atomic
 from sse_cosim.reporting.outputs import SUMMARY
 
 ERROR = "error.json"
+TASKS_PER_WORKER = 100  # then a fresh process: no slow build-up over long sweeps
 
 
 @dataclass(frozen=True)
@@ -79,19 +89,106 @@ def finished_outcome(task: RunTask) -> TaskOutcome | None:
     return None
 
 
-def run_in_subprocess(task: RunTask) -> TaskOutcome:
-    """Run ``task`` in a fresh Python process and read its outcome from its folder."""
-    staged = _staged(task)
-    env = {**os.environ, "PYTHONHASHSEED": "0", "MPLBACKEND": "Agg"}
-    proc = subprocess.run(
-        [sys.executable, "-m", "sse_cosim.runner.worker", staged.to_json()],
-        capture_output=True, text=True, env=env, check=False,
-    )
-    if finished_outcome(staged) is None:
-        last = (proc.stderr.strip().splitlines() or [f"exit status {proc.returncode}"])[-1]
-        error = f"worker died ({_exit_reason(proc.returncode)}): {last}"
-        write_json_atomic(Path(staged.out_dir) / ERROR, {"key": task.key, "error": error})
-    return _publish(staged, task)
+class WorkerProcess:
+    """One worker process, started on first use, that runs tasks one after another."""
+
+    def __init__(self) -> None:
+        self._proc: subprocess.Popen[str] | None = None
+        self._stderr: IO[bytes] | None = None
+        self._served = 0
+
+    def run(self, task: RunTask) -> TaskOutcome:
+        """Run ``task`` in the worker and read its outcome from its folder."""
+        staged = _staged(task)
+        proc = self._started()
+        try:
+            proc.stdin.write(staged.to_json() + "\n")
+            proc.stdin.flush()
+            answer = proc.stdout.readline().strip()
+        except (BrokenPipeError, OSError):
+            answer = ""
+        self._served += 1
+        if answer != task.key:
+            self._record_death(staged, task)
+        outcome = _publish(staged, task)
+        if not outcome.ok or answer != task.key or self._served >= TASKS_PER_WORKER:
+            self.close()  # the worker exits after a failure; start afresh either way
+        return outcome
+
+    def close(self) -> None:
+        """End the worker (it finishes its current task first) and forget it."""
+        proc, self._proc = self._proc, None
+        if proc is not None:
+            with contextlib.suppress(OSError):  # already gone
+                proc.stdin.close()
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+            proc.stdout.close()
+        if self._stderr is not None:
+            self._stderr.close()
+            self._stderr = None
+
+    def _started(self) -> subprocess.Popen[str]:
+        if self._proc is None:
+            self._stderr = tempfile.TemporaryFile()  # noqa: SIM115 -- closed in close()
+            env = {**os.environ, "PYTHONHASHSEED": "0", "MPLBACKEND": "Agg"}
+            self._proc = subprocess.Popen(
+                [sys.executable, "-m", "sse_cosim.runner.worker"], stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE, stderr=self._stderr, text=True, encoding="utf-8",
+                env=env,
+            )
+            self._served = 0
+        return self._proc
+
+    def _record_death(self, staged: RunTask, task: RunTask) -> None:
+        """The worker died during ``task``: record why in its folder, unless the task did."""
+        try:
+            code = self._proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:  # alive but answering out of turn: stop it
+            self._proc.kill()
+            code = self._proc.wait()
+        self._stderr.seek(0)
+        lines = self._stderr.read().decode("utf-8", "replace").strip().splitlines()
+        if finished_outcome(staged) is None:
+            last = lines[-1] if lines else f"exit status {code}"
+            error = f"worker died ({_exit_reason(code)}): {last}"
+            write_json_atomic(Path(staged.out_dir) / ERROR, {"key": task.key, "error": error})
+
+
+class WorkerPool:
+    """One :class:`WorkerProcess` per calling thread (threads run tasks in parallel)."""
+
+    def __init__(self) -> None:
+        self._local = threading.local()
+        self._workers: list[WorkerProcess] = []
+        self._lock = threading.Lock()
+
+    def run(self, task: RunTask) -> TaskOutcome:
+        worker = getattr(self._local, "worker", None)
+        if worker is None:
+            worker = self._local.worker = WorkerProcess()
+            with self._lock:
+                self._workers.append(worker)
+        return worker.run(task)
+
+    def close(self) -> None:
+        with self._lock:
+            workers, self._workers = self._workers, []
+        for worker in workers:
+            worker.close()
+
+
+_PROCESS_POOL = WorkerPool()
+atexit.register(_PROCESS_POOL.close)
+
+
+def run_in_worker(task: RunTask) -> TaskOutcome:
+    """Run ``task`` in this thread's worker of a pool that lives as long as this process
+    (for executors such as Dask whose own workers call it)."""
+    return _PROCESS_POOL.run(task)
 
 
 def record_failure(task: RunTask, error: str) -> TaskOutcome:

@@ -1,13 +1,19 @@
-"""A worker process: runs one :class:`RunTask` given as JSON on the command line.
+"""A worker process: runs :class:`RunTask`\\ s, one JSON line each on stdin, one after another.
 
-Its folder ends with ``summary.json`` (success) or ``error.json`` (a one-line reason).
+After each task it answers the task's key on its reply channel (the original stdout; anything
+else written to stdout, such as SUMO's messages, goes to stderr). A task's folder ends with
+``summary.json`` (success) or ``error.json`` (a one-line reason). After a failed task the
+worker exits, so the next task starts in a fresh process with nothing left behind.
 """
 
 from __future__ import annotations
 
+import os
 import sys
 import traceback
+from collections.abc import Iterable
 from pathlib import Path
+from typing import TextIO
 
 from sse_cosim.errors import SimulationError, UserError
 from sse_cosim.files import write_json_atomic
@@ -15,8 +21,8 @@ from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.runner.tasks import ERROR, RunTask
 
 
-def main(argv: list[str]) -> int:
-    task = RunTask.from_json(argv[0])
+def run_task(task: RunTask) -> int:
+    """Run one task into its folder; 0 on success, 2 for a bad input, 1 for a bug."""
     try:
         run_scenario_file(
             Path(task.scenario), Path(task.out_dir), task.overrides,
@@ -35,5 +41,23 @@ def main(argv: list[str]) -> int:
     return 0
 
 
+def serve(lines: Iterable[str], reply: TextIO) -> int:
+    """Run the task of every line, answering each key; stop after the first failure."""
+    for line in lines:
+        task = RunTask.from_json(line)
+        code = run_task(task)
+        reply.write(task.key + "\n")
+        reply.flush()
+        if code:
+            return code
+    return 0
+
+
+def main() -> int:
+    reply = os.fdopen(os.dup(sys.stdout.fileno()), "w", encoding="utf-8")
+    os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # stray output must not mix with replies
+    return serve(sys.stdin, reply)
+
+
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(main())
