@@ -1,4 +1,4 @@
-"""All scenarios of a folder, each in its own process, then the paper's tables and figures."""
+"""All scenarios of a folder, run in worker processes, then the paper's tables and figures."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Sweeps in real SUMO through the CLI: rows, Dask, kill and resume, failures, the report.
 
-Runs are cut to 3 simulated seconds; each still costs a few seconds (a fresh process).
+Runs are cut to 3 simulated seconds; each worker process pays its start-up once.
 """
 
 from __future__ import annotations
