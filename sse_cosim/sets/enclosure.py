@@ -12,21 +12,28 @@ A_ij = |n_iᵀd_j| (A symmetric, zero diagonal). Such a zonotope is the intersec
 
     max_j |n_iᵀ(v_j - c)| <= (Aα)_i          (v_j the vertices of P),
 
-which is linear in (c, α). For a fixed c the smallest such zonotope (by inclusion, hence in
-area and perimeter alike) is the symmetric polygon with those half-widths; over c,
-:func:`enclose_polygon` minimizes the perimeter 4 Σ α_i (an LP, scipy HiGHS), a convex
-problem. When D holds every edge direction of P (it does for Z ∩ strips: Z's generator
-directions and the strips' edge directions), a centrally symmetric P is recovered exactly.
+which is linear in (c, α): the least perimeter 4 Σ α_i is an LP (:func:`least_perimeter_lp`,
+scipy HiGHS, the reference). It is solved without a solver instead: for a fixed c the smallest
+such zonotope, by inclusion and so in area and perimeter alike, is the centrally symmetric
+polygon with half-widths h_i(c) = max_j |n_iᵀ(v_j - c)| (:func:`symmetric_scales`), and c
+comes from a weighted L1 problem in the plane (:func:`least_perimeter`), then is re-centered
+for area (:func:`enclose_polygon`). When D holds every edge direction of P (it does: Z's
+generator directions and the strips' edge directions for Z ∩ strips, the inputs' generator
+directions for ∩ Z_j), a centrally symmetric P is recovered exactly.
 
-Soundness does not rest on the LP's tolerances: the containment inequalities are re-evaluated
-in floating point with a small margin (:data:`MARGIN` times the size of the input), and the
-scales of the directions in use are raised until every one holds, or the enclosure is
-rejected (``None``: the callers then fall back to a Proposition 1 / 2 result).
+Soundness does not rest on any of that being optimal, nor on rounding: the containment
+inequalities are re-evaluated in floating point with a margin (:data:`MARGIN` times the size
+of the input), and the scales of the directions in use are raised until every one holds
+(:func:`_contain`), or the enclosure is rejected (``None``: the callers then keep the
+Proposition 1 / 2 result).
 """
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
+from numpy.typing import NDArray
 from scipy.optimize import linprog
 
 from sse_cosim.sets.zonotope import FloatArray
@@ -37,6 +44,9 @@ rounding of the clipped polygon's vertices and of the zonotope's half-widths."""
 
 PARALLEL_SIN = 1e-9
 """Directions whose angle has a sine below this are merged into one."""
+
+REFINE_STEPS = 2
+"""Re-centering steps after the least-perimeter enclosure (:func:`enclose_polygon`)."""
 
 
 def clip_polygon(vertices: FloatArray, normal: FloatArray, bound: float) -> FloatArray:
@@ -97,35 +107,163 @@ def unit_directions(generators: FloatArray) -> FloatArray:
     return g[:, keep]
 
 
-def enclose_polygon(vertices: FloatArray, directions: FloatArray, size: float
-                    ) -> tuple[FloatArray, FloatArray] | None:
-    """A zonotope ⟨c, G⟩ ⊇ conv(``vertices``) (m, 2) with generators along ``directions``
-    (2, k unit vectors, pairwise non-parallel), of least perimeter; ``size`` is the scale of
-    the input set (the margin of the containment test is :data:`MARGIN` × ``size``).
+def support_intervals(vertices: FloatArray, normals: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """[min, max] of n_iᵀv over the vertices (m, 2) for every normal (k, 2): each (k,)."""
+    projections = vertices @ normals.T
+    return projections.min(axis=0), projections.max(axis=0)
 
-    Returns (c, G) with zero generators dropped, or None if there are fewer than two
-    directions, the LP fails, or its result cannot be made to contain every vertex.
+
+def _normals(directions: FloatArray) -> FloatArray:
+    """n_i = d_i turned by +90° (k, 2): the facet normal of the generator along d_i."""
+    return np.stack([-directions[1], directions[0]], axis=1)
+
+
+def tangent_weights(directions: FloatArray) -> FloatArray:
+    """ω_i = tan(Δ_{i-1}/2) + tan(Δ_i/2) for directions sorted by angle in [0, π) (Δ: the gaps
+    between consecutive directions, around the half-turn): (k,).
+
+    ω/2 are the scales of the zonotope with these directions circumscribed about the unit
+    disc (A ω/2 = 1), and the perimeter of a zonotope with these directions whose every
+    direction is an edge is 2 Σ ω_i h_i, with h_i its half-width along n_i.
     """
+    theta = np.arctan2(directions[1], directions[0])
+    gaps = np.diff(np.concatenate([theta, theta[:1] + np.pi]))
+    return np.tan(gaps / 2) + np.tan(np.roll(gaps, 1) / 2)
+
+
+@cache
+def _pairs(k: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Every pair i < j of range(k), as two read-only index arrays."""
+    first, second = np.triu_indices(k, 1)
+    first.setflags(write=False)
+    second.setflags(write=False)
+    return first, second
+
+
+def weighted_l1_center(normals: FloatArray, middle: FloatArray, weights: FloatArray
+                       ) -> FloatArray:
+    """argmin_c Σ_i w_i |n_iᵀc - m_i| (w >= 0): convex and piecewise linear, so a minimum lies
+    on a vertex of the arrangement of the lines n_iᵀc = m_i; all of them are scored at once.
+    """
+    i, j = _pairs(len(middle))
+    det = normals[i, 0] * normals[j, 1] - normals[i, 1] * normals[j, 0]
+    ok = np.abs(det) > PARALLEL_SIN
+    i, j, det = i[ok], j[ok], det[ok]
+    points = np.stack([(middle[i] * normals[j, 1] - middle[j] * normals[i, 1]) / det,
+                       (normals[i, 0] * middle[j] - normals[j, 0] * middle[i]) / det], axis=1)
+    cost = (np.abs(points @ normals.T - middle) * weights).sum(axis=1)
+    return points[int(np.argmin(cost))]
+
+
+def symmetric_scales(directions: FloatArray, half_widths: FloatArray) -> FloatArray:
+    """Scales α (k,) of the centrally symmetric polygon {x : |n_iᵀx| <= h_i} (normals of the
+    sorted ``directions``), a zonotope along them: α_i is half its edge along d_i.
+
+    Edge lengths from the support numbers: L_j = (h_prev - h_j cos Δ)/sin Δ + (h_next -
+    h_j cos Δ')/sin Δ' around the normals ±n_i (Δ, Δ': the angles to the neighbours). A
+    negative L_j marks a redundant strip: its neighbours' normals span n_j positively and their
+    lines meet inside it, so their wedge lies in it. Each round drops the strips whose L is
+    negative and a local minimum (never two neighbours, so each keeps the wedge that makes it
+    redundant) and recomputes, until every edge is >= 0 or two directions are left.
+    """
+    theta = np.arctan2(directions[1], directions[0])
+    active = np.arange(len(theta))
+    while True:
+        t, h = theta[active], half_widths[active]
+        gap = np.empty_like(t)  # angle from each direction to the next, around the half-turn
+        gap[:-1] = t[1:] - t[:-1]
+        gap[-1] = t[0] + np.pi - t[-1]
+        prev_gap = np.concatenate([gap[-1:], gap[:-1]])
+        h_next = np.concatenate([h[1:], h[:1]])
+        h_prev = np.concatenate([h[-1:], h[:-1]])
+        lengths = ((h_prev - h * np.cos(prev_gap)) / np.sin(prev_gap)
+                   + (h_next - h * np.cos(gap)) / np.sin(gap))
+        if len(active) <= 2 or lengths.min() >= 0:
+            alpha = np.zeros(len(theta))
+            alpha[active] = np.maximum(lengths, 0.0) / 2
+            return alpha
+        after = np.concatenate([lengths[1:], lengths[:1]])
+        before = np.concatenate([lengths[-1:], lengths[:-1]])
+        drop = (lengths < 0) & (lengths <= before) & (lengths < after)
+        if not drop.any() or len(active) - drop.sum() < 2:  # ties, or too few left
+            drop[:] = False
+            drop[int(np.argmin(lengths))] = True
+        active = active[~drop]
+
+
+def least_perimeter(vertices: FloatArray, directions: FloatArray
+                    ) -> tuple[FloatArray, FloatArray]:
+    """(c, α): the least-perimeter zonotope ⟨c, D diag(α)⟩ ⊇ conv(``vertices``) (m, 2) along the
+    sorted unit ``directions`` D (2, k >= 2), without an LP.
+
+    For a fixed c the best is the symmetric polygon of half-widths
+    h_i(c) = w_i + |n_iᵀc - m_i| (w, m: half-width and middle of the vertices along n_i). Its
+    perimeter is at least 2 Σ ω_i h_i(c) (:func:`tangent_weights`: ω/2 is dual feasible for
+    the LP, as A ω/2 = 1), with equality when every direction is an edge. c minimizes that
+    bound (:func:`weighted_l1_center`), so whenever the result has every direction as an edge
+    it is the LP optimum (:func:`least_perimeter_lp`); otherwise it is still an enclosure.
+    """
+    normals = _normals(directions)
+    lower, upper = support_intervals(vertices, normals)
+    return _centered(directions, normals, (upper + lower) / 2, (upper - lower) / 2,
+                     tangent_weights(directions))
+
+
+def _centered(directions: FloatArray, normals: FloatArray, middle: FloatArray,
+              half: FloatArray, weights: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """(c, α) with c = argmin Σ w_i |n_iᵀc - m_i| and α the symmetric polygon about c."""
+    center = weighted_l1_center(normals, middle, weights)
+    return center, symmetric_scales(directions, half + np.abs(normals @ center - middle))
+
+
+def least_perimeter_lp(vertices: FloatArray, directions: FloatArray
+                       ) -> tuple[FloatArray, FloatArray] | None:
+    """The reference for :func:`least_perimeter`: min Σ α over (c, α >= 0) subject to
+    n_iᵀc + (Aα)_i >= max_j n_iᵀv_j and n_iᵀc - (Aα)_i <= min_j n_iᵀv_j (scipy HiGHS, in
+    units of the vertices' size); None if the solver fails. Not checked for containment."""
     k = directions.shape[1]
-    if k < 2 or len(vertices) == 0:
-        return None
-    normals = np.stack([-directions[1], directions[0]], axis=1)  # (k, 2), n_i ⊥ d_i
-    widths = np.abs(normals @ directions)  # A_ij = |n_iᵀ d_j|
-    projections = vertices @ normals.T  # (m, k)
-    upper, lower = projections.max(axis=0), projections.min(axis=0)
+    normals = _normals(directions)
+    widths = np.abs(normals @ directions)
+    lower, upper = support_intervals(vertices, normals)
     scale = float(np.abs(vertices).max()) or 1.0
-    # Variables (c, α), in units of ``scale``: min Σ α s.t. n_iᵀc + (Aα)_i >= upper_i and
-    # n_iᵀc - (Aα)_i <= lower_i.
-    a_ub = np.block([[-normals, -widths], [normals, -widths]])
-    b_ub = np.concatenate([-upper, lower]) / scale
-    cost = np.concatenate([np.zeros(2), np.ones(k)])
-    result = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=[(None, None)] * 2 + [(0, None)] * k,
-                     method="highs")
+    result = linprog(np.concatenate([np.zeros(2), np.ones(k)]),
+                     A_ub=np.block([[-normals, -widths], [normals, -widths]]),
+                     b_ub=np.concatenate([-upper, lower]) / scale,
+                     bounds=[(None, None)] * 2 + [(0, None)] * k, method="highs")
     if result.status != 0:
         return None
-    center = result.x[:2] * scale
-    alpha = np.maximum(result.x[2:], 0.0) * scale
-    alpha[alpha <= 1e-9 * alpha.max(initial=0.0)] = 0.0  # LP noise, not generators
+    return result.x[:2] * scale, np.maximum(result.x[2:], 0.0) * scale
+
+
+def enclose_polygon(vertices: FloatArray, directions: FloatArray, size: float,
+                    refine: int | None = None) -> tuple[FloatArray, FloatArray] | None:
+    """A zonotope ⟨c, G⟩ ⊇ conv(``vertices``) (m, 2) with generators along ``directions``
+    (2, k unit vectors sorted by angle in [0, π), pairwise non-parallel: as from
+    :func:`unit_directions`); ``size`` is the scale of the input set (the margin of the
+    containment test is :data:`MARGIN` × ``size``).
+
+    Starts from the least-perimeter enclosure (:func:`least_perimeter`), then up to
+    ``refine`` (default :data:`REFINE_STEPS`) times re-centers to lower the area: moving the
+    center off m_i along n_i widens the strip i on both sides, which costs about 2 L_i per
+    unit (L_i = 2α_i the edge along d_i), so the new c minimizes Σ α_i |n_iᵀc - m_i|; it is
+    kept only if the area drops. Finally α is raised until the containment inequalities hold
+    with the margin (:func:`_contain`). Returns (c, G) with zero generators dropped, or None
+    if there are fewer than two directions or no vertices.
+    """
+    if directions.shape[1] < 2 or len(vertices) == 0:
+        return None
+    normals = _normals(directions)
+    widths = np.abs(normals @ directions)
+    lower, upper = support_intervals(vertices, normals)
+    middle, half = (upper + lower) / 2, (upper - lower) / 2
+    center, alpha = _centered(directions, normals, middle, half, tangent_weights(directions))
+    area = alpha @ widths @ alpha  # area / 2
+    for _ in range(REFINE_STEPS if refine is None else refine):
+        candidate, scales = _centered(directions, normals, middle, half, alpha)
+        if scales @ widths @ scales >= area:
+            break
+        center, alpha, area = candidate, scales, scales @ widths @ scales
+    alpha[alpha <= 1e-12 * alpha.max(initial=0.0)] = 0.0  # rounding, not generators
     alpha = _contain(alpha, widths, normals @ center, upper, lower, MARGIN * size)
     if alpha is None:
         return None
@@ -136,7 +274,7 @@ def enclose_polygon(vertices: FloatArray, directions: FloatArray, size: float
 def _contain(alpha: FloatArray, widths: FloatArray, middle: FloatArray, upper: FloatArray,
              lower: FloatArray, margin: float) -> FloatArray | None:
     """α raised until (Aα)_i >= max(upper_i - n_iᵀc, n_iᵀc - lower_i) + margin holds for every
-    i in floating point, or None if three rounds do not get there.
+    i in floating point (by up to one more margin), or None if three rounds do not get there.
 
     Each round adds the same amount to the scales of the directions in use, so no generator
     appears; if those cannot widen the set along some normal (fewer than two of them: a
@@ -153,6 +291,6 @@ def _contain(alpha: FloatArray, widths: FloatArray, middle: FloatArray, upper: F
         if (reach[short] <= 0).any():
             used = np.ones_like(used)
             reach = widths.sum(axis=1)
-        alpha = alpha.copy()
-        alpha[used] += (deficit[short] / reach[short]).max() * (1 + 1e-9)
+        alpha = alpha.copy()  # one margin more than needed: rounding cannot undo the step
+        alpha[used] += ((deficit[short] + margin) / reach[short]).max()
     return None

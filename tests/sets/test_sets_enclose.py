@@ -152,7 +152,7 @@ def test_enclose_fusion_is_exact_for_an_octagon():
 
 def test_enclose_fusion_is_much_tighter_than_the_smallest_input():
     """On the seeded 2-D cases of ``test_sets_fusion`` (2-4 inputs), mean area relative to
-    ``frobenius``: enclose 0.224, strips 0.316, exact intersection 0.195."""
+    ``frobenius``: enclose 0.226, strips 0.316, exact intersection 0.195."""
     ratios = {"enclose": [], "strips": [], "exact": []}
     for seed in range(40):
         rng = np.random.default_rng(seed)
@@ -167,7 +167,7 @@ def test_enclose_fusion_is_much_tighter_than_the_smallest_input():
         ratios["exact"].append(exact_intersection(sets).area / base)
     means = {k: float(np.mean(v)) for k, v in ratios.items()}
     assert means["exact"] <= means["enclose"] < means["strips"]
-    assert means["enclose"] < 0.25
+    assert means["enclose"] < 0.24
 
 
 def test_enclose_fusion_of_disjoint_inputs_is_the_smallest_input():
@@ -226,6 +226,61 @@ def test_enclose_polygon_contains_every_vertex_for_any_directions(seed):
     assert found is not None
     z = Zonotope(*found)
     assert all(in_zonotope_lp(z, p) for p in points)
+
+
+@SETTINGS
+@given(zonotope_with_strips(2))
+def test_least_perimeter_reaches_the_lp_optimum(case):
+    """The solver-free least-perimeter enclosure against the LP (scipy HiGHS): never below it
+    (the LP is the optimum), and equal to it whenever every direction is an edge (then the
+    weighted-L1 bound is attained: a certificate)."""
+    z, strips = case
+    unit = strips.normalized()
+    polygon = enclosure.clip_to_strips(z.vertices(), unit.normals, unit.values, unit.radii)
+    edges = np.stack([-unit.normals[:, 1], unit.normals[:, 0]])
+    directions = enclosure.unit_directions(np.hstack([z.generators, edges]))
+    _, alpha = enclosure.least_perimeter(polygon, directions)
+    _, reference = enclosure.least_perimeter_lp(polygon, directions)
+    assert alpha.sum() >= reference.sum() * (1 - 1e-7)
+    if (alpha > 0).all():
+        assert alpha.sum() <= reference.sum() * (1 + 1e-7)
+
+
+def test_least_perimeter_equals_the_lp_on_random_intersections():
+    """Measured: on these 200 cases the two agree to 1e-7 (redundant directions included)."""
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        z = Zonotope(rng.normal(size=2), rng.normal(size=(2, int(rng.integers(2, 9)))))
+        normals = rng.normal(size=(int(rng.integers(1, 4)), 2))
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        radii = np.abs(normals @ z.generators).sum(axis=1) * rng.uniform(0.05, 0.8, len(normals))
+        point = z.center + z.generators @ rng.uniform(-1, 1, z.n_generators)
+        values = normals @ point + rng.uniform(-1, 1, len(normals)) * radii
+        polygon = enclosure.clip_to_strips(z.vertices(), normals, values, radii)
+        directions = enclosure.unit_directions(
+            np.hstack([z.generators, np.stack([-normals[:, 1], normals[:, 0]])]))
+        _, alpha = enclosure.least_perimeter(polygon, directions)
+        _, reference = enclosure.least_perimeter_lp(polygon, directions)
+        assert alpha.sum() == pytest.approx(reference.sum(), rel=1e-7)
+
+
+@SETTINGS
+@given(st.integers(0, 2**32 - 1))
+def test_symmetric_scales_give_the_polygon_of_the_half_widths(seed):
+    """{x : |n_iᵀx| <= h_i} with random h (often redundant strips) is the zonotope of
+    ``symmetric_scales``: same set as shapely's clipping of a large box."""
+    rng = np.random.default_rng(seed)
+    angles = rng.uniform(0, np.pi, int(rng.integers(2, 9)))
+    directions = enclosure.unit_directions(np.stack([np.cos(angles), np.sin(angles)]))
+    normals = np.stack([-directions[1], directions[0]], axis=1)
+    half = rng.uniform(0.1, 2.0, directions.shape[1])
+    alpha = enclosure.symmetric_scales(directions, half)
+    z = Zonotope(np.zeros(2), directions * alpha)
+    region = shapely.box(-100, -100, 100, 100)
+    for normal, h in zip(normals, half, strict=True):
+        region = intersect_strips_exact(region, Strips(normal, 0.0, h))
+    assert z.volume() == pytest.approx(region.area, rel=1e-9)
+    assert zonotope_polygon(z).symmetric_difference(region).area <= 1e-9 * region.area
 
 
 def test_containment_repair_raises_alpha_until_every_half_width_holds():
