@@ -37,6 +37,8 @@ def run(number: int = 200, repeats: int = 5) -> dict:
         "volume (closed form, 2-D vertices)": lambda: intersect_strips(z, strips, "volume"),
         "cvxpy-volume (compiled once)": lambda: intersect_strips(z, strips, "cvxpy-volume"),
         "cvxpy-volume (rebuilt every call)": lambda: _rebuilt("cvxpy-volume")(z, strips),
+        "enclose (exact polygon, enclosure; volume too)":
+            lambda: intersect_strips(z, strips, "enclose"),
     }
     us = {}
     for name, call in cases.items():
@@ -54,6 +56,8 @@ def run(number: int = 200, repeats: int = 5) -> dict:
         / us["volume (closed form, 2-D vertices)"],
         "cvxpy-volume rebuilt / compiled": us["cvxpy-volume (rebuilt every call)"]
         / us["cvxpy-volume (compiled once)"],
+        "enclose / volume": us["enclose (exact polygon, enclosure; volume too)"]
+        / us["volume (closed form, 2-D vertices)"],
     }
     areas = {name.split(" ")[0]: intersect_strips(z, strips, name.split(" ")[0]).volume()
              for name in cases if "rebuilt" not in name}

@@ -211,7 +211,11 @@ def _tightness(tt: dict, t: dict) -> list[str]:
               "scenarios' default is gain `volume`, fusion `strips`: the `volume` gain is the "
               "exact area-optimal strip-by-strip update (2-D closed form, equal to `cvxpy-volume` "
               "at a fraction of its cost) and never larger than `frobenius`, and `strips` is "
-              "the only fusion that can go below its smallest input.", ""]
+              "the only Prop. 2-based fusion that can go below its smallest input. `enclose` "
+              "(gain and fusion) is not Prop. 1/2: it intersects exactly as a 2-D polygon and "
+              "encloses that in a zonotope along the polygon's edge directions, keeping the "
+              "`volume` result (the smallest input) where that is smaller (`docs/method.md`).",
+              ""]
     return lines
 
 

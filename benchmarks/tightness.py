@@ -33,9 +33,10 @@ from sse_cosim.sets.exact import intersect_strips_exact, predict_exact
 SCENARIOS = [f"scenarios/s{i}_{kind}.toml" for i in (1, 2, 3)
              for kind in ("pedestrian", "no_pedestrian")]
 GAINS = ("frobenius", "volume", "cvxpy-frobenius", "cvxpy-volume", "volume/pca",
-         "volume/16")
+         "volume/16", "enclose", "enclose/16")
 """Gain methods (default reduction: girard to 8 generators); ``volume/pca``: PCA reduction,
-``volume/16``: girard to 16 generators (where the looseness comes from)."""
+``volume/16``: girard to 16 generators (where the looseness comes from); ``enclose``: the
+exact 2-D intersection enclosed in a zonotope (``sets.enclosure``), not a Prop. 1 gain."""
 
 
 def _observer(model: MotionModel, variant: str) -> PlainObserver:
@@ -45,7 +46,7 @@ def _observer(model: MotionModel, variant: str) -> PlainObserver:
     if option:
         return PlainObserver(model, gain, max_generators=int(option))
     return PlainObserver(model, gain)
-FUSIONS = ("frobenius", "volume", "strips")
+FUSIONS = ("frobenius", "volume", "strips", "enclose")
 DT = 0.1
 
 
@@ -163,6 +164,9 @@ def run(recordings: Sequence[Recording], gains=GAINS, fusions=FUSIONS, workers: 
         rec.scenario: {
             "local_volume_mean": _stats(p["local"].get("volume", [])).get("mean"),
             "fused_volume_strips_mean": _stats(p["fused"].get("volume|strips", [])).get("mean"),
+            "local_enclose_mean": _stats(p["local"].get("enclose", [])).get("mean"),
+            "fused_enclose_enclose_mean": _stats(p["fused"].get("enclose|enclose", [])
+                                                 ).get("mean"),
         }
         for rec, p in zip(recordings, parts, strict=True)
     }

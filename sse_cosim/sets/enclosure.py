@@ -85,15 +85,17 @@ def clip_to_strips(vertices: FloatArray, normals: FloatArray, values: FloatArray
 
 
 def unit_directions(generators: FloatArray) -> FloatArray:
-    """The distinct directions of the nonzero columns of ``generators`` (2, e) as unit vectors
-    (2, k), folded into the upper half-plane and sorted by angle; directions closer than
-    :data:`PARALLEL_SIN` are merged (the first of each run is kept)."""
-    g = generators[:, (generators[0] != 0) | (generators[1] != 0)]
-    if g.shape[1] == 0:
+    """The distinct directions of the columns of ``generators`` (2, e) as unit vectors (2, k),
+    folded into the upper half-plane and sorted by angle; directions closer than
+    :data:`PARALLEL_SIN` are merged (the first of each run is kept). Columns shorter than
+    :data:`PARALLEL_SIN` times the longest (rounding residue of earlier updates) give none."""
+    norms = np.hypot(generators[0], generators[1])
+    keep = norms > PARALLEL_SIN * norms.max(initial=0.0)
+    if not keep.any():
         return np.zeros((2, 0))
+    g = generators[:, keep] / norms[keep]
     flip = (g[1] < 0) | ((g[1] == 0) & (g[0] < 0))
     g = np.where(flip, -g, g)
-    g = g / np.sqrt((g * g).sum(axis=0))
     g = g[:, np.argsort(np.arctan2(g[1], g[0]), kind="stable")]
     keep = [0]
     for i in range(1, g.shape[1]):

@@ -212,6 +212,9 @@ def test_unit_directions_merge_parallel_and_opposite_columns():
     assert np.allclose(np.linalg.norm(d, axis=0), 1.0)
     assert np.allclose(d, [[1.0, np.sqrt(0.5), 0.0], [0.0, np.sqrt(0.5), 1.0]])
     assert enclosure.unit_directions(np.zeros((2, 2))).shape == (2, 0)
+    with np.errstate(all="raise"):  # residue columns (squares underflow) give no direction
+        tiny = enclosure.unit_directions(np.array([[1.0, 1e-160, 0.0], [0.0, -1e-167, 2.0]]))
+    assert np.allclose(tiny, [[1.0, 0.0], [0.0, 1.0]])
 
 
 @SETTINGS
