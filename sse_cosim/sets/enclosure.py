@@ -30,13 +30,14 @@ Proposition 1 / 2 result).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import cache
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linprog
 
-from sse_cosim.sets.zonotope import FloatArray
+from sse_cosim.sets.zonotope import FloatArray, Zonotope
 
 MARGIN = 1e-10
 """Safety margin of the containment test, relative to the size of the input set: covers the
@@ -45,8 +46,12 @@ rounding of the clipped polygon's vertices and of the zonotope's half-widths."""
 PARALLEL_SIN = 1e-9
 """Directions whose angle has a sine below this are merged into one."""
 
-REFINE_STEPS = 2
+REFINE_STEPS = 1
 """Re-centering steps after the least-perimeter enclosure (:func:`enclose_polygon`)."""
+
+EXACT_RTOL = 1e-8
+"""An enclosure whose area is within this of the polygon's counts as exact
+(:func:`smaller_enclosure`)."""
 
 
 def clip_polygon(vertices: FloatArray, normal: FloatArray, bound: float) -> FloatArray:
@@ -296,3 +301,21 @@ def _contain(alpha: FloatArray, widths: FloatArray, middle: FloatArray, upper: F
         alpha = alpha.copy()  # one margin more than needed: rounding cannot undo the step
         alpha[used] += ((deficit[short] + margin) / reach[short]).max()
     return None
+
+
+def polygon_area(vertices: FloatArray) -> float:
+    """Area of the convex polygon with ``vertices`` (m, 2) in order (shoelace; 0 if m < 3)."""
+    x, y = vertices[:, 0], vertices[:, 1]
+    return 0.5 * abs(float(x @ np.roll(y, -1) - y @ np.roll(x, -1)))
+
+
+def smaller_enclosure(enclosed: Zonotope, polygon: FloatArray,
+                      alternative: Callable[[], Zonotope]) -> Zonotope:
+    """The smaller in area of ``enclosed`` and ``alternative()``, two sets that both hold the
+    polygon (its vertices (m, 2) in order, in any frame). The alternative is not built when
+    ``enclosed`` is within :data:`EXACT_RTOL` of the polygon's area: nothing holding the
+    polygon is smaller than it."""
+    if enclosed.volume() <= polygon_area(polygon) * (1 + EXACT_RTOL):
+        return enclosed
+    other = alternative()
+    return enclosed if enclosed.volume() < other.volume() else other

@@ -26,7 +26,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from sse_cosim.sets._registry import lookup
-from sse_cosim.sets.enclosure import clip_to_strips, enclose_polygon, unit_directions
+from sse_cosim.sets.consistency import strip_covers
+from sse_cosim.sets.enclosure import (
+    clip_to_strips,
+    enclose_polygon,
+    smaller_enclosure,
+    unit_directions,
+)
 from sse_cosim.sets.strips import Strips
 from sse_cosim.sets.zonotope import (
     FloatArray,
@@ -290,31 +296,39 @@ def _by_gain(choose: GainMethod) -> Correction:
 
 def enclose_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
     """2-D: Z ∩ S exactly as a convex polygon P, enclosed in a zonotope along the directions of
-    Z's generators and of the strips' edges (⊥ their normals), the directions of P's edges;
-    the smaller in area of that and the ``volume`` gain's result (both contain Z ∩ S).
+    Z's generators and of the strips' edges (⊥ their normals), the directions of P's edges
+    (:mod:`sse_cosim.sets.enclosure`); the smaller in area of that and the ``volume`` gain's
+    result (both contain Z ∩ S). The ``volume`` gain is skipped when the enclosure's area is
+    within :data:`~sse_cosim.sets.enclosure.EXACT_RTOL` of P's: nothing that holds P is smaller
+    (so the result may exceed ``volume``'s, or Z's when the strips barely cut it, by that
+    relative amount; strips that all cover Z return Z).
 
     Falls back to the ``volume`` result when n != 2, when Z is not full-dimensional, when
     Z ∩ S is empty (an inconsistent measurement: any set is sound, and
     :mod:`sse_cosim.sets.consistency` is where that is detected, as for the gains), or when
-    the enclosure LP fails.
+    no enclosure is found.
     """
-    volume = apply_gain(zonotope, strips, GAIN_METHODS["volume"](zonotope, strips))
-    if zonotope.dim != 2 or not full_rank(zonotope.generators):
-        return volume
-    # Local coordinates about Z's center: the clipping and the LP see numbers of Z's size.
+
+    def volume() -> Zonotope:
+        return apply_gain(zonotope, strips, GAIN_METHODS["volume"](zonotope, strips))
+
+    if zonotope.dim != 2 or not full_rank(zonotope.generators) \
+            or strip_covers(zonotope, strips).all():
+        return volume()  # (strips that all cover Z: it comes back as it is)
+    # Local coordinates about Z's center: the clipping and the enclosure see numbers of Z's size.
     corners = Zonotope.unchecked(np.zeros(2), zonotope.generators).vertices()
     values = strips.values - strips.normals @ zonotope.center
     polygon = clip_to_strips(corners, strips.normals, values, strips.radii)
     if len(polygon) == 0:
-        return volume
+        return volume()
     edges = np.stack([-strips.normals[:, 1], strips.normals[:, 0]])
     directions = unit_directions(np.hstack([zonotope.generators, edges]))
     enclosure = enclose_polygon(polygon, directions, float(np.abs(corners).max()))
     if enclosure is None:
-        return volume
+        return volume()
     center, generators = enclosure
-    enclosed = Zonotope.unchecked(zonotope.center + center, generators)
-    return enclosed if enclosed.volume() < volume.volume() else volume
+    return smaller_enclosure(Zonotope.unchecked(zonotope.center + center, generators), polygon,
+                             volume)
 
 
 CORRECTION_METHODS: dict[str, Correction] = {
