@@ -145,8 +145,14 @@ class Estimator(StrictModel):
         5.0,
         description="Bound on a velocity component's change per step (m/s); constant velocity.",
     )
-    gain_method: str = Field("volume", description="Proposition 1 gain method (sets.gains).")
-    fusion_method: str = Field("strips", description="Proposition 2 fusion method (sets.fusion).")
+    gain_method: str = Field(
+        "volume", description="Correction: a Proposition 1 gain, or 'enclose' (exact 2-D "
+        "intersection enclosed in a zonotope) (sets.gains)."
+    )
+    fusion_method: str = Field(
+        "strips", description="Fusion: Proposition 2 weights, 'strips', or 'enclose' (exact 2-D "
+        "intersection enclosed in a zonotope) (sets.fusion)."
+    )
     reduction_method: str = Field("girard", description="Order reduction method (sets.reduction).")
     max_generators: int = Field(8, ge=2, le=64, description="Generators kept after reduction.")
     filter: Literal["zonotope", "kalman"] = Field(
