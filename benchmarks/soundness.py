@@ -30,8 +30,8 @@ from sse_cosim.world.snapshot import Pose
 DT = 0.1
 BOUNDS = (0.1, 0.5, 1.0, 2.0)
 KINDS = ("uniform", "worst-case")
-GAINS = ("volume", "frobenius")
-FUSIONS = ("strips", "frobenius", "volume")
+GAINS = ("volume", "frobenius", "enclose")
+FUSIONS = ("strips", "frobenius", "volume", "enclose")
 NODES = ("bus", "n1", "n2")
 
 
