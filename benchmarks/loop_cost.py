@@ -19,16 +19,17 @@ from sse_cosim.reporting.recorder import RunRecorder
 from sse_cosim.runner.simulation import simulate
 from sse_cosim.runner.timing import STAGES, StageTimer
 from sse_cosim.scenario.loader import load_scenario
-from sse_cosim.scenario.model import BUS_NODE, Scenario
+from sse_cosim.scenario.model import BUS_NODE, Estimator, Scenario
 from sse_cosim.world.sumo import SumoWorld
 
 SCENARIO = "scenarios/s3_pedestrian.toml"
-FUSION = "strips"  # the scenarios' default fusion, the same in every configuration
+FUSION = Estimator().fusion_method  # the default fusion, the same in every configuration
 CONFIGS = {
     "a_frobenius": "frobenius",
     "b_cvxpy_frobenius": "cvxpy-frobenius",
     "b_cvxpy_volume": "cvxpy-volume",
-    "default_volume": "volume",
+    "volume": "volume",
+    "default_enclose": "enclose",
 }
 
 

@@ -146,12 +146,12 @@ class Estimator(StrictModel):
         description="Bound on a velocity component's change per step (m/s); constant velocity.",
     )
     gain_method: str = Field(
-        "volume", description="Correction: a Proposition 1 gain, or 'enclose' (exact 2-D "
-        "intersection enclosed in a zonotope) (sets.gains)."
+        "enclose", description="Correction: 'enclose' (the exact 2-D intersection enclosed in a "
+        "zonotope; the tightest) or a Proposition 1 gain (sets.gains)."
     )
     fusion_method: str = Field(
-        "strips", description="Fusion: Proposition 2 weights, 'strips', or 'enclose' (exact 2-D "
-        "intersection enclosed in a zonotope) (sets.fusion)."
+        "enclose", description="Fusion: 'enclose' (the exact 2-D intersection enclosed in a "
+        "zonotope; the tightest), 'strips' or Proposition 2 weights (sets.fusion)."
     )
     reduction_method: str = Field("girard", description="Order reduction method (sets.reduction).")
     max_generators: int = Field(8, ge=2, le=64, description="Generators kept after reduction.")
