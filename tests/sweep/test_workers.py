@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from sse_cosim.runner import tasks
 from sse_cosim.runner.tasks import RunTask, WorkerProcess
 
 pytestmark = pytest.mark.sumo
@@ -78,3 +79,17 @@ def test_a_killed_worker_costs_only_its_run(tmp_path):
     assert outcomes["long"].error.startswith("worker died (signal 9)")
     assert not (tmp_path / ".long.tmp").exists() and (tmp_path / "long" / "error.json").is_file()
     assert after.ok
+
+
+def test_a_worker_is_replaced_after_its_quota_of_runs(tmp_path, monkeypatch):
+    monkeypatch.setattr(tasks, "TASKS_PER_WORKER", 2)
+    worker = WorkerProcess()
+    pids = []
+    try:
+        for i in range(3):
+            assert worker.run(task(tmp_path, f"r{i}", seed=1, duration_s=0.5)).ok
+            pids.append(None if worker._proc is None else worker._proc.pid)
+    finally:
+        worker.close()
+    assert pids[0] is not None and pids[1] is None  # ended after its second run
+    assert pids[2] is not None and pids[2] != pids[0]  # a fresh process took the third
