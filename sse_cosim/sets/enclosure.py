@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linprog
 
+from sse_cosim.sets.strips import Strips
 from sse_cosim.sets.zonotope import FloatArray, Zonotope
 
 MARGIN = 1e-10
@@ -276,6 +277,25 @@ def enclose_polygon(vertices: FloatArray, directions: FloatArray, size: float,
         return None
     used = alpha > 0
     return center, directions[:, used] * alpha[used]
+
+
+def enclose_intersection(base: Zonotope, strips: Strips, generators: FloatArray
+                         ) -> tuple[Zonotope, FloatArray] | None:
+    """``base`` ∩ ``strips`` (2-D, ``base`` full-dimensional) exactly as a convex polygon P,
+    enclosed in a zonotope along the directions of the columns of ``generators`` (2, e):
+    (the enclosure, P's vertices (m, 2) about ``base``'s center), or None when P is empty or
+    no enclosure was accepted. Works about ``base``'s center, so that the clipping and the
+    enclosure see numbers of the set's size, not of its position."""
+    corners = Zonotope.unchecked(np.zeros(2), base.generators).vertices()
+    polygon = clip_to_strips(corners, strips.normals, strips.values - strips.normals @ base.center,
+                             strips.radii)
+    if len(polygon) == 0:
+        return None
+    found = enclose_polygon(polygon, unit_directions(generators), float(np.abs(corners).max()))
+    if found is None:
+        return None
+    center, enclosure_generators = found
+    return Zonotope.unchecked(base.center + center, enclosure_generators), polygon
 
 
 def _contain(alpha: FloatArray, widths: FloatArray, middle: FloatArray, upper: FloatArray,

@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 
 from sse_cosim.sets._registry import lookup
 from sse_cosim.sets.consistency import projection_interval, strip_covers
-from sse_cosim.sets.enclosure import clip_to_strips, enclose_polygon, unit_directions
+from sse_cosim.sets.enclosure import enclose_intersection
 from sse_cosim.sets.gains import intersect_strips
 from sse_cosim.sets.strips import Strips, zonotope_facet_strips
 from sse_cosim.sets.zonotope import FloatArray, Zonotope, full_rank
@@ -100,27 +100,18 @@ def enclose_fusion(zonotopes: Sequence[Zonotope]) -> Zonotope:
     :func:`enclosure.enclose_polygon`); the smallest input contains it too. Falls back to the
     smallest input (``volume`` fusion) when n != 2, when an input is not full-dimensional (it
     is then the smallest: volume 0), when the inputs share no point (inconsistent sources,
-    which :mod:`sse_cosim.sets.consistency` detects; any set is sound), or when the LP fails.
+    which :mod:`sse_cosim.sets.consistency` detects; any set is sound), or when no
+    enclosure is accepted.
     """
     index = _smallest(zonotopes)
     base = zonotopes[index]
     if base.dim != 2 or not all(full_rank(z.generators) for z in zonotopes):
         return base
-    corners = Zonotope.unchecked(np.zeros(2), base.generators).vertices()
-    polygon = corners
-    for j, z in enumerate(zonotopes):
-        if j != index:
-            facets = zonotope_facet_strips(z)
-            polygon = clip_to_strips(polygon, facets.normals,
-                                     facets.values - facets.normals @ base.center, facets.radii)
-    if len(polygon) == 0:
+    others = Strips.stack([zonotope_facet_strips(z) for j, z in enumerate(zonotopes) if j != index])
+    found = enclose_intersection(base, others, np.hstack([z.generators for z in zonotopes]))
+    if found is None:
         return base
-    directions = unit_directions(np.hstack([z.generators for z in zonotopes]))
-    enclosure = enclose_polygon(polygon, directions, float(np.abs(corners).max()))
-    if enclosure is None:
-        return base
-    center, generators = enclosure
-    enclosed = Zonotope.unchecked(base.center + center, generators)
+    enclosed = found[0]
     return enclosed if enclosed.volume() < base.volume() else base
 
 

@@ -27,12 +27,7 @@ from numpy.typing import ArrayLike
 
 from sse_cosim.sets._registry import lookup
 from sse_cosim.sets.consistency import strip_covers
-from sse_cosim.sets.enclosure import (
-    clip_to_strips,
-    enclose_polygon,
-    smaller_enclosure,
-    unit_directions,
-)
+from sse_cosim.sets.enclosure import enclose_intersection, smaller_enclosure
 from sse_cosim.sets.strips import Strips
 from sse_cosim.sets.zonotope import (
     FloatArray,
@@ -315,20 +310,11 @@ def enclose_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
     if zonotope.dim != 2 or not full_rank(zonotope.generators) \
             or strip_covers(zonotope, strips).all():
         return volume()  # (strips that all cover Z: it comes back as it is)
-    # Local coordinates about Z's center: the clipping and the enclosure see numbers of Z's size.
-    corners = Zonotope.unchecked(np.zeros(2), zonotope.generators).vertices()
-    values = strips.values - strips.normals @ zonotope.center
-    polygon = clip_to_strips(corners, strips.normals, values, strips.radii)
-    if len(polygon) == 0:
-        return volume()
     edges = np.stack([-strips.normals[:, 1], strips.normals[:, 0]])
-    directions = unit_directions(np.hstack([zonotope.generators, edges]))
-    enclosure = enclose_polygon(polygon, directions, float(np.abs(corners).max()))
-    if enclosure is None:
+    found = enclose_intersection(zonotope, strips, np.hstack([zonotope.generators, edges]))
+    if found is None:
         return volume()
-    center, generators = enclosure
-    return smaller_enclosure(Zonotope.unchecked(zonotope.center + center, generators), polygon,
-                             volume)
+    return smaller_enclosure(*found, volume)
 
 
 CORRECTION_METHODS: dict[str, Correction] = {
