@@ -485,11 +485,32 @@ def run_sweep(
     resume: bool = False,
     progress: bool = True,
 ) -> list[TaskOutcome]:
-    """Write ``sweep.json``, record invalid combinations, run the rest; outcomes in plan order."""
+    """Write ``sweep.json``, then run the plan (:func:`run_planned`); outcomes in plan order."""
     write_json_atomic(out_dir / SWEEP_PLAN, plan_document(spec, runs, command, summary_only))
+    return run_planned(runs, out_dir, summary_only, workers, executor, scheduler, resume,
+                       progress, "sweep")
+
+
+def run_planned(
+    runs: Sequence[PlannedRun],
+    out_dir: Path,
+    summary_only: bool = False,
+    workers: int | None = None,
+    executor: ExecutorName = "local",
+    scheduler: str | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    description: str = "sweep",
+) -> list[TaskOutcome]:
+    """Run planned runs into ``out_dir/runs/<key>``: invalid combinations are recorded as
+    failed, the rest run on ``executor``; outcomes in plan order.
+
+    The one execution path of every planned run, whether a Cartesian sweep planned it or
+    another planner (the safety campaign's constrained grid) built the list.
+    """
     tasks = {run.key: run.task(out_dir / RUNS_FOLDER, summary_only) for run in runs}
     outcomes = {run.key: record_failure(tasks[run.key], run.error) for run in runs if run.error}
     valid = [tasks[run.key] for run in runs if not run.error]
-    for outcome in execute(valid, workers, executor, scheduler, resume, progress, "sweep"):
+    for outcome in execute(valid, workers, executor, scheduler, resume, progress, description):
         outcomes[outcome.key] = outcome
     return [outcomes[run.key] for run in runs]
