@@ -1,4 +1,5 @@
-"""A run's folder: ``trace.csv``, ``sets.jsonl``, ``summary.json``, ``scenario.json`` and plots.
+"""A run's folder: ``trace.csv``, ``sets.jsonl``, ``regions.jsonl``, ``summary.json``,
+``scenario.json`` and plots.
 
 Every file is written whole or not at all (:mod:`sse_cosim.files`); ``summary.json`` is
 written last, so a folder with a summary is a finished run. With ``summary_only`` (large
@@ -9,16 +10,26 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import shapely
 
 from sse_cosim.files import atomic_path, write_json_atomic, write_text_atomic
-from sse_cosim.reporting.recorder import RunRecorder
+from sse_cosim.reporting.recorder import RegionRecord, RunRecorder
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.world.roadmap import RoadMap
 
+if TYPE_CHECKING:
+    import pandas as pd
+
 TRACE = "trace.csv"
 SETS = "sets.jsonl"
+REGIONS = "regions.jsonl"
 SUMMARY = "summary.json"
 SCENARIO = "scenario.json"
+DECIMALS = 6  # positions in trace.csv and regions.jsonl: 1e-6 m (a re-check allows 1e-5 m)
+POSITIONS = ("bus_x", "bus_y", "ped_x", "ped_y")
 
 
 def write_run(
@@ -33,16 +44,61 @@ def write_run(
         import pandas as pd
 
         trace = pd.DataFrame(recorder.rows)
-        with atomic_path(out_dir / TRACE) as tmp:
-            trace.to_csv(tmp, index=False, float_format="%.6g")
+        _write_trace(out_dir / TRACE, trace)
         write_text_atomic(
             out_dir / SETS, "".join(json.dumps(line) + "\n" for line in recorder.set_lines)
         )
+        write_text_atomic(out_dir / REGIONS, "".join(map(region_line, recorder.regions)))
         if plots_wanted and not trace.empty:
             _write_plots(out_dir, scenario, recorder, trace, roadmap)
     summary = {"source": source, **recorder.summary()}
     write_json_atomic(out_dir / SUMMARY, summary)
     return summary
+
+
+def region_line(record: RegionRecord) -> str:
+    """One line of ``regions.jsonl``: ``{"t", "kind", "track", "polygons"}`` (compact JSON:
+    the regions are most of the file)."""
+    line = {"t": record.time, "kind": record.kind, "track": record.track,
+            "polygons": region_polygons(record.region)}
+    return json.dumps(line, separators=(",", ":")) + "\n"
+
+
+def region_polygons(region: shapely.Geometry) -> list[list[list[list[float]]]]:
+    """``region``'s polygons, each a list of rings (exterior first, then holes), each ring a
+    list of [x, y] rounded to ``DECIMALS``; ``[]`` if it is empty.
+
+    Multi-part geometries and collections are flattened; their lines and points are left out
+    (they hold no area, and a region is where a pedestrian may be).
+    """
+    return [
+        [_ring(polygon.exterior), *(_ring(hole) for hole in polygon.interiors)]
+        for polygon in _polygons(region)
+    ]
+
+
+def _polygons(geometry: shapely.Geometry) -> list[shapely.Polygon]:
+    """The non-empty polygons in ``geometry``, at any depth of nesting."""
+    if isinstance(geometry, shapely.Polygon):
+        return [] if geometry.is_empty else [geometry]
+    if isinstance(geometry, shapely.MultiPolygon | shapely.GeometryCollection):
+        return [p for part in shapely.get_parts(geometry) for p in _polygons(part)]
+    return []
+
+
+def _ring(ring: shapely.LinearRing) -> list[list[float]]:
+    return np.round(shapely.get_coordinates(ring), DECIMALS).tolist()
+
+
+def _write_trace(path: Path, trace: pd.DataFrame) -> None:
+    """``trace.csv``: positions to 1e-6 m, so that the truth can be re-checked against
+    ``regions.jsonl`` near a boundary; every other figure to 6 significant digits."""
+    text = trace.copy()
+    for column in (c for c in POSITIONS if c in trace):
+        text[column] = trace[column].map(
+            lambda v: "" if v is None or np.isnan(v) else repr(round(float(v), DECIMALS)))
+    with atomic_path(path) as tmp:
+        text.to_csv(tmp, index=False, float_format="%.6g")
 
 
 def label(scenario: Scenario) -> str:

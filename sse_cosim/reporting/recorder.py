@@ -1,4 +1,5 @@
-"""Collects what a run produced, step by step: trace rows, sets, summary figures, scene frames.
+"""Collects what a run produced, step by step: trace rows, sets, regions, summary figures,
+scene frames.
 
 The recorder only reads :class:`~sse_cosim.runner.simulation.StepResult`; writing files is
 :mod:`sse_cosim.reporting.outputs`'s job.
@@ -19,6 +20,19 @@ from sse_cosim.sensors.faults import FaultLog
 from sse_cosim.sets import Zonotope
 
 FUSED = "fused"
+REFINED = "refined"  # a known pedestrian's zonotope refined with negative information
+UNOBSERVED = "unobserved"  # walkable ground where an undetected pedestrian may be
+
+
+@dataclass(frozen=True)
+class RegionRecord:
+    """One region the controller used at one step: a known pedestrian's refined region
+    (``track`` its id) or the unobserved area (``track`` None)."""
+
+    time: float
+    kind: str  # REFINED or UNOBSERVED
+    track: str | None
+    region: shapely.Geometry
 
 
 @dataclass(frozen=True)
@@ -43,6 +57,7 @@ class RunRecorder:
     scene_times: tuple[float, ...] = ()
     rows: list[dict[str, Any]] = field(default_factory=list)
     set_lines: list[dict[str, Any]] = field(default_factory=list)
+    regions: list[RegionRecord] = field(default_factory=list)  # serialised only when written
     scenes: list[SceneFrame] = field(default_factory=list)
     violations: list[dict[str, Any]] = field(default_factory=list)
     first_detection: dict[str, dict[str, float]] = field(default_factory=dict)
@@ -107,6 +122,7 @@ class RunRecorder:
         row["possible_contains_truth"] = (
             self._check_region(t, region, truth) if region is not None else None
         )
+        self._note_regions(t, result)
         row["unresolved_occluded_m2"] = result.picture.unresolved_occluded_m2
         row["own_occluded_m2"] = result.picture.own_occluded_m2
         row["distance_to_crossing"] = result.picture.distance_to_crossing
@@ -147,6 +163,13 @@ class RunRecorder:
         if not inside:
             self.violations.append({"t": t, "node": "possible", "truth": truth.tolist()})
         return inside
+
+    def _note_regions(self, t: float, result) -> None:
+        """Keep the regions the controller used this step: every known pedestrian's refined
+        region (by id) and the unobserved area, so that anyone can re-check them."""
+        self.regions.extend(RegionRecord(t, REFINED, pid, region)
+                            for pid, region in sorted(result.possible.items()))
+        self.regions.append(RegionRecord(t, UNOBSERVED, None, result.unobserved))
 
     def _set_line(self, t: float, node: str, kind: str, position: Zonotope) -> None:
         self.set_lines.append({"t": t, "node": node, "kind": kind, **position.to_json()})
