@@ -34,9 +34,13 @@ POSITIONS = ("bus_x", "bus_y", "ped_x", "ped_y")
 
 def write_run(
     out_dir: Path, scenario: Scenario, recorder: RunRecorder, roadmap: RoadMap, source: str,
-    plots_wanted: bool = True, summary_only: bool = False,
+    route_completed: bool, plots_wanted: bool = True, summary_only: bool = False,
 ) -> dict:
-    """Write every output of one run into ``out_dir``; returns the summary."""
+    """Write every output of one run into ``out_dir``; returns the summary.
+
+    ``route_completed``: whether the bus reached the end of its route (the simulation's
+    outcome, which the recorder cannot see).
+    """
     out_dir.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out_dir / SCENARIO, {"source": source, **scenario.model_dump(mode="json")})
     if not summary_only:
@@ -51,7 +55,7 @@ def write_run(
         write_text_atomic(out_dir / REGIONS, "".join(map(region_line, recorder.regions)))
         if plots_wanted and not trace.empty:
             _write_plots(out_dir, scenario, recorder, trace, roadmap)
-    summary = {"source": source, **recorder.summary()}
+    summary = {"source": source, **recorder.summary(route_completed)}
     write_json_atomic(out_dir / SUMMARY, summary)
     return summary
 

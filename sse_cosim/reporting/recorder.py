@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass, field
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -22,6 +23,7 @@ from sse_cosim.sets import Zonotope
 FUSED = "fused"
 REFINED = "refined"  # a known pedestrian's zonotope refined with negative information
 UNOBSERVED = "unobserved"  # walkable ground where an undetected pedestrian may be
+STOPPED_SPEED_MPS = 0.1  # the bus counts as stopped below this actual speed
 
 
 @dataclass(frozen=True)
@@ -196,9 +198,15 @@ class RunRecorder:
         dt = self.scenario.simulation.step_length_s
         return any(abs(t - s) < 0.5 * dt for s in self.scene_times)
 
-    def summary(self) -> dict[str, Any]:
-        """The run's figures (``summary.json``)."""
+    def summary(self, route_completed: bool | None = None) -> dict[str, Any]:
+        """The run's figures (``summary.json``).
+
+        ``route_completed`` is whether the bus reached the end of its route, which only the
+        simulation knows (the recorder sees no step after the bus left); None: not known.
+        Rows start once the bus is in the network, so times count from its departure.
+        """
         dt = self.scenario.simulation.step_length_s
+        contact = [r["collision"] for r in self.rows]
         speeds = np.array([r["bus_speed"] for r in self.rows]) if self.rows else np.zeros(0)
         levels = Counter(r["level"] for r in self.rows)
         distances = [r["distance_bus_pedestrian"] for r in self.rows
@@ -222,7 +230,10 @@ class RunRecorder:
             "faults": self._fault_summary(),
             "flag_counts": {key: n for key, n in sorted(self.flag_steps.items()) if n},
             "inconsistent_steps": sum(r["inconsistent"] for r in self.rows),
-            "collisions": sum(r["collision"] for r in self.rows),
+            "collisions": _entries(contact),
+            "contact_steps": sum(contact),
+            "route_completed": route_completed,
+            "time_stopped_s": round(dt * int(np.sum(speeds < STOPPED_SPEED_MPS)), 6),
             "level_share": {
                 level.label: levels.get(level.label, 0) / max(len(self.rows), 1)
                 for level in SpeedLevel
@@ -254,6 +265,12 @@ def _fusion_inputs(result, person_id: str) -> dict[str, Zonotope]:
     passed the consistency screen."""
     own = result.tracks[BUS_NODE].get(person_id)
     return result.screen.inputs(person_id, None if own is None else own.estimate)
+
+
+def _entries(flags: list[bool]) -> int:
+    """How many times ``flags`` turns true (a first step in contact counts): one collision
+    lasts several steps, and the campaign counts collisions, not steps."""
+    return sum(now and not before for before, now in pairwise([False, *flags]))
 
 
 def _distance(footprint: shapely.Polygon, truth) -> float | None:

@@ -37,4 +37,5 @@ def run_scenario(
     """Simulate ``scenario`` (read from ``source``) and write its outputs to ``out_dir``."""
     recorder = RunRecorder(scenario, tuple(scene_times))
     info = simulate(scenario, out_dir / "sumo", source, recorder)
-    return write_run(out_dir, scenario, recorder, info.roadmap, source, plots, summary_only)
+    return write_run(out_dir, scenario, recorder, info.roadmap, source, info.bus_arrived, plots,
+                     summary_only)

@@ -56,7 +56,8 @@ def test_pedestrian_slows_every_scenario_and_sharing_detects_it_earlier(summarie
 def test_every_run_is_sound_and_safe(summaries):
     for name, summary in summaries.items():
         assert summary["containment_violations"] == 0, (name, summary["violations"])
-        assert summary["collisions"] == 0, name
+        assert summary["collisions"] == summary["contact_steps"] == 0, name
+        assert summary["route_completed"], name
         assert summary["fusion_larger_than_input"] == 0, name
 
 

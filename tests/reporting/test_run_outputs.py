@@ -1,0 +1,93 @@
+"""A run folder's files and summary figures, from a recorder filled by hand (no SUMO)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import shapely
+
+from sse_cosim.reporting.outputs import REGIONS, SETS, SUMMARY, TRACE, write_run
+from sse_cosim.reporting.recorder import REFINED, UNOBSERVED, RegionRecord, RunRecorder
+from sse_cosim.scenario.loader import load_scenario
+
+SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "s3_pedestrian.toml"
+
+
+def recorder_with(speeds: list[float], contact: list[bool]) -> RunRecorder:
+    """A recorder whose rows hold the bus's speed and contact flag, every 0.1 s."""
+    recorder = RunRecorder(load_scenario(SCENARIO))
+    recorder.rows = [
+        {"t": round(0.1 * i, 6), "bus_x": 2.0 * i, "bus_y": -1.75, "bus_speed": v,
+         "level": "nominal", "ped_x": 183.123456789 if i else None, "ped_y": -7.6,
+         "distance_bus_pedestrian": None, "inconsistent": False, "collision": c}
+        for i, (v, c) in enumerate(zip(speeds, contact, strict=True))
+    ]
+    return recorder
+
+
+def test_collisions_count_entries_into_contact_and_contact_steps_every_step():
+    contact = [False, True, True, True, False, False, True, True]
+    summary = recorder_with([5.0] * len(contact), contact).summary()
+    assert summary["collisions"] == 2
+    assert summary["contact_steps"] == 5
+
+
+def test_a_run_that_starts_in_contact_counts_that_collision():
+    summary = recorder_with([0.0] * 3, [True, True, False]).summary()
+    assert (summary["collisions"], summary["contact_steps"]) == (1, 2)
+
+
+def test_time_stopped_sums_the_steps_below_a_tenth_of_a_metre_per_second():
+    speeds = [20.0, 5.0, 0.09, 0.0, 0.1, 0.05, 3.0]
+    summary = recorder_with(speeds, [False] * len(speeds)).summary()
+    assert summary["time_stopped_s"] == pytest.approx(0.3)
+    assert recorder_with([], []).summary()["time_stopped_s"] == 0.0
+
+
+def test_route_completed_comes_from_the_caller():
+    recorder = recorder_with([20.0], [False])
+    assert recorder.summary(True)["route_completed"] is True
+    assert recorder.summary(False)["route_completed"] is False
+    assert recorder.summary()["route_completed"] is None
+
+
+def test_run_folder_holds_regions_and_the_summary_figures(tmp_path):
+    recorder = recorder_with([20.0, 0.0], [False, True])
+    recorder.regions = [
+        RegionRecord(0.0, UNOBSERVED, None, shapely.box(0, 0, 2, 1)),
+        RegionRecord(0.1, REFINED, "pedestrian", shapely.Polygon()),
+        RegionRecord(0.1, UNOBSERVED, None, shapely.box(0, 0, 1, 1)),
+    ]
+    summary = write_run(tmp_path, recorder.scenario, recorder, None, "test", True,
+                        plots_wanted=False)
+    lines = [json.loads(line) for line in (tmp_path / REGIONS).read_text().splitlines()]
+    assert [(line["t"], line["kind"], line["track"]) for line in lines] == [
+        (0.0, "unobserved", None), (0.1, "refined", "pedestrian"), (0.1, "unobserved", None)]
+    assert lines[1]["polygons"] == []
+    (square,) = lines[2]["polygons"]
+    assert shapely.Polygon(square[0], square[1:]).equals(shapely.box(0, 0, 1, 1))
+    on_disk = json.loads((tmp_path / SUMMARY).read_text())
+    assert on_disk == summary
+    assert (summary["route_completed"], summary["collisions"], summary["time_stopped_s"]) == (
+        True, 1, 0.1)
+
+
+def test_trace_positions_keep_a_micrometre(tmp_path):
+    recorder = recorder_with([20.0, 20.0], [False, False])
+    write_run(tmp_path, recorder.scenario, recorder, None, "test", True, plots_wanted=False)
+    trace = pd.read_csv(tmp_path / TRACE)
+    assert pd.isna(trace["ped_x"][0])
+    assert trace["ped_x"][1] == 183.123457
+    assert trace["bus_x"][1] == 2.0
+
+
+def test_summary_only_writes_no_trace_sets_or_regions(tmp_path):
+    recorder = recorder_with([20.0], [False])
+    recorder.regions = [RegionRecord(0.0, UNOBSERVED, None, shapely.box(0, 0, 1, 1))]
+    write_run(tmp_path, recorder.scenario, recorder, None, "test", False, plots_wanted=False,
+              summary_only=True)
+    assert not any((tmp_path / name).exists() for name in (TRACE, SETS, REGIONS))
+    assert json.loads((tmp_path / SUMMARY).read_text())["route_completed"] is False
