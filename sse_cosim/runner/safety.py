@@ -1,0 +1,408 @@
+"""The safety campaign: the hard cases of the occluded zebra, planned as one list of runs.
+
+The claim under test: under the model's assumptions the bus never hits a pedestrian who
+steps onto the zebra in front of it at any walking speed up to the estimator's bound, and
+always finishes its route. The campaign varies when the pedestrian steps out, how fast it
+walks, where it starts behind the parked truck, where the truck is parked, how noisy the
+shared sensors are, and the seed.
+
+The grid is not Cartesian over scenario fields: the pedestrian's start is given as an offset
+behind the truck's front (``pedestrian.start_pos_m = truck.end_pos_m - offset``), so it moves
+with the truck, and a parameter whose pattern selects nothing in a scenario (the shared
+sensors' noise in S1, which has none) is simply not varied there. So the campaign builds its
+list of runs here, with the sweep's run type and key scheme
+(:class:`~sse_cosim.runner.sweep.PlannedRun`, :func:`~sse_cosim.runner.sweep.run_key`), and
+hands it to the sweep's execution path (:func:`~sse_cosim.runner.sweep.run_planned`).
+
+Some combinations cannot happen: the pedestrian cannot walk from its start to the zebra by
+the step-out time. The project's own demand planner (:func:`sse_cosim.world.demand.plan_actors`)
+decides; such combinations are not run, and are listed in the report as not feasible.
+
+Everything is checked before anything runs: a combination the schema rejects stops the
+campaign with a :class:`UserError` (a safety grid holds only meaningful values).
+"""
+
+from __future__ import annotations
+
+import itertools
+import tomllib
+from collections import Counter
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Annotated, Any
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from sse_cosim.errors import UserError
+from sse_cosim.files import write_json_atomic
+from sse_cosim.reporting.safety_report import SAFETY_PLAN
+from sse_cosim.runner.batch import scenario_files
+from sse_cosim.runner.executors import ExecutorName
+from sse_cosim.runner.sweep import (
+    SEED_PATH,
+    Parameter,
+    ParameterEntry,
+    PlannedRun,
+    expand_pattern,
+    run_key,
+    run_planned,
+)
+from sse_cosim.runner.tasks import TaskOutcome
+from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
+from sse_cosim.scenario.model import Scenario
+
+STEP_OUT_PATH = "pedestrian.steps_onto_crossing_s"
+WALKING_SPEED_PATH = "pedestrian.walking_speed_mps"
+START_PATH = "pedestrian.start_pos_m"
+TRUCK_FRONT_PATH = "truck.end_pos_m"
+BEHIND_TRUCK = f"{START_PATH} = {TRUCK_FRONT_PATH} - value"
+FILE_FIX = "see sweeps/safety.toml for a complete example"
+
+# Why a resolved scenario cannot be run as configured (None: it can). Arguments: the
+# scenario and the source to name in errors.
+Feasibility = Callable[[Scenario, str], str | None]
+
+
+# -- the campaign file -----------------------------------------------------------------------
+
+class _FileModel(BaseModel):
+    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+
+
+class StartBehindTruck(_FileModel):
+    """``[start_behind_truck]``: the pedestrian's start as offsets (m) behind the truck's
+    front, so that it stays hidden wherever the truck is parked."""
+
+    name: str = Field("behind_truck_m", min_length=1)
+    values: list[Annotated[float, Field(ge=0)]] = Field(min_length=1)
+
+
+class QuickSubset(_FileModel):
+    """``[quick]``: the few runs of ``--quick``. Each entry keeps only the values it lists
+    (scenarios, seeds, and ``values`` per axis name); anything not listed keeps all."""
+
+    scenarios: list[str] | None = Field(None, min_length=1)
+    seeds: list[int] | None = Field(None, min_length=1)
+    values: dict[str, list[Any]] = Field(default_factory=dict)
+
+
+class CampaignFile(_FileModel):
+    """A campaign file: a sweep file's fields plus the start offsets and the quick subset.
+
+    The parameters must include the step-out time and the walking speed: the report's heat
+    maps are drawn over them.
+    """
+
+    description: str = ""
+    scenarios: list[str] = Field(min_length=1)
+    seeds: list[Annotated[int, Field(ge=0)]] = Field(min_length=1)
+    overrides: dict[str, Any] = Field(default_factory=dict, alias="set")
+    params: list[ParameterEntry] = Field(min_length=1)
+    start_behind_truck: StartBehindTruck
+    quick: QuickSubset = Field(default_factory=QuickSubset)
+
+    @model_validator(mode="after")
+    def _heat_map_axes(self) -> CampaignFile:
+        paths = [p.path for p in self.params]
+        for needed in (STEP_OUT_PATH, WALKING_SPEED_PATH):
+            if needed not in paths:
+                raise ValueError(f"params: add a parameter with path = {needed!r} "
+                                 "(the report's heat maps are drawn over it)")
+        return self
+
+
+@dataclass(frozen=True)
+class Campaign:
+    """What the campaign runs: scenario files x parameters x start offsets x seeds.
+
+    ``scenario_names`` are the scenario files as the campaign file names them (for the
+    report: no machine paths); ``source`` is the campaign file as given.
+    """
+
+    scenarios: tuple[Path, ...]
+    scenario_names: tuple[str, ...]
+    parameters: tuple[Parameter, ...]
+    behind_truck: Parameter
+    seeds: tuple[int, ...]
+    fixed: Mapping[str, Any] = field(default_factory=dict)
+    description: str = ""
+    source: str = ""
+
+    @property
+    def axes(self) -> tuple[Parameter, ...]:
+        """Every varied value but the seed, in the order runs are planned."""
+        return (*self.parameters, self.behind_truck)
+
+    @property
+    def heat_map_columns(self) -> tuple[str, str]:
+        """The step-out time's and the walking speed's columns (x and y of the heat maps)."""
+        by_path = {p.pattern: p.column for p in self.parameters}
+        return by_path[STEP_OUT_PATH], by_path[WALKING_SPEED_PATH]
+
+
+def load_campaign(path: Path, quick: bool = False) -> Campaign:
+    """Read and validate a campaign file (its ``[quick]`` subset with ``quick``)."""
+    model = _read_campaign_file(path)
+    names = tuple(model.scenarios)
+    files = tuple(scenario_files([path.parent / s for s in names]))
+    if len(files) != len(names):
+        raise UserError(str(path), "scenarios", "name scenario files, not folders",
+                        "list each scenario file")
+    campaign = Campaign(
+        scenarios=files,
+        scenario_names=names,
+        parameters=tuple(entry.parameter() for entry in model.params),
+        behind_truck=Parameter(BEHIND_TRUCK, tuple(model.start_behind_truck.values),
+                               model.start_behind_truck.name),
+        seeds=tuple(model.seeds),
+        fixed=model.overrides,
+        description=model.description,
+        source=str(path),
+    )
+    columns = [axis.column for axis in campaign.axes]
+    if len(set(columns)) < len(columns) or "seed" in columns:
+        raise UserError(str(path), "params", "two axes share a name (or one is named 'seed')",
+                        "give every parameter its own name")
+    return _quick_subset(campaign, model.quick) if quick else campaign
+
+
+def _read_campaign_file(path: Path) -> CampaignFile:
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise UserError(str(path), "", "campaign file not found",
+                        "run from the project folder or give --file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise UserError(str(path), "syntax", str(exc), "fix the TOML syntax there") from None
+    try:
+        return CampaignFile.model_validate(raw)
+    except ValidationError as exc:
+        err = exc.errors(include_url=False)[0]
+        where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in err["loc"])
+        message = str(err["msg"]).removeprefix("Value error, ")
+        raise UserError(str(path), where.lstrip("."), message, FILE_FIX) from None
+
+
+def _quick_subset(campaign: Campaign, quick: QuickSubset) -> Campaign:
+    """``campaign`` restricted to ``[quick]``; every value kept must be one of the grid's."""
+    source = f"{campaign.source}: quick"
+    named = dict(zip(campaign.scenario_names, campaign.scenarios, strict=True))
+    wanted = _subset(campaign.scenario_names, quick.scenarios, source, "scenarios")
+    axes = {axis.column: axis for axis in campaign.axes}
+    for column in quick.values:
+        if column not in axes:
+            raise UserError(source, f"values.{column}", "is not an axis of the campaign",
+                            f"use one of {', '.join(axes)}")
+    return replace(
+        campaign,
+        scenarios=tuple(named[name] for name in wanted),
+        scenario_names=wanted,
+        parameters=tuple(_kept(p, quick.values.get(p.column), source)
+                         for p in campaign.parameters),
+        behind_truck=_kept(campaign.behind_truck,
+                           quick.values.get(campaign.behind_truck.column), source),
+        seeds=_subset(campaign.seeds, quick.seeds, source, "seeds"),
+    )
+
+
+def _kept(axis: Parameter, wanted: list[Any] | None, source: str) -> Parameter:
+    return replace(axis, values=_subset(axis.values, wanted, source, axis.column))
+
+
+def _subset(values: Sequence[Any], wanted: Sequence[Any] | None, source: str,
+            name: str) -> tuple[Any, ...]:
+    """``values`` that ``wanted`` lists, in the grid's order (all of them without a list)."""
+    if wanted is None:
+        return tuple(values)
+    extra = [v for v in wanted if v not in values]
+    if extra:
+        raise UserError(source, name, f"{extra[0]!r} is not among the campaign's values",
+                        f"choose from {list(values)}")
+    return tuple(v for v in values if v in wanted)
+
+
+# -- planning --------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class NotFeasible:
+    """A combination that cannot happen (the planner's reason): listed, never run."""
+
+    run: PlannedRun
+    reason: str
+
+
+@dataclass(frozen=True)
+class CampaignPlan:
+    """The feasible runs, in plan order, and the combinations left out."""
+
+    runs: tuple[PlannedRun, ...]
+    not_feasible: tuple[NotFeasible, ...]
+
+
+class ActorPlanner:
+    """Feasibility by the project's own demand planner, on the real road network.
+
+    Each network is built (or found in the cache) once. A scenario is infeasible when the
+    planner refuses it (a ``UserError``: above all, the pedestrian cannot reach the zebra by
+    the step-out time); its reason is the planner's.
+    """
+
+    def __init__(self) -> None:
+        self._networks: dict[str, tuple[Path, Any]] = {}
+
+    def __call__(self, scenario: Scenario, source: str) -> str | None:
+        from sse_cosim.world import demand
+
+        net_path, roadmap = self._network(scenario.network.sources_dir)
+        try:
+            demand.plan_actors(scenario, net_path, roadmap, source)
+        except UserError as exc:
+            return exc.problem
+        return None
+
+    def _network(self, sources_dir: str) -> tuple[Path, Any]:
+        if sources_dir not in self._networks:
+            from sse_cosim.world.network import build_network
+            from sse_cosim.world.roadmap import load_roadmap
+
+            net_path = build_network(sources_dir)
+            self._networks[sources_dir] = (net_path, load_roadmap(net_path))
+        return self._networks[sources_dir]
+
+
+def plan_campaign(campaign: Campaign, feasibility: Feasibility | None = None) -> CampaignPlan:
+    """Every combination in a fixed order (scenario, axes in file order, start offset, seed),
+    split into feasible runs and the combinations ``feasibility`` rules out.
+
+    Raises :class:`UserError` for anything wrong with the grid: a pattern that selects
+    nothing in any scenario, a field set from two places, a value the schema rejects, two
+    identical runs.
+    """
+    check = feasibility or ActorPlanner()
+    datas = [load_scenario_data(path) for path in campaign.scenarios]
+    fields = [validate_scenario(data, str(path)).model_dump(mode="json")
+              for data, path in zip(datas, campaign.scenarios, strict=True)]
+    targets = _parameter_targets(campaign, fields)
+    runs: list[PlannedRun] = []
+    left_out: list[NotFeasible] = []
+    for path, data, found, paths in zip(campaign.scenarios, datas, fields, targets,
+                                        strict=True):
+        for run, scenario in _scenario_runs(campaign, path, data, found, paths):
+            reason = check(scenario, str(path))
+            if reason is None:
+                runs.append(run)
+            else:
+                left_out.append(NotFeasible(run, reason))
+    keys = Counter(run.key for run in (*runs, *(n.run for n in left_out)))
+    twice = sorted(key for key, n in keys.items() if n > 1)
+    if twice:
+        raise UserError(campaign.source, "", f"some runs would be identical ({twice[0]}, ...)",
+                        "remove repeated values, seeds or scenario files of the same name")
+    return CampaignPlan(tuple(runs), tuple(left_out))
+
+
+def _parameter_targets(campaign: Campaign,
+                       fields: Sequence[Mapping[str, Any]]) -> list[list[list[str]]]:
+    """Per scenario, per parameter, the concrete paths it sets (none where its pattern selects
+    nothing there); a pattern that selects nothing in every scenario is an error."""
+    targets = [[_selected(p.pattern, found, str(path)) for p in campaign.parameters]
+               for found, path in zip(fields, campaign.scenarios, strict=True)]
+    for i, parameter in enumerate(campaign.parameters):
+        if not any(per_scenario[i] for per_scenario in targets):
+            expand_pattern(parameter.pattern, fields[0], campaign.source)  # raises: why
+    return targets
+
+
+def _selected(pattern: str, fields: Mapping[str, Any], source: str) -> list[str]:
+    try:
+        return [path for path, _ in expand_pattern(pattern, fields, source)]
+    except UserError:
+        return []
+
+
+def _scenario_runs(campaign: Campaign, path: Path, data: Mapping[str, Any],
+                   fields: Mapping[str, Any],
+                   targets: Sequence[list[str]]) -> Iterator[tuple[PlannedRun, Scenario]]:
+    """The runs of one scenario file, each with its resolved scenario."""
+    source = str(path)
+    fixed = {concrete: value for pattern, value in campaign.fixed.items()
+             for concrete, _ in expand_pattern(pattern, fields, source)}
+    active = [(p, paths) for p, paths in zip(campaign.parameters, targets, strict=True) if paths]
+    _check_disjoint(fixed, active, source)
+    behind = campaign.behind_truck
+    for combination in itertools.product(*(p.values for p, _ in active)):
+        values = {p.column: v for (p, _), v in zip(active, combination, strict=True)}
+        overrides = dict(fixed)
+        for (_, paths), value in zip(active, combination, strict=True):
+            overrides.update(dict.fromkeys(paths, value))
+        truck_front = overrides.get(TRUCK_FRONT_PATH, fields["truck"]["end_pos_m"])
+        for offset, seed in itertools.product(behind.values, campaign.seeds):
+            run_values = {**values, behind.column: offset}
+            run_overrides = {**overrides, START_PATH: round(truck_front - offset, 9),
+                             SEED_PATH: seed}
+            key = run_key(path.stem, list(run_values.items()), seed, run_overrides)
+            scenario = validate_scenario(apply_overrides(data, run_overrides, source),
+                                         f"{source} ({key})")
+            yield PlannedRun(key=key, scenario=str(path.resolve()), seed=seed,
+                             values=run_values, overrides=run_overrides), scenario
+
+
+def _check_disjoint(fixed: Mapping[str, Any], active: Sequence[tuple[Parameter, list[str]]],
+                    source: str) -> None:
+    """Each field is set from one place: ``set``, one parameter, the start offset or seeds."""
+    owners = {START_PATH: "start_behind_truck", SEED_PATH: "seeds"}
+    claims = [*((path, f"set {path}") for path in fixed),
+              *((path, p.pattern) for p, paths in active for path in paths)]
+    for path, owner in claims:
+        if path in owners and owners[path] != owner:
+            raise UserError(source, owner, f"sets {path}, which {owners[path]} sets too",
+                            "set each field from one place only")
+        owners[path] = owner
+
+
+# -- running ---------------------------------------------------------------------------------
+
+def plan_document(campaign: Campaign, plan: CampaignPlan, command: str) -> dict[str, Any]:
+    """``safety.json``: how the campaign was made, every run and every combination left out
+    (what the report reads). Scenario files appear as the campaign file names them."""
+    names = dict(zip((p.stem for p in campaign.scenarios), campaign.scenario_names,
+                     strict=True))
+    step_out, walking = campaign.heat_map_columns
+
+    def entry(run: PlannedRun) -> dict[str, Any]:
+        stem = Path(run.scenario).stem
+        return {"key": run.key, "scenario": stem, "file": names[stem], "seed": run.seed,
+                "values": run.values, "overrides": run.overrides}
+
+    return {
+        "command": command,
+        "campaign": campaign.source,
+        "description": campaign.description,
+        "scenarios": list(campaign.scenario_names),
+        "seeds": list(campaign.seeds),
+        "set": dict(campaign.fixed),
+        "axes": [{"column": a.column, "path": a.pattern, "values": list(a.values)}
+                 for a in campaign.axes],
+        "heat_map": {"x": step_out, "y": walking},
+        "runs": [entry(run) for run in plan.runs],
+        "not_feasible": [{**entry(n.run), "reason": n.reason} for n in plan.not_feasible],
+    }
+
+
+def run_campaign(
+    campaign: Campaign,
+    plan: CampaignPlan,
+    out_dir: Path,
+    command: str,
+    workers: int | None = None,
+    executor: ExecutorName = "local",
+    scheduler: str | None = None,
+    resume: bool = False,
+    progress: bool = True,
+) -> list[TaskOutcome]:
+    """Write ``safety.json``, then run the feasible runs (summaries only) through the sweep's
+    execution path; outcomes in plan order."""
+    write_json_atomic(out_dir / SAFETY_PLAN, plan_document(campaign, plan, command))
+    return run_planned(plan.runs, out_dir, True, workers, executor, scheduler, resume,
+                       progress, "safety")
