@@ -18,6 +18,7 @@ PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegativeFloat = Annotated[float, Field(ge=0)]
 BUS_NODE = "bus"
 CAR_NODE = "car"
+Assumption = Literal["pedestrian_speed", "sensor_bounds", "shared_estimates"]
 
 
 class StrictModel(BaseModel):
@@ -86,7 +87,10 @@ class Pedestrian(StrictModel):
     )
     end_edge: str = Field("CW", description="Edge whose sidewalk it walks to (across the zebra).")
     end_pos_m: NonNegativeFloat = Field(4.0, description="Arrival position along that edge (m).")
-    walking_speed_mps: PositiveFloat = Field(1.2, le=3.0, description="Walking speed (m/s).")
+    walking_speed_mps: PositiveFloat = Field(
+        1.2, le=3.0, description="Walking speed (m/s); at most estimator.max_pedestrian_speed_mps "
+        "unless breaks_assumptions lists 'pedestrian_speed'."
+    )
     steps_onto_crossing_s: NonNegativeFloat = Field(
         14.1, description="Time at which it reaches the crossing (s); its departure is derived."
     )
@@ -350,6 +354,15 @@ class Scenario(StrictModel):
     estimator: Estimator = Field(default_factory=Estimator)
     controller: Controller = Field(default_factory=Controller)
     faults: Faults = Field(default_factory=Faults)
+    breaks_assumptions: list[Assumption] = Field(
+        default_factory=list,
+        description="Assumptions of the estimator this study breaks on purpose (anything else "
+        "that would break one is an error): 'pedestrian_speed': the pedestrian walks faster than "
+        "estimator.max_pedestrian_speed_mps; 'sensor_bounds': sensors whose measurements leave "
+        "their noise bounds or report what is not there (bias beyond the bound, stuck, phantom); "
+        "'shared_estimates': connected nodes send estimates that do not hold their bounds "
+        "(node shift and shrink faults).",
+    )
 
     @model_validator(mode="after")
     def _sensors_on_existing_nodes(self) -> Scenario:
@@ -363,7 +376,31 @@ class Scenario(StrictModel):
         if BUS_NODE in self.rsus or CAR_NODE in self.rsus:
             raise ValueError("rsus: the ids 'bus' and 'car' are reserved for the vehicles")
         self._faults_on_existing_targets()
+        self._broken_assumptions_declared()
         return self
+
+    def _broken_assumptions_declared(self) -> None:
+        """What breaks an assumption of the estimator is listed in ``breaks_assumptions``.
+
+        The sets are guaranteed to hold the pedestrian only under those assumptions, so a study
+        that breaks one says so; dropouts and link faults break nothing (the estimator handles
+        missing frames and late messages).
+        """
+        declared = set(self.breaks_assumptions)
+        bound = self.estimator.max_pedestrian_speed_mps
+        speed = self.pedestrian.walking_speed_mps
+        if self.pedestrian.present and speed > bound:
+            _require(declared, "pedestrian_speed", "pedestrian.walking_speed_mps",
+                     f"{speed:g} m/s is above estimator.max_pedestrian_speed_mps ({bound:g} m/s), "
+                     f"the bound the estimator relies on; walk at most {bound:g} m/s or raise "
+                     "the bound")
+        for name, fault in self.faults.sensor.items():
+            if fault.kind != "dropout" and not (fault.kind == "bias" and fault.within_bound):
+                _require(declared, "sensor_bounds", f"faults.sensor.{name}.kind",
+                         _SENSOR_FAULT_BREAKS[fault.kind])
+        for name, node_fault in self.faults.node.items():
+            _require(declared, "shared_estimates", f"faults.node.{name}.kind",
+                     f"a {node_fault.kind} fault sends estimates that do not hold their bounds")
 
     def _faults_on_existing_targets(self) -> None:
         """Every fault names a sensor of the scenario, or a node that sends to the bus."""
@@ -387,6 +424,21 @@ class Scenario(StrictModel):
     def sensors_of(self, node: str) -> dict[str, Sensor]:
         """The sensors carried by ``node``, by name."""
         return {name: s for name, s in self.sensors.items() if s.node == node}
+
+
+_SENSOR_FAULT_BREAKS = {
+    "bias": "a bias beyond the noise bound (within_bound = false) puts the measurements outside "
+    "the bound the estimator relies on",
+    "stuck": "a stuck sensor's measurements leave the noise bound the estimator relies on",
+    "phantom": "a phantom is reported where no pedestrian is, which the estimator does not expect",
+}
+
+
+def _require(declared: set[str], assumption: str, field: str, problem: str) -> None:
+    """Reject ``field`` (a ValueError naming it) unless ``assumption`` is declared broken."""
+    if assumption not in declared:
+        raise ValueError(f"{field}: {problem}; if the study breaks it on purpose, add "
+                         f'"{assumption}" to breaks_assumptions')
 
 
 def _one_of(value: str, allowed: list[str]) -> str:

@@ -100,3 +100,80 @@ def test_override_of_an_unknown_table_is_an_error():
 def test_override_of_an_unknown_field_is_an_error():
     with pytest.raises(UserError, match=r"bus\.top_speed"):
         load_scenario(SCENARIOS / "s1_pedestrian.toml", {"bus.top_speed": 3})
+
+
+# --- breaks_assumptions: a study that breaks an assumption of the estimator says so -------------
+
+S3_FILE = SCENARIOS / "s3_pedestrian.toml"
+
+
+def _sensor_fault(kind: str, **fields: object) -> dict:
+    """Dotted overrides of S3 that add sensor fault ``f`` on rsu1's camera."""
+    base = {"faults.sensor.f.sensor": "rsu1_cam", "faults.sensor.f.kind": kind}
+    return base | {f"faults.sensor.f.{k}": v for k, v in fields.items()}
+
+
+NODE_SHRINK = {"faults.node.n.node": "rsu2", "faults.node.n.kind": "shrink"}
+NODE_SHIFT = {"faults.node.n.node": "rsu2", "faults.node.n.kind": "shift",
+              "faults.node.n.shift_m": [4.0, 0.0]}
+BREAKING = [  # overrides, the field refused, the assumption it breaks
+    pytest.param({"pedestrian.walking_speed_mps": 2.6}, "pedestrian.walking_speed_mps",
+                 "pedestrian_speed", id="fast pedestrian"),
+    pytest.param(_sensor_fault("bias", bias_m=[3.0, 0.0]), "faults.sensor.f.kind",
+                 "sensor_bounds", id="bias"),
+    pytest.param(_sensor_fault("stuck"), "faults.sensor.f.kind", "sensor_bounds", id="stuck"),
+    pytest.param(_sensor_fault("phantom", phantom_xy_m=[200.0, 0.0]), "faults.sensor.f.kind",
+                 "sensor_bounds", id="phantom"),
+    pytest.param(NODE_SHRINK, "faults.node.n.kind", "shared_estimates", id="shrink"),
+    pytest.param(NODE_SHIFT, "faults.node.n.kind", "shared_estimates", id="shift"),
+]
+
+
+@pytest.mark.parametrize(("overrides", "field", "assumption"), BREAKING)
+def test_an_undeclared_broken_assumption_is_refused(overrides, field, assumption):
+    with pytest.raises(UserError) as info:
+        load_scenario(S3_FILE, overrides)
+    assert (info.value.source, info.value.field) == (str(S3_FILE), field)
+    assert f'add "{assumption}" to breaks_assumptions' in info.value.problem
+
+
+@pytest.mark.parametrize(("overrides", "field", "assumption"), BREAKING)
+def test_a_declared_broken_assumption_is_accepted(overrides, field, assumption):
+    scenario = load_scenario(S3_FILE, {**overrides, "breaks_assumptions": [assumption]})
+    assert scenario.breaks_assumptions == [assumption]
+
+
+def test_the_wrong_declaration_does_not_cover_a_break():
+    with pytest.raises(UserError, match="sensor_bounds"):
+        load_scenario(S3_FILE, {**_sensor_fault("stuck"),
+                                "breaks_assumptions": ["shared_estimates", "pedestrian_speed"]})
+
+
+@pytest.mark.parametrize("overrides", [
+    _sensor_fault("dropout"),
+    _sensor_fault("bias", bias_m=[0.8, 0.8], within_bound=True),
+    {"faults.link.l.node": "rsu1", "faults.link.l.kind": "loss"},
+    {"faults.link.l.node": "rsu1", "faults.link.l.kind": "latency"},
+    {"pedestrian.walking_speed_mps": 2.5},  # at the bound
+    {"pedestrian.walking_speed_mps": 2.8, "pedestrian.present": False},  # nobody walks
+], ids=["dropout", "bias within bound", "loss", "latency", "speed at the bound", "no pedestrian"])
+def test_what_breaks_nothing_needs_no_declaration(overrides):
+    assert load_scenario(S3_FILE, overrides).breaks_assumptions == []
+
+
+def test_an_unknown_assumption_is_refused():
+    with pytest.raises(UserError, match=r"breaks_assumptions\.0: .*'sensor_bounds'"):
+        load_scenario(S3_FILE, {"breaks_assumptions": ["sensor_bias"]})
+
+
+def test_fault_scenarios_declare_what_they_break():
+    """Each fault scenario loads, and declares exactly what its faults break."""
+    declared = {p.stem: load_scenario(p).breaks_assumptions
+                for p in sorted((SCENARIOS / "faults").glob("[!_]*.toml"))}
+    assert declared == {
+        "s1_bias_bus": ["sensor_bounds"], "s2_shrink_car": ["shared_estimates"],
+        "s3_bias_rsu1_second_camera": ["sensor_bounds"], "s3_bias_within_bound": [],
+        "s3_dropout_rsu2": [], "s3_latency_rsu1": [], "s3_loss_rsu1": [],
+        "s3_phantom_rsu1": ["sensor_bounds"], "s3_shift_rsu2": ["shared_estimates"],
+        "s3_stuck_rsu1": ["sensor_bounds"],
+    }
