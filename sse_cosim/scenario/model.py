@@ -43,7 +43,10 @@ class Network(StrictModel):
 class Bus(StrictModel):
     route_edges: list[str] = Field(["WC", "CE"], min_length=1, description="Edge ids, in order.")
     depart_pos_m: NonNegativeFloat = Field(0.0, description="Front position on the first edge (m).")
-    nominal_speed_mps: PositiveFloat = Field(20.0, description="Nominal speed (m/s), Table I: 20.")
+    nominal_speed_mps: PositiveFloat = Field(
+        20.0, description="Nominal speed (m/s), Table I: 20; at most the speed limit of every lane "
+        "on its route."
+    )
     length_m: PositiveFloat = Field(12.0, description="Bus length (m).")
     width_m: PositiveFloat = Field(2.55, description="Bus width (m).")
     accel_mps2: PositiveFloat = Field(1.5, description="Maximum acceleration (m/s^2).")
@@ -74,7 +77,10 @@ class ConnectedCar(StrictModel):
     lane_index: int = Field(2, ge=0, description="Driving lane index on its edges.")
     depart_s: NonNegativeFloat = Field(0.0, description="Departure time (s).")
     depart_pos_m: NonNegativeFloat = Field(0.0, description="Front position on the first edge (m).")
-    speed_mps: PositiveFloat = Field(10.0, description="Constant speed (m/s).")
+    speed_mps: PositiveFloat = Field(
+        10.0,
+        description="Constant speed (m/s); at most the speed limit of every lane on its route.",
+    )
     length_m: PositiveFloat = Field(4.5, description="Car length (m).")
     width_m: PositiveFloat = Field(1.8, description="Car width (m).")
 
@@ -92,7 +98,8 @@ class Pedestrian(StrictModel):
         "unless breaks_assumptions lists 'pedestrian_speed'."
     )
     steps_onto_crossing_s: NonNegativeFloat = Field(
-        14.1, description="Time at which it reaches the crossing (s); its departure is derived."
+        14.1, description="Time at which it steps onto the crossing (s). It stands at its start "
+        "from t = 0 and starts walking in time; a time its walk cannot make is an error."
     )
     radius_m: PositiveFloat = Field(0.3, description="Body radius used for collisions (m).")
 

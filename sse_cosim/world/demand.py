@@ -7,11 +7,19 @@ dawdling), so one seed gives one run.
 
 The pedestrian walks an explicit path: its start sidewalk, the walking area, the zebra, the
 walking area on the far side, its end sidewalk. (Left to SUMO's router, a pedestrian whose
-end lies far down the opposite sidewalk would rather cross at the dead end of the road.) It
-departs so that it reaches the zebra at ``pedestrian.steps_onto_crossing_s``: the walking
+end lies far down the opposite sidewalk would rather cross at the dead end of the road.)
+
+The pedestrian exists from t=0: the estimator assumes that an undetected pedestrian has been
+somewhere on walkable ground since the start, so it may not appear later where sensors already
+saw nobody. Its plan is a stop at its start position until its walk starts, then the walk,
+timed so that it steps onto the zebra at ``pedestrian.steps_onto_crossing_s`` (the walking
 distance to the zebra is the rest of its start sidewalk plus the walking area's length, both
-from the network. When that departure would lie before t=0 the pedestrian departs at t=0 and
-reaches the zebra later than configured; :class:`PedestrianPlan` says when (``late``).
+from the network); a time the walk cannot make is an error. The walk starts on the sidewalk's
+centre line (``departPosLat="0"``), where :class:`PedestrianPlan` says the pedestrian stands
+while it waits (SUMO itself draws a waiting person beside the sidewalk).
+
+Every vehicle keeps its speed: a speed above the limit of a lane on its route is an error, as
+SUMO would silently hold the vehicle to the limit.
 """
 
 from __future__ import annotations
@@ -37,27 +45,25 @@ PEDESTRIAN_ID = "pedestrian"
 ROLES = {BUS_ID: "bus", TRUCK_ID: "truck", CAR_ID: "car"}
 PARKED_DURATION_S = 1.0e7  # "for ever": the truck's stop outlasts any run
 ROUTE_FILE_NAME = "scenario.rou.xml"
+_EPS = 1e-9  # tolerance of time comparisons in steps
 
 
 @dataclass(frozen=True)
 class PedestrianPlan:
-    """When and where the pedestrian walks.
+    """When and where the pedestrian waits and walks.
 
     ``path`` lists the edges it walks (sidewalks, walking areas, the crossing);
-    ``distance_to_crossing_m`` the walk from its start to the zebra; ``depart_s`` its
-    departure; ``crossing_time_s`` when it steps onto the zebra (= the configured time unless
-    ``late``: then it departs at t=0 and arrives ``crossing_time_s`` instead).
+    ``distance_to_crossing_m`` the walk from its start to the zebra; ``standing_xy`` its centre
+    (network coordinates) while it waits at its start, which is where its walk begins; from
+    t=0 until ``walk_start_s`` it stands there, from the next step on it walks, and it steps
+    onto the zebra at ``crossing_time_s`` (the configured time).
     """
 
     path: tuple[str, ...]
     distance_to_crossing_m: float
-    depart_s: float
+    standing_xy: tuple[float, float]
+    walk_start_s: float
     crossing_time_s: float
-    configured_crossing_time_s: float
-
-    @property
-    def late(self) -> bool:
-        return self.crossing_time_s > self.configured_crossing_time_s + 1e-9
 
 
 @dataclass(frozen=True)
@@ -75,6 +81,8 @@ def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: st
     dt = scenario.simulation.step_length_s
     bus = scenario.bus
     _check_route(net, bus.route_edges, "bus", "bus.route_edges", source)
+    _check_speed(net, bus.route_edges, "bus", bus.nominal_speed_mps, "bus.nominal_speed_mps",
+                 source)
     _check_pos(net, bus.route_edges[0], bus.depart_pos_m, "bus.depart_pos_m", source)
     bus_lane = _vehicle_lane(net, bus.route_edges[0], "bus", "bus.route_edges", source)
     if scenario.truck.present:
@@ -82,6 +90,7 @@ def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: st
     if scenario.car.present:
         car = scenario.car
         _check_route(net, car.route_edges, "passenger", "car.route_edges", source)
+        _check_speed(net, car.route_edges, "passenger", car.speed_mps, "car.speed_mps", source)
         _check_pos(net, car.route_edges[0], car.depart_pos_m, "car.depart_pos_m", source)
         _check_lane(net, car.route_edges[0], car.lane_index, "passenger", "car.lane_index", source)
     plan = None
@@ -133,10 +142,12 @@ def write_route_file(scenario: Scenario, plan: ActorPlan, path: Path) -> Path:
                               length=size, width=size, desiredMaxSpeed=ped.walking_speed_mps,
                               maxSpeed=ped.walking_speed_mps, speedFactor=1, speedDev=0))
         p = plan.pedestrian
-        entries.append((p.depart_s, 3, (
-            f'    <person id="{PEDESTRIAN_ID}" type="pedestrian" depart="{_num(p.depart_s)}" '
+        entries.append((0.0, 3, (
+            f'    <person id="{PEDESTRIAN_ID}" type="pedestrian" depart="0" '
             f'departPos="{_num(ped.start_pos_m)}">\n'
-            f'        <walk edges={quoteattr(" ".join(p.path))} '
+            f"        <stop edge={quoteattr(ped.start_edge)} endPos=\"{_num(ped.start_pos_m)}\" "
+            f'until="{_num(p.walk_start_s)}"/>\n'
+            f'        <walk edges={quoteattr(" ".join(p.path))} departPosLat="0" '
             f'arrivalPos="{_num(ped.end_pos_m)}"/>\n'
             f"    </person>")))
     entries.sort(key=lambda e: (e[0], e[1]))
@@ -187,6 +198,29 @@ def _check_route(net: sumolib.net.Net, edges: list[str], vclass: str, field: str
         if not any(c.getFromLane().allows(vclass) and c.getToLane().allows(vclass) for c in conns):
             raise UserError(source, field, f"edge {b!r} does not follow edge {a!r} for a "
                             f"{vclass}", "list consecutive, connected edges")
+
+
+def _check_speed(net: sumolib.net.Net, edges: list[str], vclass: str, speed: float, field: str,
+                 source: str) -> None:
+    """``speed`` is within the limit of every lane the vehicle may use on its route (SUMO would
+    hold it to the limit, and refuse a faster departure)."""
+    slowest = min(_route_lanes(net, edges, vclass), key=lambda lane: lane.getSpeed())
+    limit = slowest.getSpeed()
+    if speed > limit + 1e-9:
+        raise UserError(source, field, f"{speed:g} m/s is above the speed limit of lane "
+                        f"{slowest.getID()!r} on the route ({limit:g} m/s), which SUMO would "
+                        "hold the vehicle to", f"use at most {limit:g} m/s")
+
+
+def _route_lanes(net: sumolib.net.Net, edges: list[str],
+                 vclass: str) -> list[sumolib.net.lane.Lane]:
+    """The lanes of ``edges`` that admit ``vclass``, and the junction lanes between them."""
+    lanes = [lane for e in edges for lane in net.getEdge(e).getLanes() if lane.allows(vclass)]
+    for a, b in itertools.pairwise(edges):
+        for conn in net.getEdge(a).getOutgoing().get(net.getEdge(b), []):
+            if conn.getFromLane().allows(vclass) and conn.getViaLaneID():
+                lanes.append(net.getLane(conn.getViaLaneID()))
+    return lanes
 
 
 def _vehicle_lane(net: sumolib.net.Net, edge_id: str, vclass: str, field: str, source: str) -> int:
@@ -254,14 +288,23 @@ def _plan_pedestrian(net: sumolib.net.Net, scenario: Scenario, roadmap: RoadMap,
     distance = distance_to_crossing(net, path, ped.start_pos_m)
     walk_s = distance / ped.walking_speed_mps
     wanted = ped.steps_onto_crossing_s
-    # the last step at which it can leave and still be on time (never late by rounding)
-    depart = max(0.0, math.floor((wanted - walk_s) / dt + 1e-9) * dt)
+    # the last step from which it is still on time (never late by rounding)
+    start_step = math.floor((wanted - walk_s) / dt + _EPS)
+    if start_step < 0:
+        earliest = math.ceil(walk_s / dt - _EPS) * dt
+        raise UserError(source, "pedestrian.steps_onto_crossing_s",
+                        f"{wanted:g} s cannot be reached: the walk of {distance:.1f} m from "
+                        f"pedestrian.start_pos_m to the crossing takes {walk_s:.2f} s at "
+                        f"{ped.walking_speed_mps:g} m/s, so it steps onto the crossing at "
+                        f"{earliest:.6g} s at the earliest",
+                        f"use {earliest:.6g} s or later, or a pedestrian.start_pos_m nearer the "
+                        "crossing")
     return PedestrianPlan(
         path=tuple(path),
         distance_to_crossing_m=distance,
-        depart_s=round(depart, 6),
-        crossing_time_s=max(wanted, depart + walk_s),
-        configured_crossing_time_s=wanted,
+        standing_xy=standing_point(net, path, ped.start_pos_m, ped.radius_m),
+        walk_start_s=round(start_step * dt, 6),
+        crossing_time_s=wanted,
     )
 
 
@@ -286,13 +329,25 @@ def pedestrian_path(net: sumolib.net.Net, start: str, end: str, crossing: str) -
     return None if best is None else best[1]
 
 
+def standing_point(net: sumolib.net.Net, path: list[str] | tuple[str, ...], start_pos: float,
+                   radius: float) -> tuple[float, float]:
+    """Centre (x, y) of a pedestrian of ``radius`` whose walk along ``path`` starts at
+    ``start_pos`` on the centre line of ``path[0]``'s sidewalk (SUMO places a walking person
+    by its front, so the centre lies ``radius`` behind, against the walking direction)."""
+    first = net.getEdge(path[0])
+    lane = next(lane for lane in first.getLanes() if lane.allows("pedestrian"))
+    centre = start_pos - radius if _walks_forward(net, path) else start_pos + radius
+    shape = lane.getShape()
+    scale = sumolib.geomhelper.polyLength(shape) / lane.getLength()  # SUMO's geometry factor
+    x, y = sumolib.geomhelper.positionAtShapeOffset(shape, centre * scale)
+    return float(x), float(y)
+
+
 def distance_to_crossing(net: sumolib.net.Net, path: list[str] | tuple[str, ...],
                          start_pos: float) -> float:
     """Walking distance (m) from ``start_pos`` on ``path[0]`` to the start of the crossing."""
     first = net.getEdge(path[0])
-    nxt = net.getEdge(path[1])
-    forward = _touches(nxt, first.getToNode())
-    distance = (first.getLength() - start_pos) if forward else start_pos
+    distance = (first.getLength() - start_pos) if _walks_forward(net, path) else start_pos
     for edge_id in path[1:]:
         edge = net.getEdge(edge_id)
         if edge.getFunction() == "crossing":
@@ -301,8 +356,10 @@ def distance_to_crossing(net: sumolib.net.Net, path: list[str] | tuple[str, ...]
     raise ValueError("the path has no crossing")
 
 
-def _touches(edge: sumolib.net.edge.Edge, node: sumolib.net.node.Node) -> bool:
-    return node in (edge.getFromNode(), edge.getToNode())
+def _walks_forward(net: sumolib.net.Net, path: list[str] | tuple[str, ...]) -> bool:
+    """Whether the walk leaves ``path[0]`` at its end (along the edge's direction)."""
+    nxt = net.getEdge(path[1])
+    return net.getEdge(path[0]).getToNode() in (nxt.getFromNode(), nxt.getToNode())
 
 
 def _pedestrian_graph(net: sumolib.net.Net) -> dict[str, dict[str, float]]:

@@ -11,6 +11,14 @@ Its ``time`` is the time SUMO's own outputs (FCD etc.) give that state: the firs
 t=0 with the actors that depart at t=0 standing at their departure places, i.e. one step less
 than ``libsumo.simulation.getTime()`` after the step.
 
+Insertion. SUMO keeps a vehicle waiting while there is no room where it departs; ``step()``
+raises :class:`UserError` naming ``bus.depart_pos_m`` (``car.depart_pos_m``) once the bus (the
+car) has waited ``INSERTION_WAIT_S`` past its departure.
+
+The pedestrian exists from t=0 and stands at its start until its walk starts (see
+:mod:`sse_cosim.world.demand`); meanwhile the snapshot places it at the plan's standing point
+on the sidewalk, where its walk then begins, not where SUMO draws a waiting person.
+
 Speed mode. The bus drives under speed mode 31 (SUMO's default, set explicitly): SUMO keeps the
 safe speed towards leaders, the bus's maximum acceleration and deceleration, and the right of
 way at junctions -- so SUMO still yields to pedestrians on the priority crossing -- while
@@ -47,13 +55,21 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
+from typing import Any
 from xml.sax.saxutils import quoteattr
 
 from sse_cosim.errors import SimulationError, UserError
 from sse_cosim.files import write_text_atomic
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.world import demand
-from sse_cosim.world.demand import BUS_ID, PEDESTRIAN_ID, ROLES, ActorPlan, PedestrianPlan
+from sse_cosim.world.demand import (
+    BUS_ID,
+    CAR_ID,
+    PEDESTRIAN_ID,
+    ROLES,
+    ActorPlan,
+    PedestrianPlan,
+)
 from sse_cosim.world.network import NetworkBuildError, build_network
 from sse_cosim.world.roadmap import RoadMap, load_roadmap
 from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
@@ -65,11 +81,13 @@ with contextlib.redirect_stdout(io.StringIO()):
 log = logging.getLogger(__name__)
 
 BUS_SPEED_MODE = 31
+INSERTION_WAIT_S = 2.0  # how long a vehicle may wait for room at its departure (s)
 CONFIG_FILE_NAME = "sumo.sumocfg"
 LOG_FILE_NAME = "sumo.log"
 _VEHICLE_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED)
 _BUS_VARS = (*_VEHICLE_VARS, libsumo.VAR_DISTANCE)
-_PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libsumo.VAR_ROAD_ID)
+_PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libsumo.VAR_ROAD_ID,
+                libsumo.VAR_LANE_ID)
 _LIBSUMO_ERRORS: tuple[type[BaseException], ...] = (
     libsumo.TraCIException, libsumo.FatalTraCIError, RuntimeError)
 
@@ -108,7 +126,7 @@ class SumoWorld:
         self._open = False
         self._entered = False
         self._time = -self._dt
-        self._bus_seen = False
+        self._departed: set[str] = set()  # vehicles SUMO has inserted
         self._bus_arrived = False
         self._bus_distance = 0.0
         self._bus_decel = scenario.bus.comfortable_decel_mps2
@@ -144,12 +162,6 @@ class SumoWorld:
         self._roadmap = load_roadmap(self._net_path)
         self._plan = demand.plan_actors(self.scenario, self._net_path, self._roadmap,
                                         source=self.scenario_name)
-        if self._plan.pedestrian is not None and self._plan.pedestrian.late:
-            p = self._plan.pedestrian
-            log.warning("%s: the pedestrian needs %.1f s to walk %.1f m to the crossing, so it "
-                        "departs at t=0 and reaches the crossing at %.1f s instead of %.1f s",
-                        self.scenario_name, p.crossing_time_s - p.depart_s,
-                        p.distance_to_crossing_m, p.crossing_time_s, p.configured_crossing_time_s)
         config = self._write_files()
         try:
             libsumo.start(["sumo", "-c", str(config)])
@@ -181,15 +193,21 @@ class SumoWorld:
     # --- stepping -------------------------------------------------------------------------
 
     def step(self) -> Snapshot:
-        """Advance SUMO by one step and return the new state."""
+        """Advance SUMO by one step and return the new state.
+
+        Raises :class:`UserError` once a vehicle has waited :data:`INSERTION_WAIT_S` past its
+        departure without SUMO finding room to insert it where the scenario places it.
+        """
         self._require_open()
         try:
             libsumo.simulationStep()
-            return self._snapshot()
+            snapshot = self._snapshot()
         except _LIBSUMO_ERRORS as exc:
             raise SimulationError(self.scenario_name,
                                   f"SUMO step at t={self._time + self._dt:.2f} s failed: "
                                   f"{_message(exc)}") from exc
+        self._check_insertions()
+        return snapshot
 
     def set_bus_speed(self, commanded_mps: float, emergency: bool = False) -> None:
         """Command the bus's speed (m/s); ``emergency`` brakes at the emergency deceleration.
@@ -204,7 +222,7 @@ class SumoWorld:
         self._require_open()
         self._last_commanded = float(commanded_mps)
         self._last_emergency = bool(emergency)
-        if not self._bus_seen or self._bus_arrived:
+        if not self.bus_departed or self._bus_arrived:
             return
         try:
             self._apply_command()
@@ -239,7 +257,8 @@ class SumoWorld:
 
     @property
     def pedestrian_plan(self) -> PedestrianPlan | None:
-        """When the pedestrian departs and steps onto the crossing (None without one)."""
+        """Where the pedestrian waits, when it walks and steps onto the crossing (None without
+        one)."""
         return None if self._plan is None else self._plan.pedestrian
 
     @property
@@ -265,7 +284,7 @@ class SumoWorld:
     @property
     def bus_departed(self) -> bool:
         """Whether SUMO has inserted the bus (it may wait for room at its departure)."""
-        return self._bus_seen
+        return BUS_ID in self._departed
 
     @property
     def bus_arrived(self) -> bool:
@@ -292,6 +311,28 @@ class SumoWorld:
         if not self._open:
             raise SimulationError(self.scenario_name, "the SUMO world is not open "
                                   "(use it inside 'with SumoWorld(...) as world:')")
+
+    def _check_insertions(self) -> None:
+        """Every vehicle is inserted within :data:`INSERTION_WAIT_S` of its departure; one that
+        is not stands where the scenario leaves it no room (SUMO would keep it waiting)."""
+        bus, car = self.scenario.bus, self.scenario.car
+        self._check_inserted(BUS_ID, 0.0, "bus.depart_pos_m",
+                             f"at {bus.depart_pos_m:g} m on edge {bus.route_edges[0]!r}",
+                             "move bus.depart_pos_m to where there is room")
+        if car.present:
+            self._check_inserted(CAR_ID, car.depart_s, "car.depart_pos_m",
+                                 f"at {car.depart_pos_m:g} m on edge {car.route_edges[0]!r} "
+                                 f"(car.depart_s = {car.depart_s:g} s)",
+                                 "move car.depart_pos_m, or change car.depart_s, to where and "
+                                 "when there is room")
+
+    def _check_inserted(self, vid: str, depart_s: float, field: str, where: str,
+                        fix: str) -> None:
+        if vid in self._departed or self._time < depart_s + INSERTION_WAIT_S - 1e-9:
+            return
+        raise UserError(self.scenario_name, field, f"SUMO found no room to insert the "
+                        f"{ROLES[vid]} {where} within {INSERTION_WAIT_S:g} s of its departure "
+                        f"(see {self.run_dir / LOG_FILE_NAME})", fix)
 
     def _write_files(self) -> Path:
         assert self._plan is not None and self._net_path is not None
@@ -332,9 +373,9 @@ class SumoWorld:
         sim = libsumo.simulation
         self._time = round(sim.getTime() - self._dt, 6)
         for vid in sim.getDepartedIDList():
+            self._departed.add(vid)
             libsumo.vehicle.subscribe(vid, _BUS_VARS if vid == BUS_ID else _VEHICLE_VARS)
             if vid == BUS_ID:
-                self._bus_seen = True
                 libsumo.vehicle.setSpeedMode(BUS_ID, BUS_SPEED_MODE)
                 self._apply_command()
         for pid in sim.getDepartedPersonIDList():
@@ -358,16 +399,24 @@ class SumoWorld:
         persons: dict[str, PersonState] = {}
         crossing = self.roadmap.crossing_id
         for pid, values in libsumo.person.getAllSubscriptionResults().items():
-            x, y = values[libsumo.VAR_POSITION]
-            heading = _heading(values[libsumo.VAR_ANGLE])
-            half = 0.5 * self._person_size(pid)
-            # SUMO places a walking person by its front; the snapshot wants its centre.
             persons[pid] = PersonState(
                 id=pid,
-                position=(float(x) - half * math.cos(heading), float(y) - half * math.sin(heading)),
+                position=self._person_position(pid, values),
                 speed=float(values[libsumo.VAR_SPEED]),
                 on_crossing=values[libsumo.VAR_ROAD_ID] == crossing)
         return Snapshot(time=self._time, vehicles=vehicles, persons=persons)
+
+    def _person_position(self, pid: str, values: dict[int, Any]) -> tuple[float, float]:
+        """A person's centre. A walking person SUMO places by its front; a waiting one (on no
+        lane: the pedestrian before its walk) it draws beside the sidewalk, so the plan's
+        standing point is used, where its walk then begins."""
+        plan = self.pedestrian_plan
+        if not values[libsumo.VAR_LANE_ID] and pid == PEDESTRIAN_ID and plan is not None:
+            return plan.standing_xy
+        x, y = values[libsumo.VAR_POSITION]
+        heading = _heading(values[libsumo.VAR_ANGLE])
+        half = 0.5 * self._person_size(pid)
+        return float(x) - half * math.cos(heading), float(y) - half * math.sin(heading)
 
     def _size(self, vid: str) -> tuple[float, float]:
         size = self._sizes.get(vid)

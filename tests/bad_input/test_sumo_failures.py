@@ -1,5 +1,6 @@
 """SUMO failures: one line naming the scenario, exit status 3, SUMO closed, files whole; in a
-batch the failure is recorded and the other runs go on."""
+batch the failure is recorded and the other runs go on. A vehicle SUMO finds no room to insert
+is a scenario that places it badly: one line naming the field, exit status 2."""
 
 from __future__ import annotations
 
@@ -9,22 +10,46 @@ from pathlib import Path
 
 import pytest
 
-from sse_cosim.cli.main import EXIT_SIMULATION_FAILED, main
+from sse_cosim.cli.main import EXIT_BAD_INPUT, EXIT_SIMULATION_FAILED, main
 from sse_cosim.runner.batch import RUNS_FOLDER, run_batch
 from sse_cosim.world import sumo
-from sse_cosim.world.snapshot import Snapshot
 
 pytestmark = pytest.mark.sumo
 ROOT = Path(__file__).resolve().parents[2]
 S1 = ROOT / "scenarios" / "_s1.toml"
+S2 = ROOT / "scenarios" / "_s2.toml"
 
 
-def scenario_file(folder: Path, name: str, body: str, duration_s: float = 1.0) -> Path:
-    """S1 run for ``duration_s`` with ``body`` (TOML tables) added."""
+def scenario_file(folder: Path, name: str, body: str, duration_s: float = 1.0,
+                  base: Path = S1) -> Path:
+    """``base`` (S1) run for ``duration_s`` with ``body`` (TOML tables) added."""
     path = folder / f"{name}.toml"
-    path.write_text(f'extends = "{S1.as_posix()}"\n[simulation]\nduration_s = {duration_s}\n'
+    path.write_text(f'extends = "{base.as_posix()}"\n[simulation]\nduration_s = {duration_s}\n'
                     f"{body}", encoding="utf-8")
     return path
+
+
+def broken_network(folder: Path) -> Path:
+    """A copy of the network sources with an edge to a node that does not exist."""
+    net = folder / "net"
+    shutil.copytree(ROOT / "sumo_net", net, ignore=shutil.ignore_patterns("build", "*.md"))
+    edges = (net / "road.edg.xml").read_text(encoding="utf-8")
+    (net / "road.edg.xml").write_text(edges.replace('from="W" to="C"', 'from="W" to="Q"'))
+    return net
+
+
+def fail_at_third_step(monkeypatch) -> None:
+    """SUMO raises in its third step, as it does when something inside it breaks."""
+    real_step = sumo.libsumo.simulationStep
+    calls = []
+
+    def step() -> None:
+        calls.append(1)
+        if len(calls) == 3:
+            raise sumo.libsumo.TraCIException("Vehicle 'bus' has no valid route")
+        real_step()
+
+    monkeypatch.setattr(sumo.libsumo, "simulationStep", step)
 
 
 def run_cli(args: list[str], capsys) -> tuple[int, str]:
@@ -37,37 +62,34 @@ def run_cli(args: list[str], capsys) -> tuple[int, str]:
     return info.value.code, lines[0]
 
 
-def test_an_error_inside_sumo_names_the_scenario_and_closes_sumo(tmp_path, capsys):
-    """SUMO refuses the bus's departure speed (above the road's limit) at the first step."""
-    path = scenario_file(tmp_path, "too_fast", "[bus]\nnominal_speed_mps = 70.0\n")
+def test_an_error_inside_sumo_names_the_scenario_and_closes_sumo(tmp_path, capsys, monkeypatch):
+    fail_at_third_step(monkeypatch)
+    path = scenario_file(tmp_path, "broken", "")
     out = tmp_path / "out"
     code, line = run_cli(["run", str(path), "--out", str(out)], capsys)
     assert code == EXIT_SIMULATION_FAILED
-    assert "too_fast.toml" in line and "simulation failed" in line and "Departure speed" in line
+    assert "broken.toml" in line and "simulation failed" in line and "no valid route" in line
     assert not sumo.libsumo.isLoaded()
     for name in ("scenario.rou.xml", "sumo.sumocfg"):  # written before SUMO started: whole
         assert (out / "sumo" / name).read_text().rstrip().endswith(">")
     assert not (out / "summary.json").exists()
 
 
-def test_a_failed_run_leaves_the_files_of_an_earlier_run_whole(tmp_path, capsys):
-    good = scenario_file(tmp_path, "run", "")
+def test_a_failed_run_leaves_the_files_of_an_earlier_run_whole(tmp_path, capsys, monkeypatch):
+    path = scenario_file(tmp_path, "run", "")
     out = tmp_path / "out"
-    main(["run", str(good), "--out", str(out)])
+    main(["run", str(path), "--out", str(out)])
     before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
     capsys.readouterr()
-    bad = scenario_file(tmp_path, "run", "[bus]\nnominal_speed_mps = 70.0\n")
-    code, _ = run_cli(["run", str(bad), "--out", str(out)], capsys)
+    fail_at_third_step(monkeypatch)
+    code, _ = run_cli(["run", str(path), "--out", str(out)], capsys)
     assert code == EXIT_SIMULATION_FAILED
     assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
     assert json.loads((out / "summary.json").read_text())["steps"] > 0
 
 
 def test_a_network_that_does_not_build_names_the_scenario(tmp_path, capsys):
-    net = tmp_path / "net"
-    shutil.copytree(ROOT / "sumo_net", net, ignore=shutil.ignore_patterns("build", "*.md"))
-    edges = (net / "road.edg.xml").read_text(encoding="utf-8")
-    (net / "road.edg.xml").write_text(edges.replace('from="W" to="C"', 'from="W" to="Q"'))
+    net = broken_network(tmp_path)
     path = scenario_file(tmp_path, "broken_net", f'[network]\nsources_dir = "{net.as_posix()}"\n')
     code, line = run_cli(["run", str(path), "--out", str(tmp_path / "out")], capsys)
     assert code == EXIT_SIMULATION_FAILED
@@ -75,26 +97,38 @@ def test_a_network_that_does_not_build_names_the_scenario(tmp_path, capsys):
     assert not list((net / "build").glob("*/road.net.xml"))  # no half-built net is cached
 
 
-def test_a_bus_that_is_never_inserted_stops_the_run(tmp_path, capsys, monkeypatch):
-    """SUMO keeps a vehicle waiting when there is no room to insert it; the run gives up."""
-    real_step = sumo.SumoWorld.step
-
-    def step_without_bus(world):
-        snapshot = real_step(world)
-        world._bus_seen = False
-        return Snapshot(snapshot.time, {}, snapshot.persons)
-
-    monkeypatch.setattr(sumo.SumoWorld, "step", step_without_bus)
+def test_a_bus_that_is_never_inserted_is_bad_input(tmp_path, capsys, monkeypatch):
+    """SUMO keeps a vehicle waiting when there is no room to insert it (here: it never
+    reports the bus as departed); the run gives up, naming the bus's departure position."""
+    real_departed = sumo.libsumo.simulation.getDepartedIDList
+    monkeypatch.setattr(sumo.libsumo.simulation, "getDepartedIDList",
+                        lambda: [v for v in real_departed() if v != "bus"])
     path = scenario_file(tmp_path, "blocked", "", duration_s=5.0)
     code, line = run_cli(["run", str(path), "--out", str(tmp_path / "out")], capsys)
-    assert code == EXIT_SIMULATION_FAILED
-    assert "blocked.toml" in line and "could not insert the bus" in line
+    assert code == EXIT_BAD_INPUT
+    assert line.startswith(f"sse-cosim: {path}: bus.depart_pos_m: SUMO found no room to insert "
+                           "the bus at 0 m on edge 'WC' within 2 s")
+    assert "-- move bus.depart_pos_m" in line
+    assert not sumo.libsumo.isLoaded()
+
+
+def test_a_car_without_room_at_its_departure_is_bad_input(tmp_path, capsys):
+    """The connected car departs where a slow bus still stands: SUMO cannot insert it."""
+    path = scenario_file(tmp_path, "car_blocked", '[bus]\nnominal_speed_mps = 0.5\n'
+                         '[car]\nroute_edges = ["WC", "CE"]\n[pedestrian]\npresent = false\n',
+                         duration_s=5.0, base=S2)
+    code, line = run_cli(["run", str(path), "--out", str(tmp_path / "out")], capsys)
+    assert code == EXIT_BAD_INPUT
+    assert line.startswith(f"sse-cosim: {path}: car.depart_pos_m: SUMO found no room to insert "
+                           "the car at 0 m on edge 'WC' (car.depart_s = 0 s) within 2 s")
+    assert "car.depart_s" in line.partition(" -- ")[2]
     assert not sumo.libsumo.isLoaded()
 
 
 def test_a_batch_records_each_failure_and_finishes_the_other_runs(tmp_path):
     good = scenario_file(tmp_path, "good", "")
-    sumo_error = scenario_file(tmp_path, "sumo_error", "[bus]\nnominal_speed_mps = 70.0\n")
+    sumo_error = scenario_file(tmp_path, "sumo_error", "[network]\nsources_dir = "
+                               f'"{broken_network(tmp_path).as_posix()}"\n')
     bad_input = scenario_file(tmp_path, "bad_input", "[pedestrian]\nstart_pos_m = 450.0\n")
     out = tmp_path / "out"
     outcomes = {o.key: o for o in run_batch([good, sumo_error, bad_input], out, workers=3,

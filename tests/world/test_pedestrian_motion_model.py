@@ -23,10 +23,14 @@ SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
 @pytest.fixture(scope="module")
 def trajectories(tmp_path_factory) -> dict[str, tuple[np.ndarray, float]]:
-    """The pedestrian's positions (k, 2) in every scenario with one, with the step length."""
+    """The pedestrian's positions (k, 2) in every scenario with one, and in S3 with a pedestrian
+    that waits 6 s at its start before it walks, with the step length."""
     result = {}
-    for name in ("s1_pedestrian", "s2_pedestrian", "s3_pedestrian"):
-        scenario = load_scenario(SCENARIOS / f"{name}.toml", {"simulation.duration_s": 30.0})
+    runs = {name: (name, {}) for name in ("s1_pedestrian", "s2_pedestrian", "s3_pedestrian")}
+    runs["s3_waiting"] = ("s3_pedestrian", {"pedestrian.steps_onto_crossing_s": 20.0})
+    for name, (file, overrides) in runs.items():
+        scenario = load_scenario(SCENARIOS / f"{file}.toml",
+                                 {"simulation.duration_s": 30.0, **overrides})
         steps = round(scenario.simulation.duration_s / scenario.simulation.step_length_s)
         positions = []
         with SumoWorld(scenario, tmp_path_factory.mktemp(name), name) as world:

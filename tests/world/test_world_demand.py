@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
+import shapely
 from world_helpers import scenario
 
 from sse_cosim.errors import UserError
@@ -28,6 +30,11 @@ def _walk_to_crossing(name: str = "s2_pedestrian") -> float:
     return CROSSING_START_M - scenario(name).pedestrian.start_pos_m + WALKING_AREA_M
 
 
+def _walk_time(name: str = "s2_pedestrian") -> float:
+    """Seconds the pedestrian of scenario ``name`` walks from its start to the zebra."""
+    return _walk_to_crossing(name) / scenario(name).pedestrian.walking_speed_mps
+
+
 def test_pedestrian_crosses_the_zebra(net_path: Path) -> None:
     plan = _plan(net_path).pedestrian
     assert plan is not None
@@ -36,23 +43,43 @@ def test_pedestrian_crosses_the_zebra(net_path: Path) -> None:
     assert plan.distance_to_crossing_m == pytest.approx(_walk_to_crossing())
 
 
-def test_pedestrian_departure_derived_from_crossing_time(net_path: Path) -> None:
+def test_pedestrian_walk_start_derived_from_crossing_time(net_path: Path) -> None:
     plan = _plan(net_path, **{"pedestrian.steps_onto_crossing_s": 20.0}).pedestrian
-    assert plan is not None and not plan.late
+    assert plan is not None
     # the last 0.1 s step from which it is on time
-    latest = 20.0 - _walk_to_crossing() / 1.2
-    assert latest - 0.1 < plan.depart_s <= latest
+    latest = 20.0 - _walk_time()
+    assert latest - 0.1 < plan.walk_start_s <= latest
     assert plan.crossing_time_s == 20.0
 
 
-def test_pedestrian_too_far_departs_at_zero(net_path: Path) -> None:
+def test_pedestrian_stands_on_the_sidewalk_centre_line_behind_its_start(net_path: Path) -> None:
+    sc = scenario("s2_pedestrian")
+    plan = _plan(net_path).pedestrian
+    assert plan is not None
+    # walking east on WC's sidewalk (y = -7): its centre a radius behind its front
+    assert plan.standing_xy == pytest.approx(
+        (sc.pedestrian.start_pos_m - sc.pedestrian.radius_m, -7.0))
+    assert load_roadmap(net_path).sidewalks.contains(shapely.Point(plan.standing_xy))
+
+
+def test_earliest_crossing_time_is_accepted(net_path: Path) -> None:
+    """The earliest time the refusal names is one the plan takes: it walks at t=0."""
+    walk_time = _walk_time()
+    earliest = math.ceil(walk_time / 0.1) * 0.1
+    plan = _plan(net_path, **{"pedestrian.steps_onto_crossing_s": earliest}).pedestrian
+    assert plan is not None and plan.walk_start_s == 0.0
+
+
+def test_unreachable_crossing_time_is_refused(net_path: Path) -> None:
     # asked to reach the zebra 3 s before it can walk there
-    walk_time = _walk_to_crossing() / 1.2
-    plan = _plan(net_path, **{"pedestrian.steps_onto_crossing_s": walk_time - 3.0}).pedestrian
-    assert plan is not None and plan.late
-    assert plan.depart_s == 0.0
-    assert plan.crossing_time_s == pytest.approx(walk_time)
-    assert plan.configured_crossing_time_s == pytest.approx(walk_time - 3.0)
+    walk_time = _walk_time()
+    with pytest.raises(UserError) as info:
+        _plan(net_path, **{"pedestrian.steps_onto_crossing_s": walk_time - 3.0})
+    err = info.value
+    assert (err.source, err.field) == (SOURCE, "pedestrian.steps_onto_crossing_s")
+    earliest = f"{math.ceil(walk_time / 0.1) * 0.1:.6g} s"
+    assert f"at {earliest} at the earliest" in err.problem
+    assert f"use {earliest} or later" in err.fix and "pedestrian.start_pos_m" in err.fix
 
 
 @pytest.mark.parametrize(
@@ -72,6 +99,10 @@ def test_pedestrian_too_far_departs_at_zero(net_path: Path) -> None:
         ({"pedestrian.start_pos_m": 500.0}, "pedestrian.start_pos_m", "beyond the end"),
         ({"pedestrian.end_edge": ":C_w0"}, "pedestrian.end_edge", "no edge"),
         ({"pedestrian.end_pos_m": 199.0}, "pedestrian.end_pos_m", "beyond the end"),
+        ({"bus.nominal_speed_mps": 27.8}, "bus.nominal_speed_mps", "speed limit of lane 'WC_2'"),
+        ({"car.speed_mps": 30.0}, "car.speed_mps", "speed limit of lane 'EC_2'"),
+        ({"car.route_edges": ["WC", "CE"], "car.speed_mps": 28.0}, "car.speed_mps",
+         "(27.78 m/s)"),
     ],
 )
 def test_bad_actor_names_file_and_field(net_path: Path, overrides: dict, field: str,
@@ -104,7 +135,7 @@ def test_route_file(net_path: Path, tmp_path: Path) -> None:
     assert (bus.get("vClass"), bus.get("length"), bus.get("width")) == ("bus", "12", "2.55")
     assert (bus.get("accel"), bus.get("decel"), bus.get("emergencyDecel")) == ("1.5", "3", "7")
     assert types["truck"].get("vClass") == "custom1"
-    assert types["pedestrian"].get("desiredMaxSpeed") == "1.2"
+    assert float(types["pedestrian"].get("desiredMaxSpeed")) == sc.pedestrian.walking_speed_mps
     vehicles = {v.get("id"): v for v in root.iter("vehicle")}
     assert vehicles["bus"].get("departSpeed") == "20"
     assert vehicles["bus"].get("departLane") == "2"
@@ -114,7 +145,14 @@ def test_route_file(net_path: Path, tmp_path: Path) -> None:
     car = vehicles["car"]
     assert (float(car.get("depart")), float(car.get("departSpeed"))) == (sc.car.depart_s,
                                                                           sc.car.speed_mps)
-    walk = root.find("person/walk")
+    person = root.find("person")
+    assert (person.get("depart"), float(person.get("departPos"))) == ("0",
+                                                                      sc.pedestrian.start_pos_m)
+    stop, walk = list(person)  # it waits at its start, then walks
+    assert (stop.tag, stop.get("edge"), float(stop.get("endPos"))) == ("stop", "WC",
+                                                                       sc.pedestrian.start_pos_m)
+    assert float(stop.get("until")) == plan.pedestrian.walk_start_s
     assert walk.get("edges") == "WC :C_w1 :C_c0 :C_w0 CW"
+    assert walk.get("departPosLat") == "0"  # from the sidewalk's centre line: its standing point
     departs = [float(e.get("depart")) for e in root if e.tag in ("vehicle", "person")]
     assert departs == sorted(departs)

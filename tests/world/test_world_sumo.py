@@ -21,6 +21,9 @@ from sse_cosim.world.snapshot import PersonState
 pytestmark = pytest.mark.sumo
 
 PARKING_STRIP_Y = (-6.0, -3.5)  # the eastbound parking strip (sumo_net/README.md)
+# SUMO's path over the walking area (2.64 m) is shorter than the walking area's length the plan
+# counts (2.82 m): the pedestrian steps onto the zebra up to two 0.1 s steps early
+STEPS_EARLY = 0.2 + 1e-6
 
 
 def truck_corners(end_pos_m: float, length_m: float) -> np.ndarray:
@@ -89,13 +92,13 @@ def test_pedestrian_walks_over_the_zebra(name: str,
     plan = run.pedestrian_plan
     tracks = [(s.time, s.persons["pedestrian"]) for s in run.snapshots if "pedestrian" in s.persons]
     t0, p0 = tracks[0]
-    assert t0 == pytest.approx(plan.depart_s)
+    assert t0 == 0.0  # there from the first step
+    assert p0.position == plan.standing_xy
     assert p0.position[0] == pytest.approx(sc.pedestrian.start_pos_m, abs=0.5)
     assert -8.0 < p0.position[1] < -6.0  # on the south sidewalk, behind the truck
     on = [t for t, p in tracks if p.on_crossing]
     assert on, "the pedestrian never stepped onto the crossing"
-    # the configured time, or (paper scenarios: too far to make it) when it can get there
-    assert on[0] == pytest.approx(plan.crossing_time_s, abs=1.5)
+    assert on[0] == pytest.approx(sc.pedestrian.steps_onto_crossing_s, abs=STEPS_EARLY)
     assert all(run.roadmap.crossing.buffer(0.5).contains(_point(p))
                for _, p in tracks if p.on_crossing)
     after = [p for t, p in tracks if t > on[-1]]
@@ -103,14 +106,45 @@ def test_pedestrian_walks_over_the_zebra(name: str,
     assert max(p.speed for _, p in tracks) == pytest.approx(sc.pedestrian.walking_speed_mps)
 
 
-def test_pedestrian_on_time_when_reachable(tmp_path: Path) -> None:
-    sc = scenario("s1_pedestrian", **{"pedestrian.steps_onto_crossing_s": 15.0,
-                                      "simulation.duration_s": 17.0})
+def test_pedestrian_waits_at_its_start_until_its_walk_starts(tmp_path: Path) -> None:
+    """It exists from t=0, stands still at its start until its walk starts, walks on from
+    there without a jump, and steps onto the crossing at the configured time."""
+    sc = scenario("s1_pedestrian", **{"pedestrian.start_pos_m": 184.0,
+                                      "pedestrian.walking_speed_mps": 1.2,
+                                      "pedestrian.steps_onto_crossing_s": 20.0,
+                                      "simulation.duration_s": 21.0})
     run = run_world(sc, tmp_path)
-    assert not run.pedestrian_plan.late
-    on = [s.time for s in run.snapshots if s.persons.get("pedestrian") and
-          s.persons["pedestrian"].on_crossing]
-    assert on[0] == pytest.approx(15.0, abs=0.5)
+    plan = run.pedestrian_plan
+    assert plan.walk_start_s == pytest.approx(5.9)  # 20 s - 16.82 m / 1.2 m/s, on the grid
+    assert all("pedestrian" in s.persons for s in run.snapshots)
+    track = [(s.time, s.persons["pedestrian"]) for s in run.snapshots]
+    waiting = [p for t, p in track if t <= plan.walk_start_s + 1e-9]
+    assert len(waiting) == 60  # t = 0.0 ... 5.9
+    assert {p.position for p in waiting} == {plan.standing_xy}
+    assert all(p.speed == 0.0 and not p.on_crossing for p in waiting)
+    assert run.roadmap.sidewalks.contains(shapely.Point(plan.standing_xy))
+    walking = [p for t, p in track if t > plan.walk_start_s + 1e-9]
+    assert walking[0].position != plan.standing_xy and walking[0].speed > 0
+    step = sc.pedestrian.walking_speed_mps * sc.simulation.step_length_s
+    assert math.dist(plan.standing_xy, walking[0].position) < 1.5 * step  # walks on, no jump
+    on = [t for t, p in track if p.on_crossing]
+    assert on[0] == pytest.approx(20.0, abs=STEPS_EARLY)
+
+
+def test_a_car_without_room_at_its_departure_is_a_user_error(tmp_path: Path) -> None:
+    """A connected car placed where a slow bus stands: SUMO keeps it waiting; two seconds
+    after its departure the world refuses the scenario, naming car.depart_pos_m."""
+    from sse_cosim.world.sumo import INSERTION_WAIT_S, SumoWorld
+
+    sc = scenario("s2_no_pedestrian", **{"bus.nominal_speed_mps": 0.5, "car.depart_s": 0.5,
+                                         "car.route_edges": ["WC", "CE"]})
+    times = []
+    with pytest.raises(UserError) as info, SumoWorld(sc, tmp_path, "blocked.toml") as world:
+        for _ in range(50):
+            times.append(world.step().time)
+    assert times[-1] == pytest.approx(0.5 + INSERTION_WAIT_S - 0.1)  # refused at the next step
+    assert (info.value.source, info.value.field) == ("blocked.toml", "car.depart_pos_m")
+    assert "no room to insert the car" in info.value.problem and "car.depart_s" in info.value.fix
 
 
 @pytest.mark.parametrize("name", ["s1_pedestrian", "s2_pedestrian", "s3_no_pedestrian"])
@@ -169,6 +203,8 @@ def test_bus_arrives(tmp_path: Path) -> None:
 def test_sumo_yields_to_pedestrian_on_crossing(tmp_path: Path) -> None:
     # The pedestrian is on the crossing when a slow bus arrives: SUMO makes the bus wait.
     sc = scenario("s1_pedestrian", **{"bus.depart_pos_m": 120.0, "bus.nominal_speed_mps": 5.0,
+                                      "pedestrian.walking_speed_mps": 1.2,
+                                      "pedestrian.steps_onto_crossing_s": 14.1,
                                       "simulation.duration_s": 25.0})
     snaps = run_world(sc, tmp_path).snapshots
     for s in snaps:
