@@ -9,6 +9,7 @@ starts: the checks run on the built network.
 
 from __future__ import annotations
 
+import json
 import shutil
 import subprocess
 import sys
@@ -21,6 +22,7 @@ from sse_cosim.cli.main import EXIT_BAD_INPUT, main
 
 ROOT = Path(__file__).resolve().parents[2]
 S1 = ROOT / "scenarios" / "_s1.toml"  # a complete scenario to extend (absolute path)
+S2 = ROOT / "scenarios" / "_s2.toml"  # the same with the connected car
 S1_RUN = ROOT / "scenarios" / "s1_pedestrian.toml"
 
 
@@ -39,8 +41,8 @@ class Case:
     named: str = "bad.toml"  # the name the line must contain
 
 
-def extend(body: str) -> str:
-    return f'extends = "{S1.as_posix()}"\n{body}'
+def extend(body: str, base: Path = S1) -> str:
+    return f'extends = "{base.as_posix()}"\n{body}'
 
 
 CASES = [
@@ -84,6 +86,30 @@ CASES = [
                 "dropout_probability = 1.5\n"), ("faults.sensor.f.dropout_probability",)),
     Case("node fault on the bus", extend('[faults.node.n]\nnode = "bus"\nkind = "shrink"\n'),
          ("faults.node.n.node", "sends to the bus", "add the car")),
+    # --- the estimator's assumptions: broken only when declared ---
+    Case("pedestrian faster than the estimator's bound",
+         extend("[pedestrian]\nwalking_speed_mps = 2.8\n"),
+         ("pedestrian.walking_speed_mps", "max_pedestrian_speed_mps (2.5 m/s)",
+          'add "pedestrian_speed" to breaks_assumptions')),
+    Case("bias beyond the bound undeclared",
+         extend('[faults.sensor.f]\nsensor = "bus_front"\nkind = "bias"\nbias_m = [3, 0]\n'),
+         ("faults.sensor.f.kind", "bias", 'add "sensor_bounds" to breaks_assumptions')),
+    Case("stuck sensor undeclared",
+         extend('[faults.sensor.f]\nsensor = "bus_front"\nkind = "stuck"\n'),
+         ("faults.sensor.f.kind", "stuck", 'add "sensor_bounds" to breaks_assumptions')),
+    Case("phantom undeclared",
+         extend('[faults.sensor.f]\nsensor = "bus_front"\nkind = "phantom"\n'
+                "phantom_xy_m = [200, 0]\n"),
+         ("faults.sensor.f.kind", "phantom", 'add "sensor_bounds" to breaks_assumptions')),
+    Case("node fault undeclared",
+         extend('[faults.node.n]\nnode = "car"\nkind = "shift"\nshift_m = [4, 0]\n', S2),
+         ("faults.node.n.kind", "shift", 'add "shared_estimates" to breaks_assumptions')),
+    Case("fault declared as another assumption",
+         extend('breaks_assumptions = ["shared_estimates"]\n'
+                '[faults.sensor.f]\nsensor = "bus_front"\nkind = "stuck"\n'),
+         ("faults.sensor.f.kind", '"sensor_bounds"')),
+    Case("unknown assumption", extend('breaks_assumptions = ["physics"]\n'),
+         ("breaks_assumptions.0", "'sensor_bounds'")),
     # --- the scenario against the road network ---
     Case("actor off the network", extend('[bus]\nroute_edges = ["WC", "XX"]\n'),
          ("bus.route_edges", "no edge 'XX'")),
@@ -95,6 +121,15 @@ CASES = [
          ("pedestrian.start_edge", "no edge 'NOPE'")),
     Case("truck off the parking strip", extend("[truck]\nlane_index = 2\n"),
          ("truck.lane_index", "not a parking strip")),
+    Case("crossing time the walk cannot make",
+         extend("[pedestrian]\nstart_pos_m = 184\nwalking_speed_mps = 1.2\n"
+                "steps_onto_crossing_s = 5\n"),
+         ("pedestrian.steps_onto_crossing_s", "cannot be reached", "14.1 s at the earliest",
+          "use 14.1 s or later", "pedestrian.start_pos_m nearer the crossing")),
+    Case("bus faster than the road", extend("[bus]\nnominal_speed_mps = 30\n"),
+         ("bus.nominal_speed_mps", "speed limit of lane 'WC_2'", "use at most 27.78 m/s")),
+    Case("car faster than the road", extend("[car]\nspeed_mps = 28\n", S2),
+         ("car.speed_mps", "speed limit of lane 'EC_2'", "use at most 27.78 m/s")),
     Case("missing network sources", extend('[network]\nsources_dir = "no_such_folder"\n'),
          ("network.sources_dir", "does not exist")),
     # --- the command line ---
@@ -104,6 +139,14 @@ CASES = [
          ("run", "{s1}", "--out", "{tmp}/out", "--set", "nonsense"), named="command line"),
     Case("set an invalid value", None, ("bus.nominal_speed_mps", "greater than 0"),
          ("run", "{s1}", "--out", "{tmp}/out", "--set", "bus.nominal_speed_mps=-3"),
+         named="s1_pedestrian"),
+    Case("set a pedestrian faster than the estimator's bound", None,
+         ("pedestrian.walking_speed_mps", 'add "pedestrian_speed" to breaks_assumptions'),
+         ("run", "{s1}", "--out", "{tmp}/out", "--set", "pedestrian.walking_speed_mps=2.8"),
+         named="s1_pedestrian"),
+    Case("set a bound below the pedestrian's speed", None,
+         ("pedestrian.walking_speed_mps", "max_pedestrian_speed_mps (1 m/s)"),
+         ("run", "{s1}", "--out", "{tmp}/out", "--set", "estimator.max_pedestrian_speed_mps=1"),
          named="s1_pedestrian"),
     Case("output folder is a file", None, ("--out", "is a file"),
          ("run", "{s1}", "--out", "{tmp}/a_file"), named="a_file"),
@@ -180,3 +223,17 @@ def test_as_a_user_runs_it(case, tmp_path):
                           text=True, cwd=tmp_path, check=False)
     assert proc.returncode == EXIT_BAD_INPUT, proc.stderr
     check_line(proc.stderr, case)
+
+
+@pytest.mark.sumo
+def test_a_declared_fault_runs(tmp_path, capsys):
+    """The stuck sensor refused above runs once the scenario declares what it breaks."""
+    path = tmp_path / "declared.toml"
+    path.write_text(extend('breaks_assumptions = ["sensor_bounds"]\n[simulation]\n'
+                           'duration_s = 1.0\n[faults.sensor.f]\nsensor = "bus_front"\n'
+                           'kind = "stuck"\n'), encoding="utf-8")
+    main(["run", str(path), "--out", str(tmp_path / "out")])
+    assert json.loads((tmp_path / "out" / "scenario.json").read_text())[
+        "breaks_assumptions"] == ["sensor_bounds"]
+    assert (tmp_path / "out" / "summary.json").is_file()
+    assert "sse-cosim" not in capsys.readouterr().err
