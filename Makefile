@@ -7,7 +7,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 DEVSTAMP := $(VENV)/.installed-dev
 
-.PHONY: run test bench lint clean
+.PHONY: run test bench safety lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -32,6 +32,11 @@ test: $(DEVSTAMP)
 
 bench: $(STAMP)
 	$(BIN)/sse-cosim bench --out results/
+
+# The safety campaign (sweeps/safety.toml, about 45 minutes on two cores): results/safety/
+# and results/safety.md; exit status 4 if a safety target is missed.
+safety: $(STAMP)
+	$(BIN)/sse-cosim safety --out results/safety
 
 clean:
 	rm -rf $(VENV) sumo_net/build

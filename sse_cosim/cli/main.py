@@ -27,7 +27,12 @@ def cli() -> None:
 
 def register_commands() -> None:
     """Attach every sub-command module (each adds itself to :data:`cli`)."""
-    from sse_cosim.cli import bench_commands, commands, sweep_commands  # noqa: F401
+    from sse_cosim.cli import (  # noqa: F401
+        bench_commands,
+        commands,
+        safety_commands,
+        sweep_commands,
+    )
 
 
 def main(argv: list[str] | None = None) -> None:
