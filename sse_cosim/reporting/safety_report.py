@@ -46,7 +46,7 @@ SPEED = "average_speed_mps"
 STOPPED = "time_stopped_s"
 KEYS = (COLLISIONS, VIOLATIONS, VIOLATIONS_BY_SET, ROUTE_COMPLETED, STANDSTILL, MIN_DISTANCE,
         SPEED, STOPPED)
-MISSING = "missing_keys"  # table column: the keys a run's summary lacks
+MISSING = "missing_keys"  # table column: the keys a run's summary lacks (or gives as null)
 
 OK, FAILED, UNFINISHED, NOT_FEASIBLE = "ok", "failed", "missing", "not feasible"
 LISTED_MAX = 5  # runs named per target, in the report and on the terminal
@@ -97,11 +97,12 @@ def read_campaign(folder: Path) -> CampaignFolder:
 
 def run_figures(summary: Mapping[str, Any]) -> dict[str, Any]:
     """The campaign's figures of one summary: each key's value (``None`` where absent; the
-    per-set violations as JSON text) and the absent keys under :data:`MISSING`."""
+    per-set violations as JSON text) and, under :data:`MISSING`, the keys that are absent
+    or null (either way the run has no value for that figure)."""
     row: dict[str, Any] = {key: summary.get(key) for key in KEYS}
     if row[VIOLATIONS_BY_SET] is not None:
         row[VIOLATIONS_BY_SET] = json.dumps(row[VIOLATIONS_BY_SET], sort_keys=True)
-    row[MISSING] = " ".join(key for key in KEYS if key not in summary)
+    row[MISSING] = " ".join(key for key in KEYS if summary.get(key) is None)
     return row
 
 
@@ -125,6 +126,7 @@ def campaign_table(campaign: CampaignFolder) -> pd.DataFrame:
     table[ROUTE_COMPLETED] = table[ROUTE_COMPLETED].astype("boolean")
     for column in (STANDSTILL, MIN_DISTANCE, SPEED, STOPPED):
         table[column] = table[column].astype("Float64")
+    table[MISSING] = table[MISSING].astype(object).fillna("").astype(str)
     return table
 
 
@@ -207,7 +209,7 @@ def check_targets(table: pd.DataFrame) -> list[TargetCheck]:
 
 
 def _check(target: _Target, done: pd.DataFrame) -> TargetCheck:
-    missing = done[done[MISSING].str.split().apply(lambda keys: target.key in keys)]
+    missing = done[_lacks(done, target.key)]
     present = done[done[target.key].notna()]
     values = present[target.key]
     broken = present[target.breaks(values).astype(bool)]
@@ -218,6 +220,11 @@ def _check(target: _Target, done: pd.DataFrame) -> TargetCheck:
     measured = target.measure(values, len(broken)) if len(values) else "no value"
     met = False if offenders else None if len(missing) or present.empty else True
     return TargetCheck(target.label, measured, met, offenders, tuple(missing["key"]))
+
+
+def _lacks(runs: pd.DataFrame, key: str) -> pd.Series:
+    """Per run: whether its summary lacks ``key``."""
+    return runs[MISSING].map(lambda keys: key in keys.split()).astype(bool)
 
 
 # -- tables ----------------------------------------------------------------------------------
@@ -255,7 +262,7 @@ def scenario_rows(table: pd.DataFrame) -> list[dict[str, str]]:
 
 def _figure(done: pd.DataFrame, key: str, how: str) -> str:
     values = done[key].dropna()
-    lacking = int(done[MISSING].str.split().apply(lambda keys: key in keys).sum())
+    lacking = int(_lacks(done, key).sum())
     if values.empty:
         return f"missing ({lacking} runs)" if lacking else "—"
     if how == "not":

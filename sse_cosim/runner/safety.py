@@ -30,7 +30,7 @@ from collections import Counter
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
@@ -51,6 +51,9 @@ from sse_cosim.runner.sweep import (
 from sse_cosim.runner.tasks import TaskOutcome
 from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
 from sse_cosim.scenario.model import Scenario
+
+if TYPE_CHECKING:
+    from sse_cosim.world.roadmap import RoadMap
 
 STEP_OUT_PATH = "pedestrian.steps_onto_crossing_s"
 WALKING_SPEED_PATH = "pedestrian.walking_speed_mps"
@@ -244,12 +247,13 @@ class ActorPlanner:
     """Feasibility by the project's own demand planner, on the real road network.
 
     Each network is built (or found in the cache) once. A scenario is infeasible when the
-    planner refuses it (a ``UserError``: above all, the pedestrian cannot reach the zebra by
-    the step-out time); its reason is the planner's.
+    planner refuses its step-out time (the pedestrian cannot walk to the zebra by then); the
+    reason is the planner's. Any other refusal (a truck off the parking strip) is a mistake
+    in the grid, not a case that cannot happen, and stops the campaign.
     """
 
     def __init__(self) -> None:
-        self._networks: dict[str, tuple[Path, Any]] = {}
+        self._networks: dict[str, tuple[Path, RoadMap]] = {}
 
     def __call__(self, scenario: Scenario, source: str) -> str | None:
         from sse_cosim.world import demand
@@ -258,10 +262,12 @@ class ActorPlanner:
         try:
             demand.plan_actors(scenario, net_path, roadmap, source)
         except UserError as exc:
+            if exc.field != STEP_OUT_PATH:
+                raise
             return exc.problem
         return None
 
-    def _network(self, sources_dir: str) -> tuple[Path, Any]:
+    def _network(self, sources_dir: str) -> tuple[Path, RoadMap]:
         if sources_dir not in self._networks:
             from sse_cosim.world.network import build_network
             from sse_cosim.world.roadmap import load_roadmap

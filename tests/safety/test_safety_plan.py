@@ -80,6 +80,12 @@ def test_the_real_planner_refuses_a_pedestrian_that_cannot_reach_the_zebra(tmp_p
     assert all("cannot be reached" in n.reason for n in plan.not_feasible)
 
 
+def test_other_refusals_of_the_planner_stop_the_campaign(tmp_path):
+    params = PARAMS.replace("values = [186.0, 192.0]", "values = [186.0, 400.0]")
+    with pytest.raises(UserError, match=r"truck.end_pos_m: 400 m does not fit"):
+        plan_campaign(load_campaign(campaign_file(tmp_path, params=params)), ActorPlanner())
+
+
 def test_the_default_campaign_has_at_least_1000_feasible_runs():
     plan = plan_campaign(load_campaign(DEFAULT))
     assert len(plan.runs) == 1245 and len(plan.not_feasible) == 675

@@ -135,18 +135,14 @@ def test_a_missing_key_is_reported_never_filled_in(tmp_path):
     assert "| 0 (2 missing) |" in text  # route not finished, overall
 
 
-@pytest.mark.parametrize("everything_missing", [False, True])
-def test_failed_runs_are_listed_and_keep_the_others(tmp_path, everything_missing):
-    def summaries(i: int, run: PlannedRun) -> dict[str, Any] | None:
-        if i == 0:
-            return None
-        return {} if everything_missing else SAFE
-
-    out = campaign_folder(tmp_path, summaries)
+@pytest.mark.parametrize(("others", "verdict"), [
+    (SAFE, "met"), ({}, "not shown"), (None, "not shown")])
+def test_failed_runs_are_listed_and_keep_the_others(tmp_path, others, verdict):
+    out = campaign_folder(tmp_path, lambda i, run: None if i == 0 else others)
     report = write_safety_report(out)
-    assert [key for key, _ in report.failed] == [
-        pd.read_csv(out / SAFETY_TABLE)["key"].iloc[0]]
+    failed = pd.read_csv(out / SAFETY_TABLE).query("status == 'failed'")["key"]
+    assert [key for key, _ in report.failed] == list(failed)
+    assert len(report.failed) == (48 if others is None else 1)
     assert report.failed[0][1] == "worker died"
-    verdicts = {t.verdict for t in report.targets}
-    assert verdicts == ({"not shown"} if everything_missing else {"met"})
+    assert {t.verdict for t in report.targets} == {verdict}
     assert "worker died" in report.markdown.read_text(encoding="utf-8")
