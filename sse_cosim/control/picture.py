@@ -1,12 +1,30 @@
-"""The bus's situational picture: where the crossing is, what is hidden, where pedestrians may be.
+"""The bus's situational picture: its path, the conflict zones on it, what is hidden, and how
+soon a pedestrian could be in each zone.
 
 Pure geometry on the road map (no SUMO). Distances are measured along the bus's route
 centre line from its front bumper; the *path ahead* is that line widened to half the bus
-width plus ``path_margin_m``.
+width plus a margin.
+
+A **conflict zone** is walkable ground that the bus's body sweeps, widened by a pedestrian's
+radius: the only places where a pedestrian who stays on walkable ground can touch the bus
+(on this road, the zebra). Each zone has an extent ``[start_m, end_m]`` along the route: the
+front bumper reaches it at ``start_m`` and the rear has cleared it at ``end_m + length``.
+
+Every step the picture says, per zone ahead, the **earliest arrival**: the soonest any
+pedestrian can be in the zone. Each known pedestrian's refined region and every walkable
+place where an undetected pedestrian may be grows by the speed bound v (plus twice the
+jitter eps: the region holds the position p = s + e, the path s moves at most v per second,
+and the position strays at most eps from it):
+
+    arrival = max(0, distance(source, zone) - 2 eps) / v.
+
+The straight-line distance never exceeds the walk on walkable ground, so the arrival is an
+under-estimate: sound. The speed policies (:mod:`sse_cosim.control.speed`) decide on it.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
@@ -14,13 +32,27 @@ import numpy as np
 import shapely
 from shapely.ops import substring
 
+from sse_cosim.control.kinematics import BusDynamics
 from sse_cosim.scenario.model import Bus, Controller
 from sse_cosim.world.roadmap import RoadMap
 
 
 @dataclass(frozen=True)
+class ConflictZone:
+    """Walkable ground the bus sweeps (widened by a pedestrian's radius), and its extent along
+    the route (m): the front reaches it at ``start_m``, the rear clears it at ``end_m`` plus
+    the bus's length. ``beyond_arrival_s``: the earliest arrival of a pedestrian from the
+    walkable ground outside the tracked window (always possibly occupied)."""
+
+    polygon: shapely.Geometry
+    start_m: float
+    end_m: float
+    beyond_arrival_s: float
+
+
+@dataclass(frozen=True)
 class SceneContext:
-    """What does not change during a run: the route line, walkable and interesting areas."""
+    """What does not change during a run: the route, walkable ground, the conflict zones."""
 
     route_line: shapely.LineString
     walkable: shapely.Geometry  # sidewalks, walking areas and the crossing
@@ -29,27 +61,35 @@ class SceneContext:
     bus: Bus
     config: Controller
     pedestrian_speed: float  # the estimator's speed bound (m/s)
+    jitter: float  # how far a position strays from its speed-bounded path (m)
+    dynamics: BusDynamics
+    window: shapely.Geometry  # where hidden ground is tracked; outside, it counts as occupied
+    zones: tuple[ConflictZone, ...]
 
     @classmethod
     def build(
         cls, roadmap: RoadMap, route_edges: Sequence[str], bus: Bus, config: Controller,
-        pedestrian_speed: float,
+        pedestrian_speed: float, jitter: float, pedestrian_radius: float, step_length: float,
     ) -> SceneContext:
         """Prepare the static geometry for a bus driving ``route_edges``."""
         route_line = roadmap.route_line(route_edges)
         walkable = shapely.union(roadmap.sidewalks, roadmap.crossing)
         along = [route_line.project(shapely.Point(p)) for p in _boundary_points(roadmap.crossing)]
+        window = roadmap.crossing.buffer(config.interest_radius_m)
+        beyond = shapely.difference(walkable, window)
+        half_width = 0.5 * bus.width_m + pedestrian_radius
+        zones = tuple(
+            ConflictZone(polygon, start, end,
+                         _arrival([beyond], polygon, pedestrian_speed, 2.0 * jitter))
+            for polygon, start, end in _swept_walkable(route_line, walkable, half_width))
         return cls(route_line, walkable, roadmap.crossing, (min(along), max(along)), bus, config,
-                   pedestrian_speed)
+                   pedestrian_speed, jitter, BusDynamics.of(bus, config, step_length), window,
+                   zones)
 
     def reach_radius(self, front_s: float) -> float:
         """How far from the crossing an unseen pedestrian can be and still reach it before the
         bus, keeping its nominal speed, has cleared it; capped by ``interest_radius_m``.
-
-        Farther away, a pedestrian cannot meet a bus at nominal speed on the crossing, so
-        hidden area there is no reason to slow down; nearer, the bus slows so that it can
-        stop for a pedestrian who steps out.
-        """
+        (The paper policy's notion of "near the crossing".)"""
         to_clear = self.crossing_span[1] - front_s + self.bus.length_m
         if to_clear <= 0:
             return 0.0
@@ -71,20 +111,44 @@ class SceneContext:
         braking = speed**2 / (2.0 * self.bus.comfortable_decel_mps2)
         return speed * cfg.reaction_time_s + braking + cfg.stopping_margin_m
 
+    def standstill_clear_time(self, to_clear: float) -> float:
+        """Time (s) the bus needs, starting from standstill at nominal command, to clear a zone
+        whose far end its front must still travel ``to_clear`` metres to pass."""
+        return self.dynamics.travel_time(to_clear, 0.0, self.bus.nominal_speed_mps)
+
+
+@dataclass(frozen=True)
+class ZoneOutlook:
+    """One conflict zone ahead, seen from the bus now (m, s).
+
+    ``to_start_m``: front bumper to the zone (negative once the front is in it);
+    ``to_clear_m``: how far the front must still travel until the rear has cleared it;
+    ``arrival_s``: the earliest time any pedestrian, known or not, can be in it;
+    ``index``: the zone's place in ``SceneContext.zones``.
+    """
+
+    index: int
+    to_start_m: float
+    to_clear_m: float
+    arrival_s: float
+
 
 @dataclass(frozen=True)
 class Picture:
-    """Everything the speed controller decides on, for one step."""
+    """Everything the speed policies decide on, for one step."""
 
     front_s: float  # bus front along its route (m)
+    speed_mps: float  # the bus's actual speed (m/s)
     distance_to_crossing: float  # front to the crossing's near edge (m); negative once on it
     crossing_ahead: bool
-    reach_radius_m: float  # how far from the crossing a pedestrian still matters
+    reach_radius_m: float  # how far from the crossing a pedestrian still matters (paper policy)
     own_occluded_m2: float  # hidden in the bus's own view and possibly holding a pedestrian
     unresolved_occluded_m2: float  # the part of it within the reach radius of the crossing
     pedestrian_near_crossing: bool
     pedestrian_near_path: bool
     pedestrian_in_stopping_distance: bool
+    zones: tuple[ZoneOutlook, ...] = ()  # conflict zones not yet cleared, nearest first
+    path_clear: bool = True  # from standstill the bus would clear every zone before anyone
 
 
 def assess(
@@ -97,9 +161,9 @@ def assess(
 ) -> Picture:
     """The picture at one step.
 
-    ``front_xy`` (2,) is the bus's front bumper; ``own_occluded`` what its sensors' shadows
-    hide inside their fields of view; ``unobserved`` the walkable area where a pedestrian
-    nobody detected may be (every node's views, shared ones included);
+    ``front_xy`` (2,) is the bus's front bumper; ``speed`` its actual speed; ``own_occluded``
+    what its sensors' shadows hide inside their fields of view; ``unobserved`` the walkable
+    area where a pedestrian nobody detected may be (every node's views, shared ones included);
     ``pedestrian_regions`` where each known pedestrian may be.
     """
     cfg = context.config
@@ -113,8 +177,10 @@ def assess(
     near_path = context.path_ahead(front_s, cfg.crossing_horizon_m, cfg.path_margin_m)
     stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0)
     sets = [s for s in pedestrian_regions if not s.is_empty]
+    zones = _outlook(context, front_s, [unobserved, *sets])
     return Picture(
         front_s=float(front_s),
+        speed_mps=float(speed),
         distance_to_crossing=float(to_crossing),
         crossing_ahead=bool(crossing_ahead),
         reach_radius_m=float(reach),
@@ -123,7 +189,46 @@ def assess(
         pedestrian_near_crossing=any(s.intersects(relevant) for s in sets),
         pedestrian_near_path=any(s.intersects(near_path) for s in sets),
         pedestrian_in_stopping_distance=any(s.intersects(stopping) for s in sets),
+        zones=zones,
+        path_clear=all(z.arrival_s > context.standstill_clear_time(z.to_clear_m) for z in zones),
     )
+
+
+def _outlook(context: SceneContext, front_s: float,
+             sources: Sequence[shapely.Geometry]) -> tuple[ZoneOutlook, ...]:
+    """The zones the bus has not yet cleared, with the earliest arrival from ``sources``."""
+    result = []
+    for index, zone in enumerate(context.zones):
+        to_clear = zone.end_m + context.bus.length_m - front_s
+        if to_clear <= 0.0:
+            continue
+        arrival = min(zone.beyond_arrival_s, _arrival(
+            sources, zone.polygon, context.pedestrian_speed, 2.0 * context.jitter))
+        result.append(ZoneOutlook(index, zone.start_m - front_s, to_clear, arrival))
+    return tuple(result)
+
+
+def _arrival(sources: Iterable[shapely.Geometry], zone: shapely.Geometry, speed: float,
+             slack: float) -> float:
+    """Earliest time (s) a pedestrian somewhere in ``sources`` can be in ``zone``."""
+    distances = [shapely.distance(s, zone) for s in sources if not s.is_empty]
+    if not distances:
+        return math.inf
+    return max(0.0, min(distances) - slack) / speed
+
+
+def _swept_walkable(route_line: shapely.LineString, walkable: shapely.Geometry,
+                    half_width: float) -> list[tuple[shapely.Geometry, float, float]]:
+    """Each connected piece of walkable ground within ``half_width`` of the route, with its
+    extent along the route (min and max of its vertices' projections), in route order."""
+    corridor = route_line.buffer(half_width, cap_style="flat")
+    pieces = []
+    for part in shapely.get_parts(shapely.intersection(corridor, walkable)):
+        if part.area <= 0.0:
+            continue
+        along = [route_line.project(shapely.Point(p)) for p in shapely.get_coordinates(part)]
+        pieces.append((part, min(along), max(along)))
+    return sorted(pieces, key=lambda piece: piece[1])
 
 
 def _boundary_points(polygon: shapely.Geometry) -> np.ndarray:

@@ -1,9 +1,18 @@
-"""Speed levels from the situational picture (paper Section IV).
+"""Speed levels from the situational picture: two policies (``controller.policy``).
 
-The paper lists nominal (100 %), cautious "30 %", slow "50 %" and very slow "80 %" of the
-nominal speed. Read as *fractions* the levels would speed up as the danger grows, so we read
-them as *reductions*: cautious 0.7, slow 0.5 and very slow 0.2 of nominal (configurable;
-``docs/controller.md`` discusses the other reading). The rules, most severe first:
+The paper (Section IV) lists nominal (100 %), cautious "30 %", slow "50 %" and very slow
+"80 %" of the nominal speed. Read as *fractions* the levels would speed up as the danger
+grows, so we read them as *reductions*: cautious 0.7, slow 0.5 and very slow 0.2 of nominal
+(configurable; ``docs/controller.md`` discusses the other reading). Both policies use them;
+``stop`` (a comfortable stop) and ``emergency`` (a stop at the emergency deceleration) command
+zero.
+
+``safe`` (the default, :class:`SafePolicy`): the fastest level from which the bus, in every
+conflict zone ahead, either can still stop before the zone, or will be standing before any
+pedestrian can reach it, or will have cleared it before any pedestrian can reach it. The
+guarantee and its assumptions: ``docs/controller.md``.
+
+``paper`` (:func:`paper_level`): the paper's rules, most severe first:
 
 1. a pedestrian region in the swept path within the stopping distance: emergency brake;
 2. a pedestrian region within ``path_margin_m`` of the path ahead: very slow;
@@ -14,16 +23,20 @@ them as *reductions*: cautious 0.7, slow 0.5 and very slow 0.2 of nominal (confi
 
 "Near the crossing" is a reachability radius (``SceneContext.reach_radius``): a hidden place
 matters only if a pedestrian starting there could reach the crossing before the bus, at its
-nominal speed, has cleared it. "Hidden" is what the bus's sensors cannot see and no node
-has seen recently enough (``estimation.occupancy.UnobservedArea``).
+nominal speed, has cleared it.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from enum import IntEnum
 
-from sse_cosim.control.picture import Picture
+from sse_cosim.control.kinematics import BusDynamics
+from sse_cosim.control.picture import Picture, SceneContext, ZoneOutlook
 from sse_cosim.scenario.model import Controller
+
+STANDING_MPS = 1e-3  # below this the bus counts as standing
+SPEED_UP_LOOKAHEAD_S = 1.0  # a faster command must keep its plans this long (no chatter)
 
 
 class SpeedLevel(IntEnum):
@@ -33,47 +46,162 @@ class SpeedLevel(IntEnum):
     CAUTIOUS = 1
     SLOW = 2
     VERY_SLOW = 3
-    EMERGENCY = 4
+    STOP = 4
+    EMERGENCY = 5
 
     @property
     def label(self) -> str:
         return self.name.lower().replace("_", " ")
 
 
-def choose_level(picture: Picture, config: Controller) -> SpeedLevel:
-    """The speed level the rules above give for ``picture``."""
-    if picture.pedestrian_in_stopping_distance:
-        return SpeedLevel.EMERGENCY
-    if picture.pedestrian_near_path:
-        return SpeedLevel.VERY_SLOW
-    hidden_near_crossing = picture.unresolved_occluded_m2 > config.occlusion_threshold_m2
-    if picture.crossing_ahead and (picture.pedestrian_near_crossing or hidden_near_crossing):
-        return SpeedLevel.SLOW
-    if hidden_near_crossing:
-        return SpeedLevel.CAUTIOUS
-    return SpeedLevel.NOMINAL
-
-
-def with_fallback(level: SpeedLevel, inconsistent: bool, config: Controller) -> SpeedLevel:
-    """``level``, made at least ``config.inconsistent_level`` while the picture is inconsistent.
-
-    A flagged source means some node broke its bounds: before the flag (the detection delay)
-    the fused set may have missed the pedestrian, and after it the picture rests on the
-    assumption of a single fault. The floor (default slow, docs/faults.md) covers that; the
-    rules above still apply on top of it.
-    """
-    if not inconsistent:
-        return level
-    return max(level, SpeedLevel[config.inconsistent_level.upper().replace(" ", "_")])
-
-
 def level_speed(level: SpeedLevel, nominal_mps: float, config: Controller) -> float:
-    """Commanded speed (m/s) of a level; an emergency brake commands a stop."""
+    """Commanded speed (m/s) of a level; a stop and an emergency brake command zero."""
     factors = {
         SpeedLevel.NOMINAL: 1.0,
         SpeedLevel.CAUTIOUS: config.cautious_factor,
         SpeedLevel.SLOW: config.slow_factor,
         SpeedLevel.VERY_SLOW: config.very_slow_factor,
+        SpeedLevel.STOP: 0.0,
         SpeedLevel.EMERGENCY: 0.0,
     }
     return nominal_mps * factors[level]
+
+
+def fallback_floor(inconsistent: bool, config: Controller) -> SpeedLevel:
+    """The least severe level allowed: ``config.inconsistent_level`` while the picture is
+    inconsistent, else nominal.
+
+    A flagged source means some node broke its bounds: before the flag (the detection delay)
+    the fused set may have missed the pedestrian, and after it the picture rests on the
+    assumption of a single fault. The floor (default slow, docs/faults.md) covers that.
+    """
+    if not inconsistent:
+        return SpeedLevel.NOMINAL
+    return SpeedLevel[config.inconsistent_level.upper().replace(" ", "_")]
+
+
+def paper_level(picture: Picture, config: Controller, floor: SpeedLevel) -> SpeedLevel:
+    """The level the paper's rules (module docstring) give for ``picture``, at least
+    ``floor``."""
+    if picture.pedestrian_in_stopping_distance:
+        level = SpeedLevel.EMERGENCY
+    elif picture.pedestrian_near_path:
+        level = SpeedLevel.VERY_SLOW
+    else:
+        hidden_near_crossing = picture.unresolved_occluded_m2 > config.occlusion_threshold_m2
+        if picture.crossing_ahead and (picture.pedestrian_near_crossing or hidden_near_crossing):
+            level = SpeedLevel.SLOW
+        elif hidden_near_crossing:
+            level = SpeedLevel.CAUTIOUS
+        else:
+            level = SpeedLevel.NOMINAL
+    return max(level, floor)
+
+
+class PaperPolicy:
+    """The paper's rules (:func:`paper_level`); no state."""
+
+    def __init__(self, config: Controller) -> None:
+        self.config = config
+
+    def decide(self, picture: Picture, floor: SpeedLevel = SpeedLevel.NOMINAL) -> SpeedLevel:
+        return paper_level(picture, self.config, floor)
+
+
+def make_policy(context: SceneContext) -> SafePolicy | PaperPolicy:
+    """The policy ``context.config.policy`` names, for the bus of ``context``."""
+    if context.config.policy == "paper":
+        return PaperPolicy(context.config)
+    return SafePolicy(context.dynamics, context.bus.nominal_speed_mps, context.config)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Why a command is safe for one zone: ``stop`` before it, ``stand`` still before anyone
+    can reach it, or ``pass`` it before anyone can (which commits the bus to its speed)."""
+
+    zone: int
+    kind: str
+    command: float
+
+
+class SafePolicy:
+    """The fastest level that keeps a safe plan for every conflict zone ahead.
+
+    For a candidate command the bus is predicted one step ahead (the command acts over the
+    next step; :data:`SPEED_UP_LOOKAHEAD_S` for a command that speeds the bus up, so that it
+    does not accelerate only to brake at the next step); from there, per zone, one of three
+    plans must hold:
+
+    - **stop** before the zone: the comfortable stopping distance (reaction time included)
+      plus ``stopping_margin_m`` fits before it;
+    - **stand**: a comfortable stop has the bus standing, one step of margin included, before
+      the earliest arrival of any pedestrian in the zone (the bus is stopped before any
+      contact, wherever it stands);
+    - **pass**: holding the command, the rear clears the zone a step before that arrival.
+
+    A pass commits the bus: while it has not cleared the zone, any command at least as fast
+    as the one the pass was proven with stays admissible, since the pedestrians that could
+    reach the zone in time were all inside the sets when it was proven. If no level and no
+    comfortable stop keeps a plan, the bus brakes at the emergency deceleration. Under the
+    assumptions of docs/controller.md, the plans proven at one step stay valid at the next
+    (the comfortable stop of the previous step is still a stop or a stand), so the emergency
+    brake is never needed; it remains as the answer to a broken assumption.
+    """
+
+    def __init__(self, dynamics: BusDynamics, nominal_mps: float, config: Controller) -> None:
+        self.dynamics = dynamics
+        self.nominal = nominal_mps
+        self.config = config
+        self.committed: dict[int, float] = {}  # zone -> the command its pass was proven with
+
+    def decide(self, picture: Picture, floor: SpeedLevel = SpeedLevel.NOMINAL) -> SpeedLevel:
+        """The level for this step (updates the pass commitment)."""
+        candidates = [level for level in SpeedLevel if level < SpeedLevel.EMERGENCY]
+        plans = {level: self._plans(picture, level_speed(level, self.nominal, self.config))
+                 for level in candidates}
+        admissible = [level for level in candidates if plans[level] is not None]
+        allowed = [level for level in admissible if level >= floor]
+        if allowed:
+            chosen = allowed[0]
+        elif admissible:  # only a committed pass is left: hold it, the floor would break it
+            chosen = admissible[-1]
+        else:
+            self.committed = {}
+            return SpeedLevel.EMERGENCY
+        self.committed = {p.zone: p.command for p in plans[chosen] or () if p.kind == "pass"}
+        return chosen
+
+    def _plans(self, picture: Picture, command: float) -> list[Plan] | None:
+        """One plan per zone if ``command`` keeps one for every zone, else None."""
+        if command == 0.0 and picture.speed_mps < STANDING_MPS:
+            return []  # standing still touches nobody
+        dyn = self.dynamics
+        steps = 1 if command <= picture.speed_mps else max(
+            1, round(SPEED_UP_LOOKAHEAD_S / dyn.step))
+        position, speed = 0.0, picture.speed_mps
+        for _ in range(steps):
+            position, speed = dyn.advance(position, speed, command)
+        stand_time = steps * dyn.step + dyn.stopping_time(speed) + dyn.step
+        plans = []
+        for zone in picture.zones:
+            plan = self._zone_plan(zone, picture.speed_mps, command, position, speed, stand_time)
+            if plan is None:
+                return None
+            plans.append(plan)
+        return plans
+
+    def _zone_plan(self, zone: ZoneOutlook, speed_now: float, command: float, position: float,
+                   speed: float, stand_time: float) -> Plan | None:
+        dyn = self.dynamics
+        if position + dyn.stopping_distance(speed) + self.config.stopping_margin_m \
+                <= zone.to_start_m:
+            return Plan(zone.index, "stop", command)
+        if stand_time <= zone.arrival_s:
+            return Plan(zone.index, "stand", command)
+        if dyn.travel_time(zone.to_clear_m, speed_now, command) + dyn.step < zone.arrival_s:
+            return Plan(zone.index, "pass", command)
+        committed = self.committed.get(zone.index)
+        if committed is not None and command >= committed:
+            return Plan(zone.index, "pass", committed)
+        return None

@@ -345,13 +345,16 @@ class BusScreen:
 
     ``own``: pedestrian ids whose own estimate is fused; ``received``: pedestrian id ->
     sender -> the estimates fused (a conflict leaves only their hull, under
-    :data:`HULL_SOURCE`); ``excluded`` / ``conflicts``: pedestrian id -> flagged sources.
+    :data:`HULL_SOURCE`); ``excluded`` / ``conflicts``: pedestrian id -> flagged sources;
+    ``gone``: pedestrians that left the scene (nobody detects them, and every set of them lies
+    where some node looked and saw nobody).
     """
 
     own: frozenset[str] = frozenset()
     received: dict[str, dict[str, Zonotope]] = field(default_factory=dict)
     excluded: dict[str, frozenset[str]] = field(default_factory=dict)
     conflicts: dict[str, frozenset[str]] = field(default_factory=dict)
+    gone: frozenset[str] = frozenset()
 
     def inputs(self, person_id: str, own_estimate: Zonotope | None) -> dict[str, Zonotope]:
         """The sets fused for ``person_id`` by source, given the bus's own estimate of it."""
@@ -380,12 +383,21 @@ class BusScreener:
         own: Mapping[str, Zonotope],
         received: Mapping[str, Mapping[str, Zonotope]],
         clear: Mapping[str, Sequence[ClearRegion]],
+        detected: frozenset[str] = frozenset(),
     ) -> BusScreen:
         """Drop contradicted estimates, then keep each pedestrian's consistent majority.
 
         ``own``: the bus's estimates by pedestrian id; ``received``: pedestrian id -> sender
-        -> estimate at the current step; ``clear``: pedestrian id -> regions seen without it.
+        -> estimate at the current step; ``clear``: pedestrian id -> regions seen without it;
+        ``detected``: pedestrians some node (the bus, or a sender in its newest message)
+        detects now.
+
+        A pedestrian nobody detects whose every estimate is contradicted has left the scene
+        (SUMO removes pedestrians at their destination): under the sensor model it is in
+        none of the places its motion allows, so it is dropped, not flagged. A *detected*
+        pedestrian whose every estimate is contradicted stays, in conflict (a phantom).
         """
+        gone: set[str] = set()
         kept_own: set[str] = set()
         kept: dict[str, dict[str, Zonotope]] = {}
         excluded: dict[str, frozenset[str]] = {}
@@ -395,6 +407,9 @@ class BusScreener:
                 s: received[person_id][s] for s in sorted(received.get(person_id, {}))}
             names = [s for s, z in sources.items() if not self._contradicted(
                 z, clear.get(person_id, ()))]
+            if not names and person_id not in detected:
+                gone.add(person_id)
+                continue
             if not names:  # a phantom, or a real pedestrian placed wrong: keep it, in conflict
                 names, suspects = list(sources), frozenset(sources)
                 chosen = []
@@ -411,7 +426,7 @@ class BusScreener:
                     kept[person_id] = {s: sources[s] for s in chosen if s != BUS_NODE}
             if left_out:
                 excluded[person_id] = left_out
-        return BusScreen(frozenset(kept_own), kept, excluded, conflicts)
+        return BusScreen(frozenset(kept_own), kept, excluded, conflicts, frozenset(gone))
 
     def _contradicted(self, estimate: Zonotope, clear: Sequence[ClearRegion]) -> bool:
         return contradicted(self.model.position_matrix @ estimate, clear, self.model.jitter,

@@ -45,6 +45,25 @@ QUAD_SEGMENTS = 2  # polygon arcs: 2 segments per quarter circle
 ARC_SAFETY = 1.0 / np.cos(np.pi / (4 * QUAD_SEGMENTS))  # makes those arcs circumscribe the disc
 
 
+COARSEN_M = 0.01  # regions are kept as polygons at most this much larger, with few vertices
+COARSEN_ABOVE = 64  # vertices above which a region is coarsened
+
+
+def coarsen(region: shapely.Geometry, tolerance: float = COARSEN_M) -> shapely.Geometry:
+    """A polygon containing ``region`` and within ``2 * tolerance`` of it, with few vertices.
+
+    Repeated dilations and cuts leave regions with thousands of centimetre-long edges. The
+    region is grown by ``tolerance`` (mitred corners: no arcs) and simplified with the same
+    tolerance, which moves no boundary point by more than that, so the result still covers
+    the region; the cover is checked, and the region returned unchanged if it fails.
+    """
+    if region.is_empty or shapely.get_num_coordinates(region) <= COARSEN_ABOVE:
+        return region
+    grown = region.buffer(tolerance, quad_segs=1, join_style="mitre")
+    simple = shapely.simplify(grown, tolerance, preserve_topology=True)
+    return simple if simple.covers(region) else region
+
+
 def dilate(region: shapely.Geometry, distance: float) -> shapely.Geometry:
     """A polygon containing region (+) disc(distance)."""
     if distance <= 0 or region.is_empty:
@@ -61,11 +80,21 @@ class ClearRegion:
 
 
 class OccupancyTracker:
-    """The bus's refined region of every known pedestrian (one polygon each)."""
+    """The bus's refined region of every known pedestrian (one polygon each).
 
-    def __init__(self, model: MotionModel, step_length: float) -> None:
+    With ``walkable`` ground given, each path region is also kept within walkable (+)
+    disc(eps): pedestrians stay on walkable ground (an assumption, docs/controller.md), so a
+    pedestrian who has left every view stays confined to the walkable ground it can have
+    reached since it was last seen, instead of spreading over the road.
+    """
+
+    def __init__(self, model: MotionModel, step_length: float,
+                 walkable: shapely.Geometry | None = None) -> None:
         self.model = model
         self.reach = model.max_speed * step_length
+        self._ground = None if walkable is None else dilate(walkable, model.jitter)
+        if self._ground is not None:
+            shapely.prepare(self._ground)
         self._paths: dict[str, shapely.Geometry] = {}
         self._step: int | None = None
 
@@ -85,6 +114,8 @@ class OccupancyTracker:
             previous = self._paths.get(person_id)
             if previous is not None:
                 path = shapely.intersection(dilate(previous, self.reach * elapsed), path)
+            if self._ground is not None and not self._ground.contains(path):
+                path = shapely.intersection(path, self._ground)
             now_clear = [c.region for c in clear.get(person_id, ()) if c.age == 0]
             for item in clear.get(person_id, ()):
                 # p was outside item.region ``age`` steps ago, within eps + reach*age of s now.
@@ -93,7 +124,7 @@ class OccupancyTracker:
                     continue  # the region cannot touch dilate(path): the cut keeps path whole
                 outside = shapely.difference(dilate(path, slack), item.region)
                 path = shapely.intersection(path, dilate(outside, slack))
-            paths[person_id] = path
+            paths[person_id] = path = coarsen(path)
             region = dilate(path, eps)
             regions[person_id] = shapely.difference(region, shapely.union_all(now_clear)) \
                 if now_clear else region
@@ -157,7 +188,7 @@ class UnobservedArea:
         unseen = shapely.difference(self.walkable, shapely.union_all(seen)) if seen \
             else self.walkable
         moved = shapely.union(dilate(path, self.reach), self._inflow)
-        return self._clip(shapely.intersection(moved, dilate(unseen, self.model.jitter)))
+        return coarsen(self._clip(shapely.intersection(moved, dilate(unseen, self.model.jitter))))
 
     def _clip(self, region: shapely.Geometry) -> shapely.Geometry:
         return region if self._bounds is None else shapely.intersection(region, self._bounds)

@@ -27,7 +27,7 @@ import numpy as np
 import shapely
 
 from sse_cosim.control.picture import Picture, SceneContext, assess
-from sse_cosim.control.speed import SpeedLevel, choose_level, level_speed, with_fallback
+from sse_cosim.control.speed import SpeedLevel, fallback_floor, level_speed, make_policy
 from sse_cosim.estimation.consistency import BusScreen, BusScreener, StepFlags, step_flags
 from sse_cosim.estimation.kalman import KalmanTracker, all_detections
 from sse_cosim.estimation.motion import MotionModel
@@ -36,7 +36,6 @@ from sse_cosim.estimation.occupancy import (
     ClearRegion,
     OccupancyTracker,
     UnobservedArea,
-    dilate,
 )
 from sse_cosim.estimation.shared import fuse_at_bus
 from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
@@ -108,7 +107,6 @@ def simulate(
     )
     observers = {node: NodeObserver(node, model, settings) for node in scenario.node_ids()}
     link = V2XLink(scenario.v2x, v2x_rng)
-    occupancy = OccupancyTracker(model, dt)
     kalman = KalmanTracker(model) if scenario.estimator.filter == "kalman" else None
     specs = specs_from_scenario(scenario)
     faults = FaultInjector(scenario, specs, fault_rng)
@@ -118,12 +116,13 @@ def simulate(
     with SumoWorld(scenario, run_dir, scenario_name) as world:
         context = SceneContext.build(
             world.roadmap, scenario.bus.route_edges, scenario.bus, scenario.controller,
-            model.max_speed,
+            model.max_speed, model.jitter, scenario.pedestrian.radius_m, dt,
         )
-        # the picture asks about hidden ground within interest_radius_m of the crossing only
+        policy = make_policy(context)
+        occupancy = OccupancyTracker(model, dt, context.walkable)
+        # hidden ground is tracked near the crossing; outside the window it counts as occupied
         unobserved = UnobservedArea(
-            context.walkable, model, dt, scenario.v2x.latency_steps,
-            window=dilate(context.crossing, scenario.controller.interest_radius_m),
+            context.walkable, model, dt, scenario.v2x.latency_steps, window=context.window,
         )
         for step in range(n_steps):
             timer.start()
@@ -152,8 +151,10 @@ def simulate(
                 + shared.clear_of(pid)
                 for pid in tracks[BUS_NODE].keys() | shared.estimates.keys()
             }
+            detected = frozenset(pid for pid, t in tracks[BUS_NODE].items() if t.detected) \
+                .union(*shared.detected.values())
             screen = screener.screen({pid: t.estimate for pid, t in tracks[BUS_NODE].items()},
-                                     shared.estimates, clear)
+                                     shared.estimates, clear, detected)
             fused = fuse_at_bus(
                 {pid: tracks[BUS_NODE][pid] for pid in screen.own}, screen.received,
                 scenario.estimator.fusion_method, settings, model,
@@ -161,7 +162,8 @@ def simulate(
             flags = step_flags(specs, tracks, screen,
                                any(m.inconsistent for m in link.latest.values()))
             if flags.inconsistent and not was_inconsistent:
-                occupancy = OccupancyTracker(model, dt)  # its history may hold a faulty source
+                # its history may hold a faulty source
+                occupancy = OccupancyTracker(model, dt, context.walkable)
             was_inconsistent = flags.inconsistent
             timer.lap("sharing_fusion")
             possible = occupancy.update(step, fused, clear)
@@ -183,8 +185,7 @@ def simulate(
                 unknown,
                 list(possible.values()),
             )
-            level = with_fallback(choose_level(picture, scenario.controller), flags.inconsistent,
-                                  scenario.controller)
+            level = policy.decide(picture, fallback_floor(flags.inconsistent, scenario.controller))
             commanded = level_speed(level, scenario.bus.nominal_speed_mps, scenario.controller)
             world.set_bus_speed(commanded, emergency=level is SpeedLevel.EMERGENCY)
             timer.lap("control")

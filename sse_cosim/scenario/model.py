@@ -189,6 +189,12 @@ class Estimator(StrictModel):
 
 
 class Controller(StrictModel):
+    policy: Literal["safe", "paper"] = Field(
+        "safe",
+        description="'safe': the fastest level from which the bus can still stop before, stand "
+        "still before, or pass every conflict zone before any pedestrian can reach it (proof in "
+        "docs/controller.md); 'paper': the rules of the paper's Section IV.",
+    )
     cautious_factor: float = Field(0.7, gt=0, le=1, description="Cautious speed / nominal.")
     slow_factor: float = Field(0.5, gt=0, le=1, description="Slow speed / nominal.")
     very_slow_factor: float = Field(0.2, gt=0, le=1, description="Very slow speed / nominal.")

@@ -1,4 +1,5 @@
-"""Speed levels and the situational picture on the real road map (no SUMO run needed)."""
+"""The paper policy's levels and the situational picture on the real road map (no SUMO run
+needed)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import pytest
 import shapely
 
 from sse_cosim.control.picture import Picture, SceneContext, assess
-from sse_cosim.control.speed import SpeedLevel, choose_level, level_speed
+from sse_cosim.control.speed import SpeedLevel, level_speed, paper_level
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import load_roadmap
@@ -22,11 +23,13 @@ def context() -> SceneContext:
     scenario = load_scenario(SCENARIO)
     roadmap = load_roadmap(build_network(scenario.network.sources_dir))
     return SceneContext.build(roadmap, scenario.bus.route_edges, scenario.bus,
-                              scenario.controller, scenario.estimator.max_pedestrian_speed_mps)
+                              scenario.controller, scenario.estimator.max_pedestrian_speed_mps,
+                              scenario.estimator.position_jitter_m, scenario.pedestrian.radius_m,
+                              scenario.simulation.step_length_s)
 
 
 def picture(**changes) -> Picture:
-    base = dict(front_s=100.0, distance_to_crossing=98.0, crossing_ahead=False,
+    base = dict(front_s=100.0, speed_mps=10.0, distance_to_crossing=98.0, crossing_ahead=False,
                 reach_radius_m=5.0, own_occluded_m2=0.0, unresolved_occluded_m2=0.0,
                 pedestrian_near_crossing=False, pedestrian_near_path=False,
                 pedestrian_in_stopping_distance=False)
@@ -49,13 +52,13 @@ def picture(**changes) -> Picture:
 )
 def test_levels_follow_the_rules_most_severe_first(changes, level):
     config = load_scenario(SCENARIO).controller
-    assert choose_level(picture(**changes), config) is level
+    assert paper_level(picture(**changes), config, SpeedLevel.NOMINAL) is level
 
 
 def test_level_speeds_are_the_configured_reductions():
     config = load_scenario(SCENARIO).controller
     speeds = [level_speed(level, 20.0, config) for level in SpeedLevel]
-    assert speeds == pytest.approx([20.0, 14.0, 10.0, 4.0, 0.0])
+    assert speeds == pytest.approx([20.0, 14.0, 10.0, 4.0, 0.0, 0.0])
 
 
 def test_reach_radius_shrinks_as_the_bus_nears_and_vanishes_once_past(context):
@@ -87,3 +90,37 @@ def test_hidden_area_counts_only_within_reach_of_the_crossing(context):
         result = assess(context, front, 20.0, hidden, hidden, [])
         assert (result.unresolved_occluded_m2 > 1.0) is expected
         assert result.own_occluded_m2 == pytest.approx(hidden.area, rel=1e-6)
+
+
+def test_the_zebra_is_the_one_conflict_zone_on_the_route(context):
+    (zone,) = context.zones
+    start, end = context.crossing_span
+    assert zone.start_m == pytest.approx(start, abs=1e-6)
+    assert zone.end_m == pytest.approx(end, abs=1e-6)
+    # the swept corridor: half the bus plus a pedestrian's radius either side of the lane
+    lane_y = context.route_line.interpolate(start).y
+    half = 0.5 * context.bus.width_m + 0.3
+    assert zone.polygon.bounds[1] == pytest.approx(lane_y - half, abs=1e-6)
+    assert zone.polygon.bounds[3] == pytest.approx(lane_y + half, abs=1e-6)
+
+
+def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
+    start, _ = context.crossing_span
+    front = np.array(context.route_line.interpolate(start - 40.0).coords[0])
+    (zone,) = context.zones
+    south = zone.polygon.bounds[1]
+    pedestrian = shapely.Point(200.0, south - 5.0).buffer(0.5)  # 4.5 m from the zone
+    empty = shapely.Polygon()
+    result = assess(context, front, 10.0, empty, empty, [pedestrian])
+    (outlook,) = result.zones
+    eps = context.jitter
+    assert outlook.arrival_s == pytest.approx((4.5 - 2 * eps) / context.pedestrian_speed,
+                                              abs=1e-3)
+    assert outlook.to_start_m == pytest.approx(40.0, abs=1e-6)
+    assert outlook.to_clear_m == pytest.approx(zone.end_m - zone.start_m + 40.0
+                                               + context.bus.length_m, abs=1e-6)
+    at_zebra = np.array(context.route_line.interpolate(start - 3.0).coords[0])
+    # from standstill the bus needs about 5 s to clear the zebra: 1.6 s is too short
+    assert not assess(context, at_zebra, 0.0, empty, empty, [pedestrian]).path_clear
+    far = shapely.Point(200.0, south - 40.0).buffer(0.5)
+    assert assess(context, at_zebra, 0.0, empty, empty, [far]).path_clear

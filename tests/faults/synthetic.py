@@ -111,7 +111,10 @@ class Harness:
                         if t == k - self.latency}
             clear = self._clear(rng, truth, k) if self.clear_regions else []
             own = {PED: tracks[BUS_NODE][PED].estimate} if PED in tracks[BUS_NODE] else {}
-            screen = screener.screen(own, {PED: received} if received else {}, {PED: clear})
+            detected = frozenset({PED}) if any(PED in d for d in detections.values()) \
+                else frozenset()
+            screen = screener.screen(own, {PED: received} if received else {}, {PED: clear},
+                                     detected)
             fused = fuse_at_bus({pid: tracks[BUS_NODE][pid] for pid in screen.own},
                                 screen.received, "strips", settings, self.model)
             flags = step_flags(self.sensors, tracks, screen, False)

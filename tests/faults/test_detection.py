@@ -143,10 +143,24 @@ def test_a_claim_inside_a_clear_view_is_dropped_or_kept_in_conflict():
     ghost = Zonotope(np.array([0.0, 0.0]), np.eye(2))
     real = Zonotope(np.array([30.0, 0.0]), np.eye(2))
     view = [ClearRegion(shapely.box(-10, -10, 10, 10), 1)]
-    alone = screener.screen({}, {"p": {"rsu1": ghost}}, {"p": view})
+    seen = frozenset({"p"})  # rsu1 reports it as detected
+    alone = screener.screen({}, {"p": {"rsu1": ghost}}, {"p": view}, seen)
     assert alone.conflicts == {"p": {"rsu1"}} and "p" in alone.received
-    beside = screener.screen({"p": real}, {"p": {"rsu1": ghost}}, {"p": view})
+    beside = screener.screen({"p": real}, {"p": {"rsu1": ghost}}, {"p": view}, seen)
     assert beside.excluded == {"p": {"rsu1"}} and beside.own == {"p"}
+
+
+def test_a_pedestrian_nobody_detects_whose_every_set_lies_in_a_clear_view_has_left():
+    """SUMO removed it at its destination: no flag, no fused set, no refined region."""
+    model = MotionModel.from_config(Estimator(), DT)
+    screener = BusScreener(model, 2.5 * DT)
+    ghost = Zonotope(np.array([0.0, 0.0]), np.eye(2))
+    view = [ClearRegion(shapely.box(-10, -10, 10, 10), 0)]
+    screen = screener.screen({"p": ghost}, {"p": {"rsu1": ghost}}, {"p": view})
+    assert screen.gone == {"p"}
+    assert not screen.flags() and not screen.own and not screen.received
+    partly = [ClearRegion(shapely.box(-10, -10, 0.5, 10), 0)]  # part of the set is unseen
+    assert screener.screen({"p": ghost}, {}, {"p": partly}).gone == frozenset()
 
 
 def test_strips_are_about_the_sensor_axes():

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import shapely
 
-from sse_cosim.control.speed import SpeedLevel, with_fallback
+from sse_cosim.control.speed import SpeedLevel, fallback_floor
 from sse_cosim.errors import UserError
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.scenario.loader import load_scenario
@@ -24,8 +24,10 @@ POSE = Pose(212.0, -9.5, np.radians(165.0))
 
 
 def scenario(**faults):
-    """S3 with dotted fault overrides, e.g. ``{"faults.sensor.f.kind": "stuck"}``."""
-    return load_scenario(SCENARIOS / "s3_pedestrian.toml", faults)
+    """S3 with dotted fault overrides, e.g. ``{"faults.sensor.f.kind": "stuck"}``; a fault study
+    that declares the assumptions its faults break."""
+    declared = {"breaks_assumptions": ["sensor_bounds", "shared_estimates"]}
+    return load_scenario(SCENARIOS / "s3_pedestrian.toml", declared | faults)
 
 
 def sensor_fault(kind: str, **fields) -> dict:
@@ -157,13 +159,11 @@ def test_fault_log_measures_the_delay_from_the_first_active_step():
     assert entry["detection_delay_steps"] == 2 and entry["flagged_steps"] == 18
 
 
-def test_fallback_raises_the_level_only_while_inconsistent():
+def test_fallback_floor_applies_only_while_inconsistent():
     config = Controller()
-    assert with_fallback(SpeedLevel.NOMINAL, False, config) is SpeedLevel.NOMINAL
-    assert with_fallback(SpeedLevel.NOMINAL, True, config) is SpeedLevel.SLOW
-    assert with_fallback(SpeedLevel.EMERGENCY, True, config) is SpeedLevel.EMERGENCY
-    assert with_fallback(SpeedLevel.CAUTIOUS, True, Controller(inconsistent_level="very slow")) \
-        is SpeedLevel.VERY_SLOW
+    assert fallback_floor(False, config) is SpeedLevel.NOMINAL
+    assert fallback_floor(True, config) is SpeedLevel.SLOW
+    assert fallback_floor(True, Controller(inconsistent_level="very slow")) is SpeedLevel.VERY_SLOW
 
 
 @pytest.mark.parametrize(("overrides", "field", "words"), [

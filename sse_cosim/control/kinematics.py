@@ -1,0 +1,79 @@
+"""The bus's longitudinal motion as the controller predicts it: pure 1-D kinematics.
+
+SUMO moves a vehicle that follows ``vehicle.setSpeed`` one step at a time (Euler update, its
+default): the speed moves toward the command by at most ``accel * dt`` up or ``decel * dt``
+down, then the position advances by the *new* speed times ``dt``. The controller predicts
+with exactly that update, so its look-ahead and the simulated bus agree step for step.
+
+A comfortable stop starts one step after the command that orders it (the command issued
+now acts over the next step) and is padded by the reaction time: the stopping distance and
+time below are upper bounds of what SUMO's update does (the Euler sum overshoots the
+continuous braking distance ``v^2 / 2b`` by at most ``v dt``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from sse_cosim.scenario.model import Bus, Controller
+
+
+@dataclass(frozen=True)
+class BusDynamics:
+    """Acceleration, decelerations (m/s^2), reaction time and step length (s) of the bus."""
+
+    accel: float
+    decel: float
+    emergency_decel: float
+    reaction_time: float
+    step: float
+
+    @classmethod
+    def of(cls, bus: Bus, controller: Controller, step_length: float) -> BusDynamics:
+        return cls(bus.accel_mps2, bus.comfortable_decel_mps2, bus.emergency_decel_mps2,
+                   controller.reaction_time_s, step_length)
+
+    def next_speed(self, speed: float, command: float) -> float:
+        """The speed after one step under ``command`` (m/s)."""
+        return max(0.0, min(command, speed + self.accel * self.step),
+                   speed - self.decel * self.step)
+
+    def advance(self, position: float, speed: float, command: float) -> tuple[float, float]:
+        """``(position, speed)`` after one step under ``command`` (SUMO's Euler update)."""
+        new_speed = self.next_speed(speed, command)
+        return position + new_speed * self.step, new_speed
+
+    def stopping_distance(self, speed: float) -> float:
+        """Distance (m) a comfortable stop ordered now needs: reaction + braking + one step."""
+        return speed * (self.reaction_time + self.step) + speed * speed / (2.0 * self.decel)
+
+    def emergency_stopping_distance(self, speed: float) -> float:
+        """The same at the emergency deceleration."""
+        return speed * (self.reaction_time + self.step) + speed * speed / (
+            2.0 * self.emergency_decel)
+
+    def stopping_time(self, speed: float) -> float:
+        """Time (s) until a comfortable stop ordered now has the bus standing."""
+        return self.reaction_time + self.step + speed / self.decel
+
+    def travel_time(self, distance: float, speed: float, command: float) -> float:
+        """Time (s) to advance ``distance`` m from ``speed`` while holding ``command``.
+
+        The speed ramps to the command (at ``accel`` or ``decel``), then stays; one step is
+        added for the command to act. Infinite when the bus would stop first.
+        """
+        if distance <= 0.0:
+            return 0.0
+        rate = self.accel if command >= speed else -self.decel
+        ramp_time = (command - speed) / rate if rate else 0.0
+        ramp_distance = (speed + command) * 0.5 * ramp_time
+        if ramp_distance >= distance:
+            # reached during the ramp: distance = speed t + rate t^2 / 2
+            disc = speed * speed + 2.0 * rate * distance
+            if disc < 0.0:
+                return math.inf
+            return self.step + (math.sqrt(disc) - speed) / rate
+        if command <= 0.0:
+            return math.inf
+        return self.step + ramp_time + (distance - ramp_distance) / command
