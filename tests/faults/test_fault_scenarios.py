@@ -84,10 +84,10 @@ def test_fig4_second_camera_keeps_the_node_itself_sound(summaries):
 
 
 @pytest.mark.sumo
-def test_a_single_faulty_sensor_makes_its_node_keep_both_hypotheses(summaries):
+def test_the_bus_near_field_sensor_outvotes_its_biased_front_camera(summaries):
     summary = summaries["s1_bias_bus"]
-    assert summary["containment_violations"] == 0  # the hull holds the pedestrian
-    assert summary["flag_counts"]["bus: conflict"] == summary["faults"][0]["flagged_steps"]
+    assert summary["containment_violations"] == 0
+    assert summary["flag_counts"]["bus_front: left out"] == summary["faults"][0]["flagged_steps"]
 
 
 @pytest.mark.sumo
