@@ -20,7 +20,7 @@ import shapely
 from benchmarks.common import PlainObserver, fuse_inputs, median
 from sse_cosim.control.picture import SceneContext, assess
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea, dilate
+from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea
 from sse_cosim.scenario.model import Bus, Controller, Estimator
 from sse_cosim.sensors import SensorSpec, observe
 from sse_cosim.world.network import build_network
@@ -67,10 +67,10 @@ def measure(pedestrians: int, sensors: int, steps: int, warmup: int, roadmap) ->
     specs = _specs(sensors)
     nodes = sorted({s.node for s in specs.values()})
     observers = {n: PlainObserver(model, config.gain_method) for n in nodes}
-    context = SceneContext.build(roadmap, ["WC", "CE"], Bus(), Controller(), model.max_speed)
-    occupancy = OccupancyTracker(model, DT)
-    unobserved = UnobservedArea(context.walkable, model, DT, 1, window=dilate(
-        context.crossing, context.config.interest_radius_m))  # as in the loop
+    context = SceneContext.build(roadmap, ["WC", "CE"], Bus(), Controller(), model.max_speed,
+                                 model.jitter, 0.3, DT)
+    occupancy = OccupancyTracker(model, DT, context.walkable)  # as in the loop
+    unobserved = UnobservedArea(context.walkable, model, DT, 1, window=context.window)
     people, velocity = _pedestrians(pedestrians, rng)
     inbox: dict[str, tuple[int, dict, shapely.Geometry]] = {}
     samples = []

@@ -24,6 +24,7 @@ FUSED = "fused"
 REFINED = "refined"  # a known pedestrian's zonotope refined with negative information
 UNOBSERVED = "unobserved"  # walkable ground where an undetected pedestrian may be
 STOPPED_SPEED_MPS = 0.1  # the bus counts as stopped below this actual speed
+UNACCOUNTED = "unaccounted"  # a pedestrian in no refined region and not in the unobserved area
 
 
 @dataclass(frozen=True)
@@ -125,6 +126,8 @@ class RunRecorder:
             self._check_region(t, region, truth) if region is not None else None
         )
         self._note_regions(t, result)
+        row["accounted_for"] = self._check_accounted(t, result, truth)
+        row["path_clear"] = result.picture.path_clear
         row["unresolved_occluded_m2"] = result.picture.unresolved_occluded_m2
         row["own_occluded_m2"] = result.picture.own_occluded_m2
         row["distance_to_crossing"] = result.picture.distance_to_crossing
@@ -164,6 +167,20 @@ class RunRecorder:
         inside = bool(shapely.distance(region, shapely.Point(truth)) <= 1e-7)
         if not inside:
             self.violations.append({"t": t, "node": "possible", "truth": truth.tolist()})
+        return inside
+
+    def _check_accounted(self, t: float, result, truth) -> bool | None:
+        """Whether the pedestrian is where the controller looks for pedestrians: inside a
+        refined region (any track's) or the unobserved area, or outside the window where
+        hidden ground is tracked (there every walkable place counts as occupied)."""
+        if truth is None:
+            return None
+        point = shapely.Point(truth)
+        inside = not result.window.contains(point) or any(
+            shapely.distance(region, point) <= 1e-7
+            for region in [result.unobserved, *result.possible.values()])
+        if not inside:
+            self.violations.append({"t": t, "node": UNACCOUNTED, "truth": truth.tolist()})
         return inside
 
     def _note_regions(self, t: float, result) -> None:
@@ -234,6 +251,8 @@ class RunRecorder:
             "contact_steps": sum(contact),
             "route_completed": route_completed,
             "time_stopped_s": round(dt * int(np.sum(speeds < STOPPED_SPEED_MPS)), 6),
+            "longest_standstill_after_clear_s": round(dt * _longest_run(
+                [r["path_clear"] and r["bus_speed"] < STOPPED_SPEED_MPS for r in self.rows]), 6),
             "level_share": {
                 level.label: levels.get(level.label, 0) / max(len(self.rows), 1)
                 for level in SpeedLevel
@@ -301,3 +320,12 @@ def _frame(t, result, local_sets, fused_position, truth) -> SceneFrame:
         truth=None if truth is None else (float(truth[0]), float(truth[1])),
         unobserved=result.unobserved,
     )
+
+
+def _longest_run(flags: list[bool]) -> int:
+    """The most consecutive True values in ``flags``."""
+    longest = current = 0
+    for flag in flags:
+        current = current + 1 if flag else 0
+        longest = max(longest, current)
+    return longest

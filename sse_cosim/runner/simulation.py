@@ -61,6 +61,7 @@ class StepResult:
     tracks: dict[str, dict[str, Track]]  # node -> pedestrian id -> track
     shared: SharedPicture
     unobserved: shapely.Geometry  # walkable area where an undetected pedestrian may be
+    window: shapely.Geometry  # where hidden ground is tracked; outside, all counts as occupied
     fused: dict[str, Zonotope]  # pedestrian id -> fused state set
     possible: dict[str, shapely.Geometry]  # pedestrian id -> fused position set minus clear areas
     picture: Picture
@@ -191,7 +192,8 @@ def simulate(
             timer.lap("control")
             on_step(
                 StepResult(
-                    step, snapshot, observations, tracks, shared, unknown, fused, possible,
+                    step, snapshot, observations, tracks, shared, unknown, context.window,
+                    fused, possible,
                     picture, level, commanded, model, screen, flags, faults.statuses(),
                 )
             )

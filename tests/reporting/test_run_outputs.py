@@ -16,16 +16,27 @@ from sse_cosim.scenario.loader import load_scenario
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "s3_pedestrian.toml"
 
 
-def recorder_with(speeds: list[float], contact: list[bool]) -> RunRecorder:
-    """A recorder whose rows hold the bus's speed and contact flag, every 0.1 s."""
+def recorder_with(speeds: list[float], contact: list[bool],
+                  clear: list[bool] | None = None) -> RunRecorder:
+    """A recorder whose rows hold the bus's speed, contact flag and whether its path was clear
+    (default: always), every 0.1 s."""
     recorder = RunRecorder(load_scenario(SCENARIO))
     recorder.rows = [
         {"t": round(0.1 * i, 6), "bus_x": 2.0 * i, "bus_y": -1.75, "bus_speed": v,
          "level": "nominal", "ped_x": 183.123456789 if i else None, "ped_y": -7.6,
-         "distance_bus_pedestrian": None, "inconsistent": False, "collision": c}
-        for i, (v, c) in enumerate(zip(speeds, contact, strict=True))
+         "distance_bus_pedestrian": None, "inconsistent": False, "collision": c,
+         "path_clear": p}
+        for i, (v, c, p) in enumerate(zip(speeds, contact, clear or [True] * len(speeds),
+                                          strict=True))
     ]
     return recorder
+
+
+def test_longest_standstill_after_clear_counts_stopped_steps_with_a_clear_path_in_a_row():
+    speeds = [0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0]
+    clear = [False, False, True, True, True, True, True, True]
+    summary = recorder_with(speeds, [False] * 8, clear).summary()
+    assert summary["longest_standstill_after_clear_s"] == pytest.approx(0.3)
 
 
 def test_collisions_count_entries_into_contact_and_contact_steps_every_step():

@@ -82,7 +82,8 @@ def test_seeds_are_whole_numbers():
     (S3, NOISE, ["sensors.rsu1_cam.noise_bound_m", "sensors.rsu2_cam.noise_bound_m"]),
     (S2, NOISE, ["sensors.car_front.noise_bound_m"]),
     (S2, "sensors.*.noise_bound_m",
-     ["sensors.bus_front.noise_bound_m", "sensors.car_front.noise_bound_m"]),
+     ["sensors.bus_front.noise_bound_m", "sensors.bus_near.noise_bound_m",
+      "sensors.car_front.noise_bound_m"]),
     (S2, "controller.*_factor",
      ["controller.cautious_factor", "controller.slow_factor", "controller.very_slow_factor"]),
     (S2, "v2x.latency_steps", ["v2x.latency_steps"]),
@@ -95,7 +96,8 @@ def test_a_pattern_that_matches_nothing_names_the_part_and_what_is_there():
     with pytest.raises(UserError) as error:
         expand_pattern("sensors.*_cam.noise_bound_m", fields(S2), "s2.toml")
     assert str(error.value).startswith("s2.toml: sensors.*_cam.noise_bound_m: '*_cam' "
-                                       "matches nothing in sensors (it has: bus_front, car_front)")
+                                       "matches nothing in sensors (it has: bus_front, bus_near, "
+                                       "car_front)")
 
 
 def test_a_plan_crosses_scenarios_values_and_seeds_in_a_fixed_order():
