@@ -27,6 +27,8 @@ from sse_cosim.errors import UserError
 from sse_cosim.files import write_text_atomic
 from sse_cosim.reporting.paper import (
     DIFFERENCE_NOTE,
+    POLICY_TITLES,
+    TABLE1_FILES,
     RunFolder,
     fault_table,
     fig7,
@@ -108,25 +110,33 @@ def _headings(runs: Sequence[RunFolder],
         yield f"sweep{i}", f"Sweep: {_shown(sweep.path)}"
 
 
-def _paper_section(runs: Sequence[RunFolder], out_dir: Path) -> str:
-    if not runs:
-        return ""
-    table = table1(runs)
+def _table1_part(runs: Sequence[RunFolder], out_dir: Path, policy: str) -> list[str]:
+    """Table I and the speed profiles of the runs under ``policy`` (nothing without any)."""
+    table = table1(runs, policy)
+    if table.empty:
+        return []
     marked = {
         (i, "average_speed_mps") for i, row in table.iterrows()
         if pd.notna(row["paper_average_speed"])
         and abs(row["average_speed_mps"] - row["paper_average_speed"])
         > DIFFERENCE_NOTE * row["paper_average_speed"]
     }
+    suffix = TABLE1_FILES[policy]
+    return [f"<h3>{POLICY_TITLES[policy].capitalize()}</h3>", _table(table, marked),
+            _image(out_dir / f"speed_profiles{suffix}.png", "Bus speed profiles (paper Fig. 6)")]
+
+
+def _paper_section(runs: Sequence[RunFolder], out_dir: Path) -> str:
+    if not runs:
+        return ""
     sizes = fig7(runs)
     return "\n".join([
         '<h2 id="table1">Table I: average bus speed</h2>',
-        "<p>Our runs beside the paper's Table I (nominal speed 20 m/s). Highlighted: more "
-        f"than {DIFFERENCE_NOTE:.0%} away from the paper. Each run, with the command that "
+        "<p>Our runs beside the paper's Table I (nominal speed 20 m/s), under each speed "
+        "policy (docs/controller.md), with the speed profiles (paper Fig. 6). Highlighted: "
+        f"more than {DIFFERENCE_NOTE:.0%} away from the paper. Each run, with the command that "
         'reproduces it, is listed under <a href="#runs">Runs</a>.</p>',
-        _table(table, marked),
-        "<h3>Speed profiles (paper Fig. 6)</h3>",
-        _image(out_dir / "speed_profiles.png", "Bus speed profiles"),
+        *(part for policy in TABLE1_FILES for part in _table1_part(runs, out_dir, policy)),
         '<h2 id="fig7">Fig. 7: set sizes at the first shared fusion</h2>',
         _table(sizes) + _image(out_dir / "fig7_set_sizes.png", "Set sizes")
         if not sizes.empty else "<p>No run with a pedestrian and shared estimates.</p>",

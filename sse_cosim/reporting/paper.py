@@ -30,6 +30,8 @@ PAPER_FIG7 = {
     "S3": {"bus": 100.5, "rsu1": 227.5, "rsu2": 227.5, "fused": 170.0},
 }
 DIFFERENCE_NOTE = 0.10  # relative difference above which table1.md flags a figure
+TABLE1_FILES = {"safe": "", "paper": "_paper"}  # policy -> suffix of its Table I files
+POLICY_TITLES = {"safe": "safe policy (the default)", "paper": "the paper's rules"}
 
 
 @dataclass(frozen=True)
@@ -51,6 +53,11 @@ class RunFolder:
     @property
     def label(self) -> str:
         return f"{self.name} {'with' if self.pedestrian else 'without'} pedestrian"
+
+    @property
+    def policy(self) -> str:
+        """The speed policy the run used (``controller.policy``)."""
+        return str(self.scenario.get("controller", {}).get("policy", "safe"))
 
     @property
     def faults(self) -> bool:
@@ -81,10 +88,12 @@ def read_run_folders(folders: Sequence[Path]) -> list[RunFolder]:
     return runs
 
 
-def table1(runs: Sequence[RunFolder]) -> pd.DataFrame:
-    """One row per paper scenario run: our average speed beside the paper's."""
+def table1(runs: Sequence[RunFolder], policy: str = "safe") -> pd.DataFrame:
+    """One row per paper scenario run under ``policy``: our average speed beside the
+    paper's."""
     rows = []
-    paper_runs = [r for r in runs if (r.name, r.pedestrian) in PAPER_TABLE1 and not r.faults]
+    paper_runs = [r for r in runs if (r.name, r.pedestrian) in PAPER_TABLE1 and not r.faults
+                  and r.policy == policy]
     for run in sorted(paper_runs, key=lambda r: (r.name, not r.pedestrian)):
         s = run.summary
         nodes = s["nodes"]
@@ -102,16 +111,20 @@ def table1(runs: Sequence[RunFolder]) -> pd.DataFrame:
             "min_distance_bus_pedestrian_m": _round(s["min_distance_bus_pedestrian_m"]),
             "containment_violations": s["containment_violations"],
             "collisions": s["collisions"],
+            "time_stopped_s": s.get("time_stopped_s"),
+            "emergency_share": round(s["level_share"].get("emergency", 0.0), 4),
         })
     return pd.DataFrame(rows)
 
 
 def fig7(runs: Sequence[RunFolder]) -> pd.DataFrame:
-    """Set areas at the first shared fusion, beside the paper's Fig. 7 values."""
+    """Set areas at the first shared fusion of the paper's scenarios (default policy), beside
+    the paper's Fig. 7 values."""
     rows = []
     for run in runs:
         shared = run.summary.get("first_shared_fusion")
-        if not run.pedestrian or not shared or run.faults:
+        if not run.pedestrian or not shared or run.faults or run.policy != "safe" \
+                or run.name not in PAPER_FIG7:
             continue
         paper = PAPER_FIG7.get(run.name, {})
         areas = {**shared["input_areas_m2"], "fused": shared["fused_area_m2"]}
@@ -144,11 +157,16 @@ def fault_table(runs: Sequence[RunFolder]) -> pd.DataFrame:
 def write_paper_report(out_dir: Path, runs: Sequence[RunFolder]) -> list[Path]:
     """``table1.csv``/``.md``, ``fig7_set_sizes.csv``, combined speed and set-size figures."""
     written = []
-    table = table1(runs)
-    if not table.empty:
-        written.append(_csv(table, out_dir / "table1.csv"))
-        written.append(write_text_atomic(out_dir / "table1.md", table1_markdown(table)))
-        written.append(plots.save_figure(_speed_panels(runs), out_dir / "speed_profiles.png"))
+    for policy, suffix in TABLE1_FILES.items():
+        table = table1(runs, policy)
+        if table.empty:
+            continue
+        written.append(_csv(table, out_dir / f"table1{suffix}.csv"))
+        written.append(write_text_atomic(out_dir / f"table1{suffix}.md",
+                                         table1_markdown(table, policy)))
+        chosen = [r for r in runs if r.policy == policy]
+        written.append(plots.save_figure(_speed_panels(chosen),
+                                         out_dir / f"speed_profiles{suffix}.png"))
     faults = fault_table(runs)
     if not faults.empty:
         written.append(_csv(faults, out_dir / "faults.csv"))
@@ -161,11 +179,12 @@ def write_paper_report(out_dir: Path, runs: Sequence[RunFolder]) -> list[Path]:
     return written
 
 
-def table1_markdown(table: pd.DataFrame) -> str:
+def table1_markdown(table: pd.DataFrame, policy: str = "safe") -> str:
     """Table I as Markdown, with a note wherever our figure differs from the paper's."""
     header = ("| Scenario | Shared awareness | Pedestrian | Sensors | Average speed (m/s) "
               "| Paper | First detection: bus to crossing (m) | Min. distance (m) "
-              "| Violations | Collisions |\n|---|---|---|---|---|---|---|---|---|---|\n")
+              "| Stopped (s) | Violations | Collisions |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|\n")
     lines, notes = [], []
     for row in table.itertuples(index=False):
         tick = lambda flag: "✓" if flag else "–"  # noqa: E731
@@ -173,7 +192,7 @@ def table1_markdown(table: pd.DataFrame) -> str:
             f"| {row.scenario} | {tick(row.shared_awareness)} | {tick(row.pedestrian)} "
             f"| {row.sensors} | {row.average_speed_mps:.1f} | {_fmt(row.paper_average_speed)} "
             f"| {_fmt(row.first_detection_bus_to_crossing_m)} "
-            f"| {_fmt(row.min_distance_bus_pedestrian_m)} "
+            f"| {_fmt(row.min_distance_bus_pedestrian_m)} | {_fmt(row.time_stopped_s)} "
             f"| {row.containment_violations} | {row.collisions} |"
         )
         paper = row.paper_average_speed
@@ -182,7 +201,8 @@ def table1_markdown(table: pd.DataFrame) -> str:
                 f"- {row.scenario} {'with' if row.pedestrian else 'without'} pedestrian: "
                 f"{row.average_speed_mps:.1f} m/s against the paper's {paper:.1f} m/s."
             )
-    text = "# Table I: average bus speed\n\n" + header + "\n".join(lines) + "\n"
+    text = (f"# Table I: average bus speed, {POLICY_TITLES[policy]}\n\n" + header
+            + "\n".join(lines) + "\n")
     if notes:
         text += ("\nWhere our figures differ from the paper's by more than "
                  f"{DIFFERENCE_NOTE:.0%} (see `docs/results.md` for why):\n\n"

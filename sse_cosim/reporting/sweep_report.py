@@ -48,18 +48,23 @@ FIGURES: dict[str, tuple[str, ...]] = {
     "containment_violations": ("containment_violations",),
     "fusion_larger_than_input": ("fusion_larger_than_input",),
     "collisions": ("collisions",),
+    "contact_steps": ("contact_steps",),
+    "time_stopped_s": ("time_stopped_s",),
+    "longest_standstill_after_clear_s": ("longest_standstill_after_clear_s",),
+    "route_completed": ("route_completed",),
     "steps": ("steps",),
 }
-COUNTS = ("containment_violations", "fusion_larger_than_input", "collisions", "steps")
+COUNTS = ("containment_violations", "fusion_larger_than_input", "collisions", "contact_steps",
+          "steps")
 LEVEL_SHARE = "level_share"  # one column per speed level: level_share_<level>
 PLOTTED = (
-    "average_speed_mps", "travel_time_s", "min_distance_bus_pedestrian_m",
+    "average_speed_mps", "time_stopped_s", "travel_time_s", "min_distance_bus_pedestrian_m",
     "first_detection_fused_bus_to_crossing_m", "fused_area_mean_m2", "fused_area_max_m2",
     "containment_violations", "collisions",
 )
 # The short table (terminal, report): figure -> how runs of one combination are combined.
 SUMMARY_COLUMNS = {
-    "average_speed_mps": "mean", "travel_time_s": "mean",
+    "average_speed_mps": "mean", "time_stopped_s": "mean", "travel_time_s": "mean",
     "min_distance_bus_pedestrian_m": "min", "first_detection_fused_bus_to_crossing_m": "mean",
     "fused_area_mean_m2": "mean", "containment_violations": "sum", "collisions": "sum",
 }

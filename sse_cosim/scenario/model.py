@@ -94,11 +94,11 @@ class Pedestrian(StrictModel):
     end_edge: str = Field("CW", description="Edge whose sidewalk it walks to (across the zebra).")
     end_pos_m: NonNegativeFloat = Field(4.0, description="Arrival position along that edge (m).")
     walking_speed_mps: PositiveFloat = Field(
-        1.2, le=3.0, description="Walking speed (m/s); at most estimator.max_pedestrian_speed_mps "
+        1.5, le=3.0, description="Walking speed (m/s); at most estimator.max_pedestrian_speed_mps "
         "unless breaks_assumptions lists 'pedestrian_speed'."
     )
     steps_onto_crossing_s: NonNegativeFloat = Field(
-        14.1, description="Time at which it steps onto the crossing (s). It stands at its start "
+        11.5, description="Time at which it steps onto the crossing (s). It stands at its start "
         "from t = 0 and starts walking in time; a time its walk cannot make is an error."
     )
     radius_m: PositiveFloat = Field(0.3, description="Body radius used for collisions (m).")
@@ -204,9 +204,10 @@ class Controller(StrictModel):
     )
     interest_radius_m: PositiveFloat = Field(
         15.0,
-        description="Largest distance from the crossing at which a hidden pedestrian matters "
-        "(m); nearer, the reach radius (pedestrian speed bound x time for the bus to clear "
-        "the crossing) decides.",
+        description="Radius around the crossing within which hidden walkable ground is tracked "
+        "(m); beyond it every walkable place counts as possibly occupied (the safe policy's "
+        "source farthest out). The paper policy's reach radius (pedestrian speed bound x time "
+        "for the bus to clear the crossing) is capped by it.",
     )
     occlusion_threshold_m2: NonNegativeFloat = Field(
         0.5, description="Unresolved occluded area of interest above which the bus slows (m^2)."
@@ -215,10 +216,11 @@ class Controller(StrictModel):
         1.5, description="Lateral margin around the bus's swept path for 'near the path' (m)."
     )
     reaction_time_s: NonNegativeFloat = Field(
-        0.3, description="Delay added to the braking distance (s)."
+        0.3, description="Delay before a stop acts, added to stopping distances and times (s)."
     )
     stopping_margin_m: NonNegativeFloat = Field(
-        2.0, description="Extra distance kept to a pedestrian set when stopping (m)."
+        2.0, description="Distance kept, when stopping, before a conflict zone (safe policy) or "
+        "a pedestrian set (paper policy) (m)."
     )
     inconsistent_level: Literal["cautious", "slow", "very slow"] = Field(
         "slow",
