@@ -46,3 +46,17 @@ def write_text_atomic(target: str | os.PathLike[str], text: str) -> Path:
 def write_json_atomic(target: str | os.PathLike[str], data: Any) -> Path:
     """Write ``data`` as indented JSON to ``target`` atomically."""
     return write_text_atomic(target, json.dumps(data, indent=2, sort_keys=False) + "\n")
+
+
+def portable_path(path: str | os.PathLike[str], start: str | os.PathLike[str] | None = None) -> str:
+    """``path`` as committed results should record it: relative to ``start`` (default: the
+    current folder, the repository for ``make run``) when it lies below it, else as given.
+
+    Absolute paths of one machine in a results file would change it on every other machine.
+    """
+    base = Path(start if start is not None else Path.cwd()).resolve()
+    target = Path(path)
+    resolved = (target if target.is_absolute() else Path.cwd() / target).resolve()
+    if resolved.is_relative_to(base):
+        return resolved.relative_to(base).as_posix()
+    return str(path)

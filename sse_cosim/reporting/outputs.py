@@ -9,13 +9,14 @@ sweeps) a run writes ``scenario.json`` and ``summary.json`` only.
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
 
-from sse_cosim.files import atomic_path, write_json_atomic, write_text_atomic
+from sse_cosim.files import atomic_path, portable_path, write_json_atomic, write_text_atomic
 from sse_cosim.reporting.recorder import RegionRecord, RunRecorder
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.world.roadmap import RoadMap
@@ -42,7 +43,8 @@ def write_run(
     outcome, which the recorder cannot see).
     """
     out_dir.mkdir(parents=True, exist_ok=True)
-    write_json_atomic(out_dir / SCENARIO, {"source": source, **scenario.model_dump(mode="json")})
+    source = portable_path(source)
+    write_json_atomic(out_dir / SCENARIO, {"source": source, **_portable(scenario, out_dir)})
     if not summary_only:
         # pandas and matplotlib load only here: a sweep's summary-only runs skip ~1 s of imports
         import pandas as pd
@@ -58,6 +60,14 @@ def write_run(
     summary = {"source": source, **recorder.summary(route_completed)}
     write_json_atomic(out_dir / SUMMARY, summary)
     return summary
+
+
+def _portable(scenario: Scenario, out_dir: Path) -> dict:
+    """The resolved scenario with its network folder relative to the run folder, where the
+    loader looks for it (the file that sets it), so that no machine path is recorded."""
+    data = scenario.model_dump(mode="json")
+    data["network"]["sources_dir"] = os.path.relpath(scenario.network.sources_dir, out_dir)
+    return data
 
 
 def region_line(record: RegionRecord) -> str:

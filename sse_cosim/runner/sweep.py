@@ -34,7 +34,7 @@ from typing import Annotated, Any
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from sse_cosim.errors import UserError
-from sse_cosim.files import write_json_atomic
+from sse_cosim.files import portable_path, write_json_atomic
 from sse_cosim.reporting.sweep_report import SWEEP_PLAN
 from sse_cosim.runner.batch import RUNS_FOLDER, scenario_files
 from sse_cosim.runner.executors import ExecutorName, execute
@@ -460,14 +460,15 @@ def plan_document(spec: SweepSpec, runs: Sequence[PlannedRun], command: str,
     """``sweep.json``: how the sweep was made and every planned run (what reports read)."""
     return {
         "command": command,
-        "source": spec.source,
-        "scenarios": [str(s) for s in spec.scenarios],
+        "source": portable_path(spec.source) if spec.source != CLI else spec.source,
+        "scenarios": [portable_path(s) for s in spec.scenarios],
         "seeds": list(spec.seeds) if spec.seeds is not None else None,
         "set": dict(spec.fixed),
         "parameters": [{"column": p.column, "path": p.pattern, "values": list(p.values)}
                        for p in spec.parameters],
         "summary_only": summary_only,
-        "runs": [{"key": r.key, "scenario": Path(r.scenario).stem, "source": r.scenario,
+        "runs": [{"key": r.key, "scenario": Path(r.scenario).stem,
+                  "source": portable_path(r.scenario),
                   "seed": r.seed, "values": r.values, "overrides": r.overrides}
                  for r in runs],
     }

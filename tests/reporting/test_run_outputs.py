@@ -102,3 +102,19 @@ def test_summary_only_writes_no_trace_sets_or_regions(tmp_path):
               summary_only=True)
     assert not any((tmp_path / name).exists() for name in (TRACE, SETS, REGIONS))
     assert json.loads((tmp_path / SUMMARY).read_text())["route_completed"] is False
+
+
+def test_run_folder_records_no_machine_path(tmp_path, monkeypatch):
+    """Paths relative to the current folder (the repository) and to the run folder: a results
+    folder made on another machine is byte for byte the same."""
+    repo = SCENARIO.parents[1]
+    monkeypatch.chdir(repo)
+    out = tmp_path / "run"
+    recorder = recorder_with([20.0], [False])
+    write_run(out, recorder.scenario, recorder, None, str(SCENARIO), True, plots_wanted=False)
+    scenario = json.loads((out / "scenario.json").read_text())
+    assert scenario["source"] == "scenarios/s3_pedestrian.toml"
+    assert json.loads((out / "summary.json").read_text())["source"] == scenario["source"]
+    assert not Path(scenario["network"]["sources_dir"]).is_absolute()
+    sources = (out / scenario["network"]["sources_dir"]).resolve()
+    assert sources == (repo / "sumo_net").resolve()
