@@ -14,9 +14,8 @@ somewhere on walkable ground since the start, so it may not appear later where s
 saw nobody. Its plan is a stop at its start position until its walk starts, then the walk,
 timed so that it steps onto the zebra at ``pedestrian.steps_onto_crossing_s`` (the walking
 distance to the zebra is the rest of its start sidewalk plus the walking area's length, both
-from the network); a time the walk cannot make is an error. The walk starts on the sidewalk's
-centre line (``departPosLat="0"``), where :class:`PedestrianPlan` says the pedestrian stands
-while it waits (SUMO itself draws a waiting person beside the sidewalk).
+from the network); a time the walk cannot make is an error. SUMO draws a waiting person beside
+the sidewalk, so :class:`PedestrianPlan` says where it stands: where its walk will begin.
 
 Every vehicle keeps its speed: a speed above the limit of a lane on its route is an error, as
 SUMO would silently hold the vehicle to the limit.
@@ -45,6 +44,9 @@ PEDESTRIAN_ID = "pedestrian"
 ROLES = {BUS_ID: "bus", TRUCK_ID: "truck", CAR_ID: "car"}
 PARKED_DURATION_S = 1.0e7  # "for ever": the truck's stop outlasts any run
 ROUTE_FILE_NAME = "scenario.rou.xml"
+# SUMO's striping model splits a sidewalk into stripes this wide (its default; the run's
+# configuration sets it, so that standing_point knows where a walk begins)
+STRIPE_WIDTH_M = 0.64
 _EPS = 1e-9  # tolerance of time comparisons in steps
 
 
@@ -147,7 +149,7 @@ def write_route_file(scenario: Scenario, plan: ActorPlan, path: Path) -> Path:
             f'departPos="{_num(ped.start_pos_m)}">\n'
             f"        <stop edge={quoteattr(ped.start_edge)} endPos=\"{_num(ped.start_pos_m)}\" "
             f'until="{_num(p.walk_start_s)}"/>\n'
-            f'        <walk edges={quoteattr(" ".join(p.path))} departPosLat="0" '
+            f'        <walk edges={quoteattr(" ".join(p.path))} '
             f'arrivalPos="{_num(ped.end_pos_m)}"/>\n'
             f"    </person>")))
     entries.sort(key=lambda e: (e[0], e[1]))
@@ -331,16 +333,25 @@ def pedestrian_path(net: sumolib.net.Net, start: str, end: str, crossing: str) -
 
 def standing_point(net: sumolib.net.Net, path: list[str] | tuple[str, ...], start_pos: float,
                    radius: float) -> tuple[float, float]:
-    """Centre (x, y) of a pedestrian of ``radius`` whose walk along ``path`` starts at
-    ``start_pos`` on the centre line of ``path[0]``'s sidewalk (SUMO places a walking person
-    by its front, so the centre lies ``radius`` behind, against the walking direction)."""
-    first = net.getEdge(path[0])
-    lane = next(lane for lane in first.getLanes() if lane.allows("pedestrian"))
-    centre = start_pos - radius if _walks_forward(net, path) else start_pos + radius
+    """Centre (x, y) of a pedestrian of ``radius`` where its walk along ``path`` begins.
+
+    SUMO's striping model lays stripes of :data:`STRIPE_WIDTH_M` across the sidewalk from
+    its left edge and starts a walk on the stripe at the walker's right hand, with the
+    walker's front at ``start_pos``; the centre lies ``radius`` behind, against the walking
+    direction.
+    """
+    lane = next(lane for lane in net.getEdge(path[0]).getLanes() if lane.allows("pedestrian"))
+    forward = _walks_forward(net, path)
+    width = lane.getWidth()
+    stripes = max(1, math.floor(width / STRIPE_WIDTH_M))
+    stripe = stripes - 1 if forward else 0
+    right = (stripe + 0.5) * STRIPE_WIDTH_M - 0.5 * width  # lateral offset, to the lane's right
+    along = start_pos - radius if forward else start_pos + radius
     shape = lane.getShape()
-    scale = sumolib.geomhelper.polyLength(shape) / lane.getLength()  # SUMO's geometry factor
-    x, y = sumolib.geomhelper.positionAtShapeOffset(shape, centre * scale)
-    return float(x), float(y)
+    along *= sumolib.geomhelper.polyLength(shape) / lane.getLength()  # SUMO's geometry factor
+    x, y = sumolib.geomhelper.positionAtShapeOffset(shape, along)
+    angle = sumolib.geomhelper.rotationAtShapeOffset(shape, along)
+    return float(x + right * math.sin(angle)), float(y - right * math.cos(angle))
 
 
 def distance_to_crossing(net: sumolib.net.Net, path: list[str] | tuple[str, ...],

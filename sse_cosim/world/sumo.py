@@ -353,6 +353,7 @@ class SumoWorld:
                 "collision.check-junctions": "true",
                 "pedestrian.model": "striping",
                 "pedestrian.striping.dawdling": "0",
+                "pedestrian.striping.stripe-width": f"{demand.STRIPE_WIDTH_M:g}",
             },
             "report": {"no-step-log": "true", "duration-log.disable": "true",
                        "error-log": LOG_FILE_NAME},

@@ -52,13 +52,20 @@ def test_pedestrian_walk_start_derived_from_crossing_time(net_path: Path) -> Non
     assert plan.crossing_time_s == 20.0
 
 
-def test_pedestrian_stands_on_the_sidewalk_centre_line_behind_its_start(net_path: Path) -> None:
-    sc = scenario("s2_pedestrian")
-    plan = _plan(net_path).pedestrian
+@pytest.mark.parametrize(("overrides", "expected"), [
+    # east on WC's sidewalk (2 m wide, centre line y = -7): on its right-hand stripe, 0.6 m
+    # south of the centre line, the centre a radius behind the front at 184 m
+    ({}, (183.7, -7.6)),
+    # west on CE's sidewalk (from x = 202): its right-hand stripe is CE's first, 0.68 m north
+    ({"pedestrian.start_edge": "CE", "pedestrian.start_pos_m": 20.0,
+      "pedestrian.end_edge": "EC", "pedestrian.end_pos_m": 90.0}, (222.3, -6.32)),
+], ids=["forward", "backward"])
+def test_pedestrian_stands_where_its_walk_begins(net_path: Path, overrides: dict,
+                                                 expected: tuple[float, float]) -> None:
+    plan = _plan(net_path, **{"pedestrian.start_pos_m": 184.0, "pedestrian.radius_m": 0.3,
+                              "pedestrian.steps_onto_crossing_s": 30.0, **overrides}).pedestrian
     assert plan is not None
-    # walking east on WC's sidewalk (y = -7): its centre a radius behind its front
-    assert plan.standing_xy == pytest.approx(
-        (sc.pedestrian.start_pos_m - sc.pedestrian.radius_m, -7.0))
+    assert plan.standing_xy == pytest.approx(expected)
     assert load_roadmap(net_path).sidewalks.contains(shapely.Point(plan.standing_xy))
 
 
@@ -153,6 +160,5 @@ def test_route_file(net_path: Path, tmp_path: Path) -> None:
                                                                        sc.pedestrian.start_pos_m)
     assert float(stop.get("until")) == plan.pedestrian.walk_start_s
     assert walk.get("edges") == "WC :C_w1 :C_c0 :C_w0 CW"
-    assert walk.get("departPosLat") == "0"  # from the sidewalk's centre line: its standing point
     departs = [float(e.get("depart")) for e in root if e.tag in ("vehicle", "person")]
     assert departs == sorted(departs)

@@ -106,13 +106,20 @@ def test_pedestrian_walks_over_the_zebra(name: str,
     assert max(p.speed for _, p in tracks) == pytest.approx(sc.pedestrian.walking_speed_mps)
 
 
-def test_pedestrian_waits_at_its_start_until_its_walk_starts(tmp_path: Path) -> None:
+@pytest.mark.parametrize("overrides", [
+    {},
+    {"pedestrian.start_edge": "CE", "pedestrian.start_pos_m": 14.0, "pedestrian.end_edge": "EC",
+     "pedestrian.end_pos_m": 90.0, "truck.present": False},
+], ids=["east along WC", "west along CE"])
+def test_pedestrian_waits_at_its_start_until_its_walk_starts(overrides: dict,
+                                                             tmp_path: Path) -> None:
     """It exists from t=0, stands still at its start until its walk starts, walks on from
-    there without a jump, and steps onto the crossing at the configured time."""
+    there without a jump, and steps onto the crossing at the configured time (both walking
+    along its start edge and against it)."""
     sc = scenario("s1_pedestrian", **{"pedestrian.start_pos_m": 184.0,
                                       "pedestrian.walking_speed_mps": 1.2,
                                       "pedestrian.steps_onto_crossing_s": 20.0,
-                                      "simulation.duration_s": 21.0})
+                                      "simulation.duration_s": 21.0, **overrides})
     run = run_world(sc, tmp_path)
     plan = run.pedestrian_plan
     assert plan.walk_start_s == pytest.approx(5.9)  # 20 s - 16.82 m / 1.2 m/s, on the grid
@@ -124,9 +131,10 @@ def test_pedestrian_waits_at_its_start_until_its_walk_starts(tmp_path: Path) -> 
     assert all(p.speed == 0.0 and not p.on_crossing for p in waiting)
     assert run.roadmap.sidewalks.contains(shapely.Point(plan.standing_xy))
     walking = [p for t, p in track if t > plan.walk_start_s + 1e-9]
-    assert walking[0].position != plan.standing_xy and walking[0].speed > 0
     step = sc.pedestrian.walking_speed_mps * sc.simulation.step_length_s
-    assert math.dist(plan.standing_xy, walking[0].position) < 1.5 * step  # walks on, no jump
+    # it walks on from where it stood: one step along the sidewalk, no sideways jump
+    assert math.dist(plan.standing_xy, walking[0].position) == pytest.approx(step)
+    assert walking[0].position[1] == pytest.approx(plan.standing_xy[1])
     on = [t for t, p in track if p.on_crossing]
     assert on[0] == pytest.approx(20.0, abs=STEPS_EARLY)
 
