@@ -260,13 +260,14 @@ class RunRecorder:
         }
 
     def _fault_summary(self) -> list[dict[str, Any]]:
-        """Per injected fault its detection, and the fused/refined sets' containment
-        violations from its detection on."""
+        """Per injected fault its detection, and the violations of the fused set, the refined
+        region and the accounting of the pedestrian from its detection on."""
         entries = self.faults.summary()
         for entry in entries:
             since = entry["detected_t"]
             entry["fused_violations_after_detection"] = None if since is None else sum(
-                v["node"] in (FUSED, "possible") and v["t"] >= since for v in self.violations)
+                v["node"] in (FUSED, "possible", UNACCOUNTED) and v["t"] >= since
+                for v in self.violations)
         return entries
 
     def _area_stats(self) -> dict[str, dict[str, float]]:

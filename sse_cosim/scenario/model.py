@@ -29,7 +29,10 @@ class StrictModel(BaseModel):
 
 class Simulation(StrictModel):
     duration_s: PositiveFloat = Field(30.0, description="Simulated time in seconds.")
-    step_length_s: PositiveFloat = Field(0.1, le=1.0, description="SUMO step length in seconds.")
+    step_length_s: PositiveFloat = Field(
+        0.1, ge=0.001, le=1.0, description="SUMO step length in seconds (SUMO's resolution is "
+        "1 ms)."
+    )
     seed: int = Field(1, ge=0, description="Seed of SUMO and of every random draw (noise, V2X).")
 
 

@@ -97,7 +97,8 @@ def test_a_stuck_camera_is_caught_at_the_bus_and_left_out(summaries):
     assert fault["detected_step"] is not None
     assert fault["first_beyond_bounds_step"] > fault["first_active_step"]  # it drifts out
     assert fault["fused_violations_after_detection"] == 0
-    assert set(summary["containment_violations_by_set"]) <= {"rsu1", "fused", "possible"}
+    assert set(summary["containment_violations_by_set"]) <= {"rsu1", "fused", "possible",
+                                                              "unaccounted"}
 
 
 @pytest.mark.sumo

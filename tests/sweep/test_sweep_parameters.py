@@ -159,7 +159,7 @@ def test_the_example_sweep_file_loads():
     spec = load_sweep_file(ROOT / "sweeps" / "noise.toml")
     assert [p.stem for p in spec.scenarios] == ["s2_pedestrian", "s3_pedestrian"]
     assert spec.parameters[0].column == "shared_noise_bound_m"
-    assert len(plan_sweep(spec)) == 12
+    assert len(plan_sweep(spec)) == 16
 
 
 @pytest.mark.parametrize(("text", "message"), [
