@@ -10,6 +10,7 @@ from __future__ import annotations
 import cProfile
 import io
 import pstats
+import sysconfig
 import tempfile
 import time
 from pathlib import Path
@@ -59,14 +60,19 @@ def cosim(scenario: Scenario, folder: Path) -> tuple[float, dict[str, float], in
 
 
 def profile_run(scenario: Scenario, folder: Path, top: int = 15) -> str:
-    """cProfile of one full run: the functions with the largest cumulative time."""
+    """cProfile of one full run: the functions with the largest cumulative time (file paths
+    relative to the Python environment or the current folder: no machine path)."""
     profiler = cProfile.Profile()
     profiler.enable()
     simulate(scenario, folder, "profile", RunRecorder(scenario))
     profiler.disable()
     out = io.StringIO()
     pstats.Stats(profiler, stream=out).sort_stats("cumulative").print_stats(top)
-    lines = [line for line in out.getvalue().splitlines() if line.strip()]
+    text = out.getvalue()
+    for prefix in sorted({sysconfig.get_paths()["purelib"], str(Path.cwd())}, key=len,
+                         reverse=True):
+        text = text.replace(prefix + "/", "")
+    lines = [line for line in text.splitlines() if line.strip()]
     start = next(i for i, line in enumerate(lines) if "ncalls" in line)
     return "\n".join(lines[start:])
 

@@ -27,7 +27,7 @@ def markdown(r: dict) -> str:
     lines = [
         "# Benchmarks",
         "",
-        f"Produced by `{r['command']}` on {r['date']} in {r['total_seconds']:.0f} s.",
+        f"Produced by `{r['command']}` in {r['total_seconds']:.0f} s.",
         "",
         f"Machine: {m['cpu']}, {m['cores']} cores; Python {m['python']}, SUMO {m['sumo']}, "
         f"numpy {m['numpy']}, scipy {m['scipy']}, shapely {m['shapely']}, cvxpy {m['cvxpy']} "

@@ -11,7 +11,6 @@ import json
 import sys
 import time
 from collections.abc import Callable
-from datetime import UTC, datetime
 from pathlib import Path
 
 from benchmarks import (
@@ -43,7 +42,6 @@ def run_all(out: Path, quick: bool = False, log: Callable[[str], None] = print,
     started = time.perf_counter()
     results: dict = {
         "command": command + (" --quick" if quick else ""),
-        "date": datetime.now(UTC).isoformat(timespec="seconds"),
         "machine": machine(),
         "quick": quick,
         "targets": TARGETS,

@@ -36,6 +36,7 @@ from sse_cosim.reporting.paper import (
     table1,
     write_paper_report,
 )
+from sse_cosim.reporting.safety_report import SAFETY_PLAN
 from sse_cosim.reporting.sweep_report import (
     PLOTTED,
     SweepFolder,
@@ -77,8 +78,10 @@ def write_report(folders: Sequence[Path], out_dir: Path, command: str) -> list[P
 
 
 def single_runs(folders: Sequence[Path], sweeps: Sequence[SweepFolder]) -> list[RunFolder]:
-    """Finished runs under ``folders`` that belong to no sweep, each once."""
-    roots = [sweep.path.resolve() for sweep in sweeps]
+    """Finished runs under ``folders`` that belong to no sweep and no safety campaign (which
+    have reports of their own), each once."""
+    campaigns = [plan.parent for root in folders for plan in Path(root).rglob(SAFETY_PLAN)]
+    roots = [folder.resolve() for folder in [*(sweep.path for sweep in sweeps), *campaigns]]
     unique = {run.path.resolve(): run for run in read_run_folders(folders)}
     return [run for path, run in unique.items()
             if not any(path.is_relative_to(root) for root in roots)]

@@ -24,6 +24,7 @@ PAPER_TABLE1 = {
     ("S2", True): 13.1, ("S2", False): 20.0,
     ("S3", True): 13.2, ("S3", False): 20.0,
 }
+PAPER_SCENARIOS = frozenset(name for name, _ in PAPER_TABLE1)
 # Paper Fig. 7: zonotope areas when the shared estimates are first fused (with pedestrian).
 PAPER_FIG7 = {
     "S2": {"bus": 50.3, "car": 123.1, "fused": 94.0},
@@ -227,7 +228,8 @@ def _faults_markdown(faults: pd.DataFrame) -> str:
 
 
 def _speed_panels(runs: Sequence[RunFolder]):
-    paper = sorted((r for r in runs if not r.faults), key=lambda r: r.name)
+    paper = sorted((r for r in runs if not r.faults and r.name in PAPER_SCENARIOS),
+                   key=lambda r: r.name)
     with_ped = {r.label: r.trace() for r in paper if r.pedestrian}
     without = {r.label: r.trace() for r in paper if not r.pedestrian}
     return plots.speed_panels(with_ped, without)

@@ -1,0 +1,23 @@
+"""Which finished runs the report treats as single runs (Table I, Fig. 7, run list)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from sse_cosim.reporting.html import single_runs
+
+
+def finished_run(folder: Path) -> Path:
+    folder.mkdir(parents=True)
+    (folder / "summary.json").write_text(json.dumps({"scenario": "S1", "pedestrian": True}))
+    (folder / "scenario.json").write_text(json.dumps({"name": "S1"}))
+    return folder
+
+
+def test_runs_of_a_safety_campaign_are_not_single_runs(tmp_path):
+    plain = finished_run(tmp_path / "runs" / "s1_pedestrian")
+    campaign = tmp_path / "safety"
+    finished_run(campaign / "runs" / "s1_pedestrian__step_s=9__seed1__abc")
+    (campaign / "safety.json").write_text("{}")
+    assert [run.path for run in single_runs([tmp_path], [])] == [plain]
