@@ -10,6 +10,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from sse_cosim.errors import UserError
+
 
 @contextlib.contextmanager
 def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
@@ -60,3 +62,13 @@ def portable_path(path: str | os.PathLike[str], start: str | os.PathLike[str] | 
     if resolved.is_relative_to(base):
         return resolved.relative_to(base).as_posix()
     return str(path)
+
+
+def read_plan(path: Path, command: str) -> dict[str, Any]:
+    """The JSON plan a command wrote (``sweep.json``, ``safety.json``); a one-line error
+    naming ``command`` when it is missing or broken."""
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise UserError(str(path), "", f"cannot be read ({exc})",
+                        f"name a folder written by `{command}`") from None

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from sse_cosim.cli.main import cli
-from sse_cosim.cli.options import OUT_HELP, WORKERS_HELP, check_scheduler, writable_folder
+from sse_cosim.cli.options import OUT_HELP, check_scheduler, execution_options, writable_folder
 
 
 @cli.command()
@@ -40,11 +40,7 @@ def run(scenario: Path, out_dir: Path | None, scene_times: tuple[float, ...],
 @click.argument("paths", nargs=-1, type=click.Path(path_type=Path))
 @click.option("--out", "out_dir", type=click.Path(path_type=Path, file_okay=False),
               default=Path("results"), show_default=True, help=OUT_HELP)
-@click.option("--workers", type=click.IntRange(min=1), default=None, help=WORKERS_HELP)
-@click.option("--executor", type=click.Choice(["local", "dask"]), default="local",
-              show_default=True, help="Where runs execute.")
-@click.option("--scheduler", default=None, help="Dask scheduler address (tcp://host:port).")
-@click.option("--resume", is_flag=True, help="Skip scenarios whose run folder is complete.")
+@execution_options("Skip scenarios whose run folder is complete.")
 @click.option("--scene-at", "scene_times", type=float, multiple=True,
               help="Also draw every scene at this time (s); repeatable.")
 def batch(paths: tuple[Path, ...], out_dir: Path, workers: int | None, executor: str,

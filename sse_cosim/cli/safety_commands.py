@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from sse_cosim.cli.main import cli
-from sse_cosim.cli.options import WORKERS_HELP, check_scheduler, writable_folder
+from sse_cosim.cli.options import check_scheduler, execution_options, writable_folder
 from sse_cosim.cli.sweep_commands import RunsFailed
 
 EXIT_TARGET_MISSED = 4
@@ -31,14 +31,7 @@ class TargetsMissed(click.ClickException):
 @click.option("--out", "out_dir", type=click.Path(path_type=Path, file_okay=False),
               default=None, help=f"Campaign folder (created if missing; default {OUT}, "
                                  f"{QUICK_OUT} with --quick). The report goes beside it.")
-@click.option("--workers", type=click.IntRange(min=1), default=None, help=WORKERS_HELP)
-@click.option("--executor", type=click.Choice(["local", "dask"]), default="local",
-              show_default=True, help="Where runs execute.")
-@click.option("--scheduler", default=None,
-              help="Dask scheduler address (tcp://host:port); default: a local cluster of "
-                   "--workers single-threaded processes.")
-@click.option("--resume", is_flag=True,
-              help="Keep finished runs; redo failed and unfinished ones.")
+@execution_options("Keep finished runs; redo failed and unfinished ones.")
 @click.option("--quick", is_flag=True,
               help="Only the few runs of the file's [quick] table (a check that it works).")
 def safety(campaign_file: Path, out_dir: Path | None, workers: int | None, executor: str,

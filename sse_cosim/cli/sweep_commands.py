@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from sse_cosim.cli.main import EXIT_SIMULATION_FAILED, cli
-from sse_cosim.cli.options import OUT_HELP, WORKERS_HELP, check_scheduler, writable_folder
+from sse_cosim.cli.options import OUT_HELP, check_scheduler, execution_options, writable_folder
 
 SUMMARY_ROWS_MAX = 40  # above this, the terminal summary combines runs per scenario only
 
@@ -34,14 +34,7 @@ class RunsFailed(click.ClickException):
               help="A fixed override for every run, e.g. --set simulation.duration_s=20.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path, file_okay=False),
               default=Path("results/sweep"), show_default=True, help=OUT_HELP)
-@click.option("--workers", type=click.IntRange(min=1), default=None, help=WORKERS_HELP)
-@click.option("--executor", type=click.Choice(["local", "dask"]), default="local",
-              show_default=True, help="Where runs execute.")
-@click.option("--scheduler", default=None,
-              help="Dask scheduler address (tcp://host:port); default: a local cluster of "
-                   "--workers single-threaded processes.")
-@click.option("--resume", is_flag=True,
-              help="Keep finished runs; redo failed and unfinished ones.")
+@execution_options("Keep finished runs; redo failed and unfinished ones.")
 @click.option("--summaries-only", "summary_only", is_flag=True,
               help="Runs write summary.json and scenario.json only (no trace, sets or "
                    "plots): for large sweeps.")

@@ -25,8 +25,7 @@ import pandas as pd
 from matplotlib import pyplot as plt
 from matplotlib.figure import Figure
 
-from sse_cosim.errors import UserError
-from sse_cosim.files import atomic_path, write_text_atomic
+from sse_cosim.files import atomic_path, read_plan, write_text_atomic
 from sse_cosim.reporting import plots
 from sse_cosim.runner.batch import RUNS_FOLDER
 from sse_cosim.runner.tasks import RunTask, TaskOutcome, finished_outcome
@@ -87,12 +86,7 @@ class CampaignFolder:
 
 def read_campaign(folder: Path) -> CampaignFolder:
     """The campaign in ``folder`` (its ``safety.json``)."""
-    try:
-        plan = json.loads((folder / SAFETY_PLAN).read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
-        raise UserError(str(folder / SAFETY_PLAN), "", f"cannot be read ({exc})",
-                        "name a folder written by `sse-cosim safety`") from None
-    return CampaignFolder(folder, plan)
+    return CampaignFolder(folder, read_plan(folder / SAFETY_PLAN, "sse-cosim safety"))
 
 
 def run_figures(summary: Mapping[str, Any]) -> dict[str, Any]:

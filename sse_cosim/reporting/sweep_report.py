@@ -22,8 +22,7 @@ import pandas as pd
 from matplotlib import pyplot as plt
 from matplotlib.figure import Figure
 
-from sse_cosim.errors import UserError
-from sse_cosim.files import atomic_path
+from sse_cosim.files import atomic_path, read_plan
 from sse_cosim.reporting import plots
 from sse_cosim.runner.batch import RUNS_FOLDER
 from sse_cosim.runner.tasks import RunTask, TaskOutcome, finished_outcome
@@ -101,12 +100,7 @@ class SweepFolder:
 
 def read_sweep(folder: Path) -> SweepFolder:
     """The sweep in ``folder`` (its ``sweep.json``)."""
-    try:
-        plan = json.loads((folder / SWEEP_PLAN).read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
-        raise UserError(str(folder / SWEEP_PLAN), "", f"cannot be read ({exc})",
-                        "name a folder written by `sse-cosim sweep`") from None
-    return SweepFolder(folder, plan)
+    return SweepFolder(folder, read_plan(folder / SWEEP_PLAN, "sse-cosim sweep"))
 
 
 def find_sweeps(folders: Sequence[Path]) -> list[SweepFolder]:
