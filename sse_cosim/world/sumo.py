@@ -52,6 +52,7 @@ import contextlib
 import io
 import logging
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -345,7 +346,10 @@ class SumoWorld:
                                          self.run_dir / demand.ROUTE_FILE_NAME)
         sim = self.scenario.simulation
         options = {
-            "input": {"net-file": str(self._net_path.resolve()), "route-files": routes.name},
+            # relative to this file, where SUMO resolves it: no machine path in a results folder
+            "input": {"net-file": os.path.relpath(self._net_path.resolve(),
+                                                  self.run_dir.resolve()),
+                      "route-files": routes.name},
             "time": {"begin": "0", "step-length": f"{sim.step_length_s:.10g}"},
             "processing": {
                 "time-to-teleport": "-1",
