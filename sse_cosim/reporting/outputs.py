@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import shapely
 
-from sse_cosim.files import atomic_path, portable_path, write_json_atomic, write_text_atomic
+from sse_cosim.files import atomic_path, write_json_atomic, write_text_atomic
 from sse_cosim.reporting.recorder import RegionRecord, RunRecorder
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.world.roadmap import RoadMap
@@ -43,7 +43,6 @@ def write_run(
     outcome, which the recorder cannot see).
     """
     out_dir.mkdir(parents=True, exist_ok=True)
-    source = portable_path(source)
     write_json_atomic(out_dir / SCENARIO, {"source": source, **_portable(scenario, out_dir)})
     if not summary_only:
         # pandas and matplotlib load only here: a sweep's summary-only runs skip ~1 s of imports

@@ -6,6 +6,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from sse_cosim.files import portable_path
 from sse_cosim.reporting.outputs import write_run
 from sse_cosim.reporting.recorder import RunRecorder
 from sse_cosim.runner.simulation import simulate
@@ -34,7 +35,11 @@ def run_scenario(
     plots: bool = True,
     summary_only: bool = False,
 ) -> dict:
-    """Simulate ``scenario`` (read from ``source``) and write its outputs to ``out_dir``."""
+    """Simulate ``scenario`` (read from ``source``) and write its outputs to ``out_dir``.
+
+    ``source`` is recorded (and named in messages) relative to the current folder where it
+    lies below it, so that a results folder holds no machine path."""
+    source = portable_path(source)
     recorder = RunRecorder(scenario, tuple(scene_times))
     info = simulate(scenario, out_dir / "sumo", source, recorder)
     return write_run(out_dir, scenario, recorder, info.roadmap, source, info.bus_arrived, plots,

@@ -31,6 +31,7 @@ def run(request, tmp_path_factory) -> tuple[dict, pd.DataFrame]:
     summary = run_scenario_file(SCENARIOS / f"{scenario}_pedestrian.toml", out, overrides,
                                 plots=False)
     assert json.loads((out / "summary.json").read_text()) == json.loads(json.dumps(summary))
+    assert summary["source"] == f"scenarios/{scenario}_pedestrian.toml"  # no machine path
     return summary, pd.read_csv(out / "trace.csv")
 
 
