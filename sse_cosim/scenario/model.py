@@ -127,7 +127,8 @@ class Sensor(StrictModel):
         (0.5, 0.5), description="Noise bounds r (m) along the sensor's forward and lateral axes."
     )
     noise: Literal["uniform", "worst-case"] = Field(
-        "uniform", description="Uniform within the bound, or on the bound (worst case)."
+        "uniform", description="'uniform': uniform within the bound; 'worst-case': on the bound "
+        "(either sign)."
     )
 
 
