@@ -11,6 +11,14 @@ from sse_cosim.errors import SimulationError, UserError
 
 EXIT_BAD_INPUT = 2
 EXIT_SIMULATION_FAILED = 3
+EXIT_TARGET_MISSED = 4
+
+
+class TargetsMissed(click.ClickException):
+    """A run broke the guarantee (a collision, a containment violation) without declaring a
+    broken assumption, or a safety target is missed or not shown."""
+
+    exit_code = EXIT_TARGET_MISSED
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})

@@ -7,20 +7,13 @@ from pathlib import Path
 
 import click
 
-from sse_cosim.cli.main import cli
+from sse_cosim.cli.main import TargetsMissed, cli
 from sse_cosim.cli.options import check_scheduler, execution_options, writable_folder
 from sse_cosim.cli.sweep_commands import RunsFailed
 
-EXIT_TARGET_MISSED = 4
 CAMPAIGN_FILE = Path("sweeps/safety.toml")
 OUT = Path("results/safety")
 QUICK_OUT = Path("results/safety-quick")
-
-
-class TargetsMissed(click.ClickException):
-    """A safety target is missed or not shown: the campaign does not prove the claim."""
-
-    exit_code = EXIT_TARGET_MISSED
 
 
 @cli.command()

@@ -10,7 +10,6 @@ import pandas as pd
 import pytest
 
 from sse_cosim.cli.main import main
-from sse_cosim.cli.safety_commands import EXIT_TARGET_MISSED
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -30,7 +29,7 @@ def test_quick_runs_writes_the_report_and_says_which_targets_hold(tmp_path):
         [sys.executable, "-m", "sse_cosim", "safety", "--quick", "--out", str(out),
          "--workers", "2"],
         capture_output=True, text=True, cwd=ROOT, check=False, timeout=120)
-    assert proc.returncode in (0, EXIT_TARGET_MISSED), proc.stderr
+    assert proc.returncode == 0, proc.stderr  # every target met on the quick runs
     table = pd.read_csv(out / "safety.csv")
     assert table["status"].value_counts().to_dict() == {"ok": 2, "not feasible": 2}
     assert len(list((out / "runs").iterdir())) == 2
@@ -42,9 +41,4 @@ def test_quick_runs_writes_the_report_and_says_which_targets_hold(tmp_path):
     report = (tmp_path / "safety.md").read_text(encoding="utf-8")
     assert f"Made by `sse-cosim safety --out {out} --quick`" in report
     assert "cannot be reached" in report  # the planner's reason for those not run
-    lines = proc.stdout.strip().splitlines()
-    if proc.returncode == EXIT_TARGET_MISSED:
-        assert lines[-1].startswith(("MISSED", "NOT SHOWN"))
-        assert "safety target(s) not met" in proc.stderr
-    else:
-        assert report.count("| met |") == 4
+    assert report.count("| met |") == 4
