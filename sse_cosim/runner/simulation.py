@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -120,7 +121,8 @@ def simulate(
             model.max_speed, model.jitter, scenario.pedestrian.radius_m, dt,
         )
         policy = make_policy(context)
-        occupancy = OccupancyTracker(model, dt, context.walkable)
+        new_occupancy = partial(OccupancyTracker, model, dt, context.walkable)
+        occupancy = new_occupancy()
         # hidden ground is tracked near the crossing; outside the window it counts as occupied
         unobserved = UnobservedArea(
             context.walkable, model, dt, scenario.v2x.latency_steps, window=context.window,
@@ -163,8 +165,7 @@ def simulate(
             flags = step_flags(specs, tracks, screen,
                                any(m.inconsistent for m in link.latest.values()))
             if flags.inconsistent and not was_inconsistent:
-                # its history may hold a faulty source
-                occupancy = OccupancyTracker(model, dt, context.walkable)
+                occupancy = new_occupancy()  # its history may hold a faulty source
             was_inconsistent = flags.inconsistent
             timer.lap("sharing_fusion")
             possible = occupancy.update(step, fused, clear)
