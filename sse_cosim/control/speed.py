@@ -157,20 +157,17 @@ class SafePolicy:
 
     def decide(self, picture: Picture, floor: SpeedLevel = SpeedLevel.NOMINAL) -> SpeedLevel:
         """The level for this step (updates the pass commitment)."""
-        candidates = [level for level in SpeedLevel if level < SpeedLevel.EMERGENCY]
-        plans = {level: self._plans(picture, level_speed(level, self.nominal, self.config))
-                 for level in candidates}
-        admissible = [level for level in candidates if plans[level] is not None]
-        allowed = [level for level in admissible if level >= floor]
-        if allowed:
-            chosen = allowed[0]
-        elif admissible:  # only a committed pass is left: hold it, the floor would break it
-            chosen = admissible[-1]
-        else:
-            self.committed = {}
-            return SpeedLevel.EMERGENCY
-        self.committed = {p.zone: p.command for p in plans[chosen] or () if p.kind == "pass"}
-        return chosen
+        # the fastest level the floor allows; failing that, the slowest faster one (only a
+        # committed pass is left: hold it, the floor would break it)
+        allowed = [level for level in SpeedLevel if floor <= level < SpeedLevel.EMERGENCY]
+        faster = [level for level in reversed(SpeedLevel) if level < floor]
+        for level in (*allowed, *faster):
+            plans = self._plans(picture, level_speed(level, self.nominal, self.config))
+            if plans is not None:
+                self.committed = {p.zone: p.command for p in plans if p.kind == "pass"}
+                return level
+        self.committed = {}
+        return SpeedLevel.EMERGENCY
 
     def _plans(self, picture: Picture, command: float) -> list[Plan] | None:
         """One plan per zone if ``command`` keeps one for every zone, else None."""
