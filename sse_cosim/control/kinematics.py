@@ -45,17 +45,29 @@ class BusDynamics:
         return position + new_speed * self.step, new_speed
 
     def stopping_distance(self, speed: float) -> float:
-        """Distance (m) a comfortable stop ordered now needs: reaction + braking + one step."""
-        return speed * (self.reaction_time + self.step) + speed * speed / (2.0 * self.decel)
-
-    def emergency_stopping_distance(self, speed: float) -> float:
-        """The same at the emergency deceleration."""
-        return speed * (self.reaction_time + self.step) + speed * speed / (
-            2.0 * self.emergency_decel)
+        """Distance (m) a comfortable stop ordered now needs: during the reaction time the bus
+        may still follow an earlier command that speeds it up, then one step, then braking."""
+        r = self.reaction_time
+        top = speed + self.accel * r
+        return speed * r + 0.5 * self.accel * r * r + top * self.step + top * top / (
+            2.0 * self.decel)
 
     def stopping_time(self, speed: float) -> float:
-        """Time (s) until a comfortable stop ordered now has the bus standing."""
-        return self.reaction_time + self.step + speed / self.decel
+        """Time (s) until a comfortable stop ordered now has the bus standing (the same worst
+        case as :meth:`stopping_distance`)."""
+        return self.reaction_time + self.step + (speed + self.accel * self.reaction_time) / (
+            self.decel)
+
+    def pass_time(self, distance: float, speed: float, command: float) -> float:
+        """Time (s) to advance ``distance`` m holding ``command`` when the command acts only
+        after the reaction time, during which the bus may still follow an earlier command
+        that brakes it, at most at its emergency deceleration (the least progress)."""
+        r, brake = self.reaction_time, self.emergency_decel
+        slowest = max(0.0, speed - brake * r)
+        braked = (speed * speed - slowest * slowest) / (2.0 * brake)
+        if braked >= distance:
+            return (speed - math.sqrt(speed * speed - 2.0 * brake * distance)) / brake
+        return r + self.travel_time(distance - braked, slowest, command)
 
     def travel_time(self, distance: float, speed: float, command: float) -> float:
         """Time (s) to advance ``distance`` m from ``speed`` while holding ``command``.

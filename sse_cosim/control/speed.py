@@ -196,7 +196,7 @@ class SafePolicy:
             return Plan(zone.index, "stop", command)
         if stand_time <= zone.arrival_s:
             return Plan(zone.index, "stand", command)
-        if dyn.travel_time(zone.to_clear_m, speed_now, command) + dyn.step < zone.arrival_s:
+        if dyn.pass_time(zone.to_clear_m, speed_now, command) + dyn.step < zone.arrival_s:
             return Plan(zone.index, "pass", command)
         committed = self.committed.get(zone.index)
         if committed is not None and command >= committed:

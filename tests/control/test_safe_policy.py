@@ -65,6 +65,19 @@ def test_travel_time_matches_stepping(speed, command, distance):
     assert abs(predicted - steps * DT) <= 2 * DT + 1e-9
 
 
+@given(st.floats(0.0, 20.0), st.sampled_from([4.0, 10.0, 14.0, 20.0]), st.floats(0.5, 120.0))
+def test_pass_time_bounds_a_command_that_acts_after_the_reaction_time(speed, command, distance):
+    """The least progress: the bus brakes in emergency until the command acts."""
+    reaction = round(CONFIG.reaction_time_s / DT)
+    brake = BusDynamics(DYN.accel, DYN.emergency_decel, DYN.emergency_decel, 0.0, DT)
+    position, v, steps = 0.0, speed, 0
+    while position < distance and steps < 10_000:
+        step = brake.advance if steps < reaction else DYN.advance
+        position, v = step(position, v, 0.0 if steps < reaction else command)
+        steps += 1
+    assert DYN.pass_time(distance, speed, command) >= steps * DT - 2 * DT - 1e-9
+
+
 def test_travel_time_is_infinite_when_the_bus_stops_first():
     assert DYN.travel_time(50.0, 5.0, 0.0) == math.inf
     assert DYN.travel_time(50.0, 0.0, 0.0) == math.inf
