@@ -20,7 +20,7 @@ KINDS = {("sensor", "bias"), ("sensor", "stuck"), ("sensor", "dropout"), ("senso
 # scenario file -> simulated seconds (a little past the fault and its detection)
 RUNS = {
     "s3_bias_rsu1_second_camera": 6.5,
-    "s1_bias_bus": 11.5,
+    "s1_bias_bus": 12.5,
     "s3_phantom_rsu1": 4.0,
     "s3_shift_rsu2": 7.5,
     "s3_stuck_rsu1": 10.5,
