@@ -37,10 +37,13 @@ def fused_detection_time(summary: dict) -> float:
     return summary["first_detection"]["fused"]["t"]
 
 
-def test_shared_awareness_holds_nominal_speed_without_pedestrian(summaries):
-    for name in ("s2_no_pedestrian", "s3_no_pedestrian"):
-        assert summaries[name]["average_speed_mps"] >= 0.99 * 20.0, name
-    assert summaries["s1_no_pedestrian"]["average_speed_mps"] < 0.99 * 20.0
+def test_shared_awareness_buys_speed_without_pedestrian(summaries):
+    """S3's road-side units keep the nominal speed; S2's car, which clears the hidden sidewalk
+    late, keeps more of it than the bus alone (docs/results.md)."""
+    speed = {name: summaries[f"{name}_no_pedestrian"]["average_speed_mps"]
+             for name in ("s1", "s2", "s3")}
+    assert speed["s3"] >= 0.99 * 20.0
+    assert speed["s1"] < speed["s2"] < 0.99 * 20.0
 
 
 def test_pedestrian_slows_every_scenario_and_sharing_detects_it_earlier(summaries):
