@@ -5,7 +5,9 @@ The paper (Section IV) lists nominal (100 %), cautious "30 %", slow "50 %" and v
 grows, so we read them as *reductions*: cautious 0.7, slow 0.5 and very slow 0.2 of nominal
 (configurable; ``docs/controller.md`` discusses the other reading). Both policies use them;
 ``stop`` (a comfortable stop) and ``emergency`` (a stop at the emergency deceleration) command
-zero.
+zero. The safe policy adds ``creep``: when even very slow keeps no plan, the fastest slower
+speed that does (a bus beside hidden ground moves on at walking pace instead of lurching
+between very slow and a stop).
 
 ``safe`` (the default, :class:`SafePolicy`): the fastest level from which the bus, in every
 conflict zone ahead, either can still stop before the zone, or will be standing before any
@@ -46,21 +48,32 @@ class SpeedLevel(IntEnum):
     CAUTIOUS = 1
     SLOW = 2
     VERY_SLOW = 3
-    STOP = 4
-    EMERGENCY = 5
+    CREEP = 4  # safe policy: a speed below very slow, chosen per step
+    STOP = 5
+    EMERGENCY = 6
 
     @property
     def label(self) -> str:
         return self.name.lower().replace("_", " ")
 
 
+@dataclass(frozen=True)
+class Decision:
+    """A policy's answer for one step: the level and the speed it commands (m/s)."""
+
+    level: SpeedLevel
+    command_mps: float
+
+
 def level_speed(level: SpeedLevel, nominal_mps: float, config: Controller) -> float:
-    """Commanded speed (m/s) of a level; a stop and an emergency brake command zero."""
+    """Commanded speed (m/s) of a level; a stop and an emergency brake command zero. A creep
+    has no fixed speed (:meth:`SafePolicy.decide` chooses it): its ceiling, very slow."""
     factors = {
         SpeedLevel.NOMINAL: 1.0,
         SpeedLevel.CAUTIOUS: config.cautious_factor,
         SpeedLevel.SLOW: config.slow_factor,
         SpeedLevel.VERY_SLOW: config.very_slow_factor,
+        SpeedLevel.CREEP: config.very_slow_factor,
         SpeedLevel.STOP: 0.0,
         SpeedLevel.EMERGENCY: 0.0,
     }
@@ -101,17 +114,19 @@ def paper_level(picture: Picture, config: Controller, floor: SpeedLevel) -> Spee
 class PaperPolicy:
     """The paper's rules (:func:`paper_level`); no state."""
 
-    def __init__(self, config: Controller) -> None:
+    def __init__(self, nominal_mps: float, config: Controller) -> None:
+        self.nominal = nominal_mps
         self.config = config
 
-    def decide(self, picture: Picture, floor: SpeedLevel = SpeedLevel.NOMINAL) -> SpeedLevel:
-        return paper_level(picture, self.config, floor)
+    def decide(self, picture: Picture, floor: SpeedLevel = SpeedLevel.NOMINAL) -> Decision:
+        level = paper_level(picture, self.config, floor)
+        return Decision(level, level_speed(level, self.nominal, self.config))
 
 
 def make_policy(context: SceneContext) -> SafePolicy | PaperPolicy:
     """The policy ``context.config.policy`` names, for the bus of ``context``."""
     if context.config.policy == "paper":
-        return PaperPolicy(context.config)
+        return PaperPolicy(context.bus.nominal_speed_mps, context.config)
     return SafePolicy(context.dynamics, context.bus.nominal_speed_mps, context.config)
 
 
@@ -140,6 +155,9 @@ class SafePolicy:
       contact, wherever it stands);
     - **pass**: holding the command, the rear clears the zone a step before that arrival.
 
+    The candidates are the levels, fastest first, then creep speeds below very slow in steps
+    of one step's acceleration (``accel * dt``), then a stop.
+
     A pass commits the bus: while it has not cleared the zone, any command at least as fast
     as the one the pass was proven with stays admissible, since the pedestrians that could
     reach the zone in time were all inside the sets when it was proven. If no level and no
@@ -155,19 +173,30 @@ class SafePolicy:
         self.config = config
         self.committed: dict[int, float] = {}  # zone -> the command its pass was proven with
 
-    def decide(self, picture: Picture, floor: SpeedLevel = SpeedLevel.NOMINAL) -> SpeedLevel:
-        """The level for this step (updates the pass commitment)."""
+    def decide(self, picture: Picture, floor: SpeedLevel = SpeedLevel.NOMINAL) -> Decision:
+        """The level and command for this step (updates the pass commitment)."""
         # the fastest level the floor allows; failing that, the slowest faster one (only a
         # committed pass is left: hold it, the floor would break it)
         allowed = [level for level in SpeedLevel if floor <= level < SpeedLevel.EMERGENCY]
         faster = [level for level in reversed(SpeedLevel) if level < floor]
         for level in (*allowed, *faster):
-            plans = self._plans(picture, level_speed(level, self.nominal, self.config))
-            if plans is not None:
-                self.committed = {p.zone: p.command for p in plans if p.kind == "pass"}
-                return level
+            for command in self._commands(level):
+                plans = self._plans(picture, command)
+                if plans is not None:
+                    self.committed = {p.zone: p.command for p in plans if p.kind == "pass"}
+                    return Decision(level, command)
         self.committed = {}
-        return SpeedLevel.EMERGENCY
+        return Decision(SpeedLevel.EMERGENCY, 0.0)
+
+    def _commands(self, level: SpeedLevel) -> list[float]:
+        """The commands a level stands for: one, or for a creep the speeds below very slow in
+        steps of ``accel * dt``, fastest first."""
+        ceiling = level_speed(level, self.nominal, self.config)
+        if level is not SpeedLevel.CREEP:
+            return [ceiling]
+        quantum = self.dynamics.accel * self.dynamics.step
+        return [ceiling - k * quantum for k in range(1, int(ceiling / quantum) + 1)
+                if ceiling - k * quantum >= quantum - 1e-9]
 
     def _plans(self, picture: Picture, command: float) -> list[Plan] | None:
         """One plan per zone if ``command`` keeps one for every zone, else None."""

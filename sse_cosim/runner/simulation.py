@@ -28,7 +28,7 @@ import numpy as np
 import shapely
 
 from sse_cosim.control.picture import Picture, SceneContext, assess
-from sse_cosim.control.speed import SpeedLevel, fallback_floor, level_speed, make_policy
+from sse_cosim.control.speed import SpeedLevel, fallback_floor, make_policy
 from sse_cosim.estimation.consistency import BusScreen, BusScreener, StepFlags, step_flags
 from sse_cosim.estimation.kalman import KalmanTracker, all_detections
 from sse_cosim.estimation.motion import MotionModel
@@ -187,8 +187,9 @@ def simulate(
                 unknown,
                 list(possible.values()),
             )
-            level = policy.decide(picture, fallback_floor(flags.inconsistent, scenario.controller))
-            commanded = level_speed(level, scenario.bus.nominal_speed_mps, scenario.controller)
+            decision = policy.decide(
+                picture, fallback_floor(flags.inconsistent, scenario.controller))
+            level, commanded = decision.level, decision.command_mps
             world.set_bus_speed(commanded, emergency=level is SpeedLevel.EMERGENCY)
             timer.lap("control")
             on_step(

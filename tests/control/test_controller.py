@@ -58,7 +58,7 @@ def test_levels_follow_the_rules_most_severe_first(changes, level):
 def test_level_speeds_are_the_configured_reductions():
     config = load_scenario(SCENARIO).controller
     speeds = [level_speed(level, 20.0, config) for level in SpeedLevel]
-    assert speeds == pytest.approx([20.0, 14.0, 10.0, 4.0, 0.0, 0.0])
+    assert speeds == pytest.approx([20.0, 14.0, 10.0, 4.0, 4.0, 0.0, 0.0])
 
 
 def test_reach_radius_shrinks_as_the_bus_nears_and_vanishes_once_past(context):

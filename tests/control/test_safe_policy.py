@@ -87,51 +87,71 @@ def test_travel_time_is_infinite_when_the_bus_stops_first():
 
 
 def test_no_zone_ahead_is_nominal():
-    assert policy().decide(picture(20.0, ())) is SpeedLevel.NOMINAL
+    assert policy().decide(picture(20.0, ())).level is SpeedLevel.NOMINAL
 
 
 def test_a_zone_beyond_the_stopping_distance_keeps_nominal_even_if_occupied():
     far = DYN.stopping_distance(20.0) + CONFIG.stopping_margin_m + 5.0
-    assert policy().decide(picture(20.0, (zone(far, 0.0),))) is SpeedLevel.NOMINAL
+    assert policy().decide(picture(20.0, (zone(far, 0.0),))).level is SpeedLevel.NOMINAL
 
 
 def test_an_occupied_zone_just_beyond_the_stopping_distance_makes_the_bus_brake():
     # a stop from 10 m/s fits, but not after one more step at 10 m/s: it brakes now, gently
     near = DYN.stopping_distance(10.0) + CONFIG.stopping_margin_m + 0.5
-    level = policy().decide(picture(10.0, (zone(near, 0.0),)))
-    assert level_speed(level, BUS.nominal_speed_mps, CONFIG) < 10.0
-    assert level is not SpeedLevel.EMERGENCY
-    assert policy().decide(picture(10.0, (zone(near + 1.0, 0.0),))) is SpeedLevel.SLOW
+    decision = policy().decide(picture(10.0, (zone(near, 0.0),)))
+    assert decision.command_mps < 10.0
+    assert decision.level is not SpeedLevel.EMERGENCY
+    assert policy().decide(picture(10.0, (zone(near + 1.0, 0.0),))).level is SpeedLevel.SLOW
 
 
 def test_when_nothing_else_stops_in_time_the_bus_brakes_in_emergency():
-    assert policy().decide(picture(10.0, (zone(5.0, 0.0),))) is SpeedLevel.EMERGENCY
+    assert policy().decide(picture(10.0, (zone(5.0, 0.0),))).level is SpeedLevel.EMERGENCY
 
 
 def test_a_standing_bus_beside_an_occupied_zone_just_stops():
-    assert policy().decide(picture(0.0, (zone(0.5, 0.0),))) is SpeedLevel.STOP
+    assert policy().decide(picture(0.0, (zone(0.5, 0.0),))).level is SpeedLevel.STOP
 
 
 def test_slow_enough_to_stand_before_anyone_arrives():
     # 4 m/s stands within reaction + 4/3 s; 10 m/s needs more than 3 s
     arrival = DT + DYN.stopping_time(4.0) + 2 * DT
-    level = policy().decide(picture(4.0, (zone(1.0, arrival),)))
+    level = policy().decide(picture(4.0, (zone(1.0, arrival),))).level
     assert level is SpeedLevel.VERY_SLOW
+
+
+def test_beside_hidden_ground_the_bus_creeps_on_at_a_steady_speed():
+    """Hidden ground a few metres from the zebra stays hidden while the bus drives over it
+    (S1 with the truck 6 m before the zebra): an unseen pedestrian could be in the zone in
+    2.4 s, too soon to pass, so the bus must be able to stand by then. Very slow cannot; a
+    creep can, and it holds its speed instead of lurching between accelerating and stopping."""
+    safe = policy()
+    s, v, levels, commands = 0.0, 0.0, [], []
+    while s < ZONE_LENGTH + BUS.length_m and len(levels) < 200:
+        decision = safe.decide(picture(v, (zone(-s, 2.39),)))
+        levels.append(decision.level)
+        commands.append(decision.command_mps)
+        s, v = DYN.advance(s, v, decision.command_mps)
+    # from standstill any command accelerates alike for a while; then a creep, never a stop
+    assert SpeedLevel.STOP not in levels and set(levels[10:60]) == {SpeedLevel.CREEP}
+    assert 0.0 < commands[59] < level_speed(SpeedLevel.VERY_SLOW, BUS.nominal_speed_mps, CONFIG)
+    assert len(set(commands[15:60])) == 1  # steady
+    assert len(levels) * DT < 10.0  # cleared the 16 m in less than 10 s
 
 
 def test_a_bus_that_passes_before_anyone_arrives_keeps_its_speed_and_commits():
     safe = policy()
-    assert safe.decide(picture(20.0, (zone(10.0, 5.0),))) is SpeedLevel.NOMINAL
+    assert safe.decide(picture(20.0, (zone(10.0, 5.0),))).level is SpeedLevel.NOMINAL
     assert safe.committed == {0: 20.0}
     # a new set that could arrive sooner does not make it brake inside its pass
-    assert safe.decide(picture(20.0, (zone(8.0, 0.2),))) is SpeedLevel.NOMINAL
+    assert safe.decide(picture(20.0, (zone(8.0, 0.2),))).level is SpeedLevel.NOMINAL
 
 
 def test_the_inconsistency_floor_applies_unless_it_breaks_a_committed_pass():
     safe = policy()
-    assert safe.decide(picture(20.0, (zone(500.0, 0.0),)), SpeedLevel.SLOW) is SpeedLevel.SLOW
-    assert safe.decide(picture(20.0, (zone(10.0, 5.0),))) is SpeedLevel.NOMINAL
-    assert safe.decide(picture(20.0, (zone(8.0, 0.2),)), SpeedLevel.SLOW) is SpeedLevel.NOMINAL
+    slow, nominal = SpeedLevel.SLOW, SpeedLevel.NOMINAL
+    assert safe.decide(picture(20.0, (zone(500.0, 0.0),)), slow).level is slow
+    assert safe.decide(picture(20.0, (zone(10.0, 5.0),))).level is nominal
+    assert safe.decide(picture(20.0, (zone(8.0, 0.2),)), slow).level is nominal
 
 
 # --- the guarantee in closed loop --------------------------------------------------------------
@@ -156,8 +176,7 @@ def closed_loop(zone_start: float, hidden_m: float, step_out_s: float, speed_bou
         arrival = max(0.0, -ped) / speed_bound if ped < ZONE_LENGTH else math.inf
         outlook = tuple(zone(zone_start - s, arrival) for _ in (0,)
                         if zone_start + ZONE_LENGTH + BUS.length_m - s > 0)
-        level = safe.decide(picture(v, outlook))
-        pending.append(level_speed(level, BUS.nominal_speed_mps, CONFIG))
+        pending.append(safe.decide(picture(v, outlook)).command_mps)
         s, v = DYN.advance(s, v, pending.pop(0))
         if t + DT >= step_out_s:
             ped += speed_bound * DT
@@ -168,7 +187,7 @@ def closed_loop(zone_start: float, hidden_m: float, step_out_s: float, speed_bou
     return True, s
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=1000, deadline=None)
 @given(zone_start=st.floats(90.0, 250.0), hidden_m=st.floats(0.0, 15.0),
        step_out_s=st.floats(0.0, 20.0), speed_bound=st.floats(0.5, 2.5))
 def test_no_contact_while_moving_whenever_the_pedestrian_steps_out(
