@@ -6,7 +6,7 @@ the current step -- holds the pedestrian's admissible path point s_k while the b
 (motion model, noise bounds, jitter eps; :mod:`sse_cosim.estimation.motion`). So sources
 that obey their bounds always share a point, and two sets that are *disjoint* prove that one
 of their sources broke its bounds (paper Fig. 4: the strips S^3 that meet neither the
-predicted set nor S^1, S^2). The tests are exact (:mod:`sse_cosim.sets.consistency`, and an
+predicted set nor S^1, S^2). The tests are exact (:mod:`sse_cosim.sets.overlap`, with an
 LP for three or more sets) with a tolerance of :data:`CONSISTENCY_TOL` metres, far below any
 fault worth the name and far above rounding, so consistent sources are never flagged.
 
@@ -41,12 +41,17 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
-from scipy.optimize import linprog
 
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import ARC_SAFETY, QUAD_SEGMENTS, ClearRegion
 from sse_cosim.scenario.model import BUS_NODE
-from sse_cosim.sets import Strips, Zonotope, intersect_strips, zonotopes_disjoint
+from sse_cosim.sets import (
+    Strips,
+    Zonotope,
+    have_common_point,
+    intersect_strips,
+    zonotopes_disjoint,
+)
 from sse_cosim.sets.exact import zonotope_polygon
 
 CONSISTENCY_TOL = 1e-6  # m: sets closer than this count as meeting
@@ -56,54 +61,6 @@ CONFLICT = "conflict"
 
 
 # --- exact tests and the vote -----------------------------------------------------------
-
-
-def have_common_point(sets: Sequence[Zonotope], tol: float = CONSISTENCY_TOL) -> bool:
-    """Whether the zonotopes (same dimension) share a point, up to ``tol`` (a distance).
-
-    Two sets: the exact test of :func:`sets.zonotopes_disjoint`. More: the LP
-    min t s.t. |c_i + G_i b_i - x|_inf <= t, |b_i|_inf <= 1, and t <= tol.
-    """
-    if len(sets) <= 1:
-        return True
-    if len(sets) == 2:
-        return not zonotopes_disjoint(sets[0], sets[1], tol)
-    if _has_witness(sets, tol):
-        return True
-    dim = sets[0].dim
-    origin = np.mean([z.center for z in sets], axis=0)  # conditioning: work near zero
-    sizes = [z.n_generators for z in sets]
-    n_vars = dim + sum(sizes) + 1  # x, every b_i, t
-    rows, rhs = [], []
-    offset = dim
-    for z, size in zip(sets, sizes, strict=True):
-        block = np.zeros((dim, n_vars))
-        block[:, :dim] = -np.eye(dim)
-        block[:, offset:offset + size] = z.generators
-        offset += size
-        for sign in (1.0, -1.0):  # ±(c + G b - x) <= t
-            part = sign * block
-            part[:, -1] = -1.0
-            rows.append(part)
-            rhs.append(-sign * (z.center - origin))
-    cost = np.zeros(n_vars)
-    cost[-1] = 1.0
-    bounds = [(None, None)] * dim + [(-1.0, 1.0)] * sum(sizes) + [(0.0, None)]
-    result = linprog(cost, A_ub=np.vstack(rows), b_ub=np.concatenate(rhs), bounds=bounds,
-                     method="highs")
-    if result.status != 0:
-        raise RuntimeError(f"common-point LP failed: {result.message}")
-    return bool(result.fun <= tol)
-
-
-def _has_witness(sets: Sequence[Zonotope], tol: float) -> bool:
-    """Whether a cheap candidate (a centre, or the mean of the centres) lies in every set:
-    a common point found without the LP."""
-    centers = [z.center for z in sets]
-    for candidate in [*centers, np.mean(centers, axis=0)]:
-        if all(z.contains(candidate, tol) for z in sets):
-            return True
-    return False
 
 
 def largest_consistent_groups(
