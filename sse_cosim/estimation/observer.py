@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from sse_cosim.estimation.consistency import Suspicion, correct
+from sse_cosim.estimation.correction import Suspicion, correct
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.sets import Strips, Zonotope, intersect_strips
 
@@ -31,7 +31,7 @@ class Track:
 
     ``flagged``: sensors whose strips were judged inconsistent and left out this step;
     ``conflict``: the estimate is a hull of hypotheses (an inconsistency the node cannot
-    attribute, :mod:`sse_cosim.estimation.consistency`).
+    attribute, :mod:`sse_cosim.estimation.correction`).
     """
 
     person_id: str
@@ -59,7 +59,7 @@ class NodeObserver:
 
         ``detections`` maps a pedestrian id to the position strips of this node's sensors
         that see it at this step, by sensor name (or as a list). Strips inconsistent with the
-        prediction and the other sensors are left out (:func:`consistency.correct`).
+        prediction and the other sensors are left out (:func:`correction.correct`).
         """
         updated: dict[str, Track] = {}
         for person_id in self.tracks.keys() | detections.keys():

@@ -27,7 +27,7 @@ class Message:
     ``detected`` names the pedestrians its sensors saw when sending: for any other
     pedestrian, ``visible_region`` is a place it was not (negative information).
     ``inconsistent``: the sender's own sources disagreed (it left a sensor out, or its
-    estimates are hulls of hypotheses; :mod:`sse_cosim.estimation.consistency`).
+    estimates are hulls of hypotheses; :mod:`sse_cosim.estimation.correction`).
     """
 
     sender: str

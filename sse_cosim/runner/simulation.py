@@ -8,7 +8,7 @@ Data flows one way through a step:
    other sensors, correct with the rest (Proposition 1), reduce;
 4. V2X: every other node sends the bus its estimates and visible region;
 5. the bus screens its own and the received estimates (a consistent majority, negative
-   information; :mod:`sse_cosim.estimation.consistency`), fuses those it keeps
+   information; :mod:`sse_cosim.estimation.bus_screen`), fuses those it keeps
    (Proposition 2), refines where each known pedestrian can be and where an undetected one
    may be (negative information);
 6. the situational picture; 7. the speed level (no faster than the fallback level while the
@@ -29,7 +29,9 @@ import shapely
 
 from sse_cosim.control.picture import Picture, SceneContext, assess
 from sse_cosim.control.speed import SpeedLevel, fallback_floor, make_policy
-from sse_cosim.estimation.consistency import BusScreen, BusScreener, StepFlags, step_flags
+from sse_cosim.estimation.bus_fusion import fuse_at_bus
+from sse_cosim.estimation.bus_screen import BusScreen, BusScreener
+from sse_cosim.estimation.flags import StepFlags, step_flags
 from sse_cosim.estimation.kalman import KalmanTracker, all_detections
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver, Track
@@ -38,7 +40,6 @@ from sse_cosim.estimation.occupancy import (
     OccupancyTracker,
     UnobservedArea,
 )
-from sse_cosim.estimation.shared import fuse_at_bus
 from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
 from sse_cosim.runner.timing import NoTimer, StageTimer
 from sse_cosim.scenario.model import BUS_NODE, Scenario

@@ -16,11 +16,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
-from sse_cosim.estimation.consistency import BusScreen, BusScreener, StepFlags, step_flags
+from sse_cosim.estimation.bus_fusion import fuse_at_bus
+from sse_cosim.estimation.bus_screen import BusScreen, BusScreener
+from sse_cosim.estimation.flags import StepFlags, step_flags
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver, Track
 from sse_cosim.estimation.occupancy import ClearRegion
-from sse_cosim.estimation.shared import fuse_at_bus
 from sse_cosim.scenario.model import BUS_NODE, Estimator
 from sse_cosim.sets import Strips, Zonotope
 

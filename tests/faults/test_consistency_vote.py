@@ -1,4 +1,5 @@
-"""The consistency vote, its exact tests, the hull, probation and negative information."""
+"""The consistency vote, the hull, probation and negative information (the exact tests:
+tests/sets/test_sets_overlap.py)."""
 
 from __future__ import annotations
 
@@ -6,15 +7,15 @@ import numpy as np
 import pytest
 import shapely
 
-from sse_cosim.estimation.consistency import (
+from sse_cosim.estimation.bus_screen import contradicted
+from sse_cosim.estimation.occupancy import ClearRegion
+from sse_cosim.estimation.vote import (
     READMIT_STEPS,
     Probation,
-    contradicted,
     interval_hull,
     largest_consistent_groups,
     vote,
 )
-from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.sets import Zonotope
 
 
