@@ -136,7 +136,7 @@ class Recording:
 
 
 def record_step(result, recording: Recording) -> None:
-    """Append one :class:`~sse_cosim.runner.simulation.StepResult` to ``recording``."""
+    """Append one :class:`~sse_cosim.pipeline.result.StepResult` to ``recording``."""
     strips: dict[str, dict[str, list[Strips]]] = {}
     for obs in result.observations.values():
         for person_id, detection in obs.detections.items():

@@ -8,7 +8,7 @@ tracks by the pedestrian's id (the simulation knows who is who; the paper has on
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from sse_cosim.estimation.correction import Suspicion, correct
@@ -80,6 +80,22 @@ class NodeObserver:
                                        update.conflict)
         self.tracks = updated
         return updated
+
+
+class LocalObservers:
+    """Every node's observer, stepped together: the first fusion level of the network."""
+
+    def __init__(self, nodes: Iterable[str], model: MotionModel,
+                 settings: EstimatorSettings) -> None:
+        self._observers = {node: NodeObserver(node, model, settings) for node in nodes}
+
+    def step(
+        self, step: int, detections: Mapping[str, Mapping[str, Mapping[str, Strips]]]
+    ) -> dict[str, dict[str, Track]]:
+        """Node -> pedestrian id -> track at ``step``, from ``detections``: node -> pedestrian
+        id -> sensor name -> the strips of that node's sensors that see it now."""
+        return {node: observer.step(step, detections.get(node, {}))
+                for node, observer in self._observers.items()}
 
 
 def _by_sensor(strips: Sequence[Strips] | Mapping[str, Strips]) -> dict[str, Strips]:
