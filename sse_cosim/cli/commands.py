@@ -55,8 +55,9 @@ def batch(paths: tuple[Path, ...], out_dir: Path, workers: int | None, executor:
     whether its scenario breaks an assumption on purpose (breaks_assumptions, as the fault
     studies do); exit status 4 if one does not, 3 if a run failed.
     """
+    from sse_cosim.reporting.outputs import RUNS_FOLDER
     from sse_cosim.reporting.paper import read_run_folders, write_paper_report
-    from sse_cosim.runner.batch import RUNS_FOLDER, run_batch
+    from sse_cosim.runner.batch import run_batch
 
     check_scheduler(executor, scheduler)
     out_dir = writable_folder(out_dir, "--out")

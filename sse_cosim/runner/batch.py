@@ -6,10 +6,9 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from sse_cosim.errors import UserError
+from sse_cosim.reporting.outputs import RUNS_FOLDER, TaskOutcome
 from sse_cosim.runner.executors import ExecutorName, execute
-from sse_cosim.runner.tasks import RunTask, TaskOutcome
-
-RUNS_FOLDER = "runs"
+from sse_cosim.runner.tasks import RunTask
 
 
 def scenario_files(paths: Sequence[Path]) -> list[Path]:

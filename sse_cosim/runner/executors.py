@@ -15,9 +15,9 @@ from typing import Literal
 
 from tqdm import tqdm
 
+from sse_cosim.reporting.outputs import TaskOutcome
 from sse_cosim.runner.tasks import (
     RunTask,
-    TaskOutcome,
     WorkerPool,
     finished_outcome,
     run_in_worker,

@@ -36,6 +36,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from sse_cosim.errors import UserError
 from sse_cosim.files import write_json_atomic
+from sse_cosim.reporting.outputs import TaskOutcome
 from sse_cosim.reporting.safety_report import SAFETY_PLAN
 from sse_cosim.runner.batch import scenario_files
 from sse_cosim.runner.executors import ExecutorName
@@ -48,7 +49,6 @@ from sse_cosim.runner.sweep import (
     run_key,
     run_planned,
 )
-from sse_cosim.runner.tasks import TaskOutcome
 from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
 from sse_cosim.scenario.model import Scenario
 

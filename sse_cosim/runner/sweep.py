@@ -35,11 +35,12 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from sse_cosim.errors import UserError
 from sse_cosim.files import portable_path, write_json_atomic
+from sse_cosim.reporting.outputs import RUNS_FOLDER, TaskOutcome
 from sse_cosim.reporting.sweep_report import SWEEP_PLAN
-from sse_cosim.runner.batch import RUNS_FOLDER, scenario_files
+from sse_cosim.runner.batch import scenario_files
 from sse_cosim.runner.executors import ExecutorName, execute
 from sse_cosim.runner.parameters import parse_value
-from sse_cosim.runner.tasks import RunTask, TaskOutcome, record_failure
+from sse_cosim.runner.tasks import RunTask, record_failure
 from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
 
 SEED_PATH = "simulation.seed"

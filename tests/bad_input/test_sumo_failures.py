@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 from sse_cosim.cli.main import EXIT_BAD_INPUT, EXIT_SIMULATION_FAILED, main
-from sse_cosim.runner.batch import RUNS_FOLDER, run_batch
+from sse_cosim.reporting.outputs import RUNS_FOLDER
+from sse_cosim.runner.batch import run_batch
 from sse_cosim.world import sumo
 
 pytestmark = pytest.mark.sumo

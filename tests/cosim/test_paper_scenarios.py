@@ -10,8 +10,9 @@ import pandas as pd
 import pytest
 from scipy.optimize import linprog
 
+from sse_cosim.reporting.outputs import RUNS_FOLDER
 from sse_cosim.reporting.paper import read_run_folders, write_paper_report
-from sse_cosim.runner.batch import RUNS_FOLDER, run_batch
+from sse_cosim.runner.batch import run_batch
 
 pytestmark = pytest.mark.sumo
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
