@@ -119,7 +119,7 @@ class FaultInjector:
                 return obs
             nothing = shapely.Polygon()
             return replace(obs, detections={}, visible=None if obs.visible is None else nothing,
-                           occluded=_union(obs.visible, obs.occluded))
+                           occluded=_hidden_by_lost_frame(obs.visible, obs.occluded))
         if fault.kind == "bias":
             detections = {pid: _biased(d, fault, truth.get(pid))
                           for pid, d in obs.detections.items()}
@@ -177,7 +177,7 @@ def _biased(detection: Detection, fault: SensorFault, truth: np.ndarray | None) 
     return replace(detection, strips=Strips(strips.normals, values, strips.radii))
 
 
-def _union(*parts: shapely.Geometry | None) -> shapely.Geometry | None:
+def _hidden_by_lost_frame(*parts: shapely.Geometry | None) -> shapely.Geometry | None:
     """What a lost frame hides: the whole sector (None when regions were not requested)."""
     present = [p for p in parts if p is not None]
     return shapely.union_all(present) if present else None
