@@ -13,9 +13,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import linprog
 
+from sse_cosim.estimation.bus_fusion import fuse_sets
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver
-from sse_cosim.estimation.shared import fuse_sets
 from sse_cosim.sets import Strips, Zonotope
 
 CONTAINMENT_TOL = 1e-7
@@ -136,7 +136,7 @@ class Recording:
 
 
 def record_step(result, recording: Recording) -> None:
-    """Append one :class:`~sse_cosim.runner.simulation.StepResult` to ``recording``."""
+    """Append one :class:`~sse_cosim.pipeline.result.StepResult` to ``recording``."""
     strips: dict[str, dict[str, list[Strips]]] = {}
     for obs in result.observations.values():
         for person_id, detection in obs.detections.items():
@@ -172,5 +172,5 @@ class PlainObserver:
 
 def fuse_inputs(inputs: Sequence[Zonotope], method: str, model: MotionModel,
                 max_generators: int = 8, reduction: str = "girard") -> Zonotope:
-    """The bus's fusion rule (``estimation.shared.fuse_sets``)."""
+    """The bus's fusion rule (``estimation.bus_fusion.fuse_sets``)."""
     return fuse_sets(inputs, method, EstimatorSettings("volume", reduction, max_generators), model)

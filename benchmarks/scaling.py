@@ -22,7 +22,7 @@ from sse_cosim.control.picture import SceneContext, assess
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea
 from sse_cosim.scenario.model import Bus, Controller, Estimator
-from sse_cosim.sensors import SensorSpec, observe
+from sse_cosim.sensors import Camera, SensorSpec, observe
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import load_roadmap
 from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
@@ -33,13 +33,13 @@ DT = 0.1
 
 
 def _specs(count: int) -> dict[str, SensorSpec]:
-    specs = {"bus_front": SensorSpec("bus_front", "bus", range_m=60.0)}
+    specs = {"bus_front": SensorSpec("bus_front", "bus", Camera(range_m=60.0))}
     for i in range(count - 1):
         angle = 2 * math.pi * i / max(count - 1, 1)
         x, y = 200 + 16 * math.cos(angle), 11 * math.sin(angle)
         heading = math.atan2(-y, 200 - x)  # looking at the crossing
-        specs[f"rsu{i}"] = SensorSpec(f"rsu{i}", f"rsu{i}", range_m=40.0,
-                                      noise_bound_m=(1.0, 1.0), static_pose=Pose(x, y, heading))
+        camera = Camera(range_m=40.0, noise_bound_m=(1.0, 1.0))
+        specs[f"rsu{i}"] = SensorSpec(f"rsu{i}", f"rsu{i}", camera, static_pose=Pose(x, y, heading))
     return specs
 
 

@@ -9,7 +9,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from sse_cosim.runner.executors import execute
+from sse_cosim.runner.executors import Execution, execute
 from sse_cosim.runner.tasks import RunTask
 
 SCENARIO = "scenarios/s3_pedestrian.toml"
@@ -28,7 +28,7 @@ def _timed(runs: int, duration_s: float | None, workers: int, executor: str) -> 
     with tempfile.TemporaryDirectory(prefix="sse-bench-sweep-") as tmp:
         tasks = _tasks(Path(tmp), runs, duration_s)
         start = time.perf_counter()
-        outcomes = execute(tasks, workers=workers, executor=executor, progress=False)
+        outcomes = execute(tasks, Execution(workers, executor, progress=False))
         elapsed = time.perf_counter() - start
     failed = [o.error for o in outcomes if not o.ok]
     if failed:

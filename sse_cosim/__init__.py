@@ -8,8 +8,9 @@ Folders, one concern each, in the order data flows through a simulation step:
 - ``sets``       -- zonotopes, strips, Propositions 1 and 2 (pure math)
 - ``estimation`` -- per-node observers, V2X sharing, the bus's fused estimate
 - ``control``    -- situational picture and speed levels
-- ``runner``     -- one simulation run, batches and sweeps
-- ``reporting``  -- traces, summaries, tables and plots
+- ``pipeline``   -- the stages of one simulation step, wired one way, and the step's record
+- ``runner``     -- one simulation run (``simulate``), batches and sweeps; uses ``reporting``
+- ``reporting``  -- traces, summaries, tables and plots; reads run folders, never ``runner``
 - ``cli``        -- the ``sse-cosim`` command
 """
 

@@ -55,13 +55,15 @@ def batch(paths: tuple[Path, ...], out_dir: Path, workers: int | None, executor:
     whether its scenario breaks an assumption on purpose (breaks_assumptions, as the fault
     studies do); exit status 4 if one does not, 3 if a run failed.
     """
+    from sse_cosim.reporting.outputs import RUNS_FOLDER
     from sse_cosim.reporting.paper import read_run_folders, write_paper_report
-    from sse_cosim.runner.batch import RUNS_FOLDER, run_batch
+    from sse_cosim.runner.batch import run_batch
+    from sse_cosim.runner.executors import Execution
 
     check_scheduler(executor, scheduler)
     out_dir = writable_folder(out_dir, "--out")
-    outcomes = run_batch(list(paths) or [Path("scenarios")], out_dir, workers, executor,
-                         scheduler, resume, scene_times)
+    outcomes = run_batch(list(paths) or [Path("scenarios")], out_dir,
+                         Execution(workers, executor, scheduler, resume), scene_times)
     runs = read_run_folders([out_dir / RUNS_FOLDER / o.key for o in outcomes if o.ok])
     written = write_paper_report(out_dir, runs)
     _echo_outcomes(outcomes, written)

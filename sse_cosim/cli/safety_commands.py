@@ -59,6 +59,7 @@ def safety(campaign_file: Path, out_dir: Path | None, workers: int | None, execu
     (the last lines name the runs); otherwise 3 if a run failed; 0 if every target is met.
     """
     from sse_cosim.reporting.safety_report import write_safety_report
+    from sse_cosim.runner.executors import Execution
     from sse_cosim.runner.safety import load_campaign, plan_campaign, run_campaign
 
     check_scheduler(executor, scheduler)
@@ -68,8 +69,8 @@ def safety(campaign_file: Path, out_dir: Path | None, workers: int | None, execu
     click.echo(f"safety: {len(plan.runs) + len(plan.not_feasible)} combinations: "
                f"{len(plan.runs)} runs, {len(plan.not_feasible)} not feasible (not run) "
                f"-> {out_dir}")
-    run_campaign(campaign, plan, out_dir, _command(campaign_file, out_dir, quick), workers,
-                 executor, scheduler, resume)
+    run_campaign(campaign, plan, out_dir, _command(campaign_file, out_dir, quick),
+                 Execution(workers, executor, scheduler, resume))
     report = write_safety_report(out_dir)
     for target in report.targets:
         click.echo(f"  {target.verdict:9} {target.label}: {target.measured}")

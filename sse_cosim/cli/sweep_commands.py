@@ -61,6 +61,7 @@ def sweep(scenarios: tuple[Path, ...], sweep_file: Path | None, params: tuple[st
     sweep.json (the plan), runs/<key>/ per run, sweep.csv (one row per run; sweep.parquet
     too when pyarrow imports) and sweep_<figure>.png. Exit status 3 if any run failed.
     """
+    from sse_cosim.runner.executors import Execution
     from sse_cosim.runner.parameters import parse_assignment
     from sse_cosim.runner.sweep import (
         combine,
@@ -84,8 +85,8 @@ def sweep(scenarios: tuple[Path, ...], sweep_file: Path | None, params: tuple[st
     invalid = sum(run.error is not None for run in runs)
     click.echo(f"sweep: {len(runs)} runs -> {out_dir}"
                + (f" ({invalid} with invalid values, recorded as failed)" if invalid else ""))
-    run_sweep(spec, runs, out_dir, _command(), summary_only, workers, executor, scheduler,
-              resume)
+    run_sweep(spec, runs, out_dir, _command(), summary_only,
+              Execution(workers, executor, scheduler, resume))
     _finish_sweep(out_dir)
 
 

@@ -8,10 +8,10 @@ tracks by the pedestrian's id (the simulation knows who is who; the paper has on
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
-from sse_cosim.estimation.consistency import Suspicion, correct
+from sse_cosim.estimation.correction import Suspicion, correct
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.sets import Strips, Zonotope, intersect_strips
 
@@ -31,7 +31,7 @@ class Track:
 
     ``flagged``: sensors whose strips were judged inconsistent and left out this step;
     ``conflict``: the estimate is a hull of hypotheses (an inconsistency the node cannot
-    attribute, :mod:`sse_cosim.estimation.consistency`).
+    attribute, :mod:`sse_cosim.estimation.correction`).
     """
 
     person_id: str
@@ -59,7 +59,7 @@ class NodeObserver:
 
         ``detections`` maps a pedestrian id to the position strips of this node's sensors
         that see it at this step, by sensor name (or as a list). Strips inconsistent with the
-        prediction and the other sensors are left out (:func:`consistency.correct`).
+        prediction and the other sensors are left out (:func:`correction.correct`).
         """
         updated: dict[str, Track] = {}
         for person_id in self.tracks.keys() | detections.keys():
@@ -80,6 +80,22 @@ class NodeObserver:
                                        update.conflict)
         self.tracks = updated
         return updated
+
+
+class LocalObservers:
+    """Every node's observer, stepped together: the first fusion level of the network."""
+
+    def __init__(self, nodes: Iterable[str], model: MotionModel,
+                 settings: EstimatorSettings) -> None:
+        self._observers = {node: NodeObserver(node, model, settings) for node in nodes}
+
+    def step(
+        self, step: int, detections: Mapping[str, Mapping[str, Mapping[str, Strips]]]
+    ) -> dict[str, dict[str, Track]]:
+        """Node -> pedestrian id -> track at ``step``, from ``detections``: node -> pedestrian
+        id -> sensor name -> the strips of that node's sensors that see it now."""
+        return {node: observer.step(step, detections.get(node, {}))
+                for node, observer in self._observers.items()}
 
 
 def _by_sensor(strips: Sequence[Strips] | Mapping[str, Strips]) -> dict[str, Strips]:

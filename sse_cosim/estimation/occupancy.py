@@ -98,6 +98,11 @@ class OccupancyTracker:
         self._paths: dict[str, shapely.Geometry] = {}
         self._step: int | None = None
 
+    def forget(self) -> None:
+        """Drop every pedestrian's history: the next update starts from its sets alone."""
+        self._paths = {}
+        self._step = None
+
     def update(
         self,
         step: int,

@@ -27,7 +27,7 @@ class Message:
     ``detected`` names the pedestrians its sensors saw when sending: for any other
     pedestrian, ``visible_region`` is a place it was not (negative information).
     ``inconsistent``: the sender's own sources disagreed (it left a sensor out, or its
-    estimates are hulls of hypotheses; :mod:`sse_cosim.estimation.consistency`).
+    estimates are hulls of hypotheses; :mod:`sse_cosim.estimation.correction`).
     """
 
     sender: str
@@ -46,6 +46,7 @@ class SharedPicture:
     regions: dict[str, shapely.Geometry]  # sender -> visible region when sent
     ages: dict[str, int]  # sender -> steps since it sent
     detected: dict[str, frozenset[str]]  # sender -> pedestrians it saw
+    inconsistent: frozenset[str] = frozenset()  # senders whose own sources disagreed
 
     def clear_of(self, person_id: str) -> list[ClearRegion]:
         """Regions seen by senders that did not detect ``person_id`` (negative information)."""
@@ -99,4 +100,5 @@ class V2XLink:
             regions={sender: m.visible_region for sender, m in latest},
             ages={sender: step - m.sent_step for sender, m in latest},
             detected={sender: m.detected for sender, m in latest},
+            inconsistent=frozenset(sender for sender, m in latest if m.inconsistent),
         )

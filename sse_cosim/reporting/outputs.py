@@ -1,5 +1,5 @@
 """A run's folder: ``trace.csv``, ``sets.jsonl``, ``regions.jsonl``, ``summary.json``,
-``scenario.json`` and plots.
+``scenario.json`` and plots -- or ``error.json`` if the run failed.
 
 Every file is written whole or not at all (:mod:`sse_cosim.files`); ``summary.json`` is
 written last, so a folder with a summary is a finished run. With ``summary_only`` (large
@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import json
 import os
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import shapely
@@ -29,8 +30,38 @@ SETS = "sets.jsonl"
 REGIONS = "regions.jsonl"
 SUMMARY = "summary.json"
 SCENARIO = "scenario.json"
+ERROR = "error.json"  # instead of summary.json: {"key", "error"}, the one line that stopped it
+RUNS_FOLDER = "runs"  # a batch, sweep or campaign keeps run <key> in <its folder>/runs/<key>/
 DECIMALS = 6  # positions in trace.csv and regions.jsonl: 1e-6 m (a re-check allows 1e-5 m)
 POSITIONS = ("bus_x", "bus_y", "ped_x", "ped_y")
+
+
+@dataclass(frozen=True)
+class TaskOutcome:
+    """A finished run: its summary, or the one-line error that stopped it."""
+
+    key: str
+    summary: dict[str, Any] | None
+    error: str | None
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+def read_outcome(key: str, folder: Path) -> TaskOutcome | None:
+    """The outcome recorded in run ``key``'s ``folder``, if the run already ran to its end."""
+    for name, is_summary in ((SUMMARY, True), (ERROR, False)):
+        path = folder / name
+        if path.is_file():
+            try:
+                data = json.loads(path.read_text(encoding="utf-8"))
+            except (OSError, json.JSONDecodeError):
+                return None
+            if is_summary:
+                return TaskOutcome(key, data, None)
+            return TaskOutcome(key, None, str(data.get("error", "unknown error")))
+    return None
 
 
 def write_run(

@@ -1,7 +1,7 @@
 """Collects what a run produced, step by step: trace rows, sets, regions, summary figures,
 scene frames.
 
-The recorder only reads :class:`~sse_cosim.runner.simulation.StepResult`; writing files is
+The recorder only reads :class:`~sse_cosim.pipeline.result.StepResult`; writing files is
 :mod:`sse_cosim.reporting.outputs`'s job.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections import Counter
 from dataclasses import dataclass, field
 from itertools import pairwise
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import shapely
@@ -19,6 +19,9 @@ from sse_cosim.control.speed import SpeedLevel
 from sse_cosim.scenario.model import BUS_NODE, Scenario
 from sse_cosim.sensors.faults import FaultLog
 from sse_cosim.sets import Zonotope
+
+if TYPE_CHECKING:  # only the type: a report that reads folders loads no estimation
+    from sse_cosim.pipeline.result import StepResult
 
 FUSED = "fused"
 REFINED = "refined"  # a known pedestrian's zonotope refined with negative information
@@ -72,7 +75,7 @@ class RunRecorder:
     def __post_init__(self) -> None:
         self.faults = FaultLog(self.scenario)
 
-    def __call__(self, result) -> None:
+    def __call__(self, result: StepResult) -> None:
         snap = result.snapshot
         bus = snap.role(BUS_NODE)
         t = round(snap.time, 6)
@@ -140,7 +143,7 @@ class RunRecorder:
         if self._wants_scene(t):
             self.scenes.append(_frame(t, result, local_sets, fused_position, truth))
 
-    def _flags(self, row: dict[str, Any], result) -> None:
+    def _flags(self, row: dict[str, Any], result: StepResult) -> None:
         """Flag columns (per sensor: left out; per node: excluded/conflict), fault bookkeeping."""
         flags = result.flags
         for sensor, flagged in flags.sensors.items():
@@ -169,7 +172,7 @@ class RunRecorder:
             self.violations.append({"t": t, "node": "possible", "truth": truth.tolist()})
         return inside
 
-    def _check_accounted(self, t: float, result, truth) -> bool | None:
+    def _check_accounted(self, t: float, result: StepResult, truth) -> bool | None:
         """Whether the pedestrian is where the controller looks for pedestrians: inside a
         refined region (any track's) or the unobserved area, or outside the window where
         hidden ground is tracked (there every walkable place counts as occupied)."""
@@ -183,7 +186,7 @@ class RunRecorder:
             self.violations.append({"t": t, "node": UNACCOUNTED, "truth": truth.tolist()})
         return inside
 
-    def _note_regions(self, t: float, result) -> None:
+    def _note_regions(self, t: float, result: StepResult) -> None:
         """Keep the regions the controller used this step: every known pedestrian's refined
         region (by id) and the unobserved area, so that anyone can re-check them."""
         self.regions.extend(RegionRecord(t, REFINED, pid, region)
@@ -194,7 +197,7 @@ class RunRecorder:
         self.set_lines.append({"t": t, "node": node, "kind": kind, **position.to_json()})
 
     @staticmethod
-    def _moment(t: float, result) -> dict[str, float]:
+    def _moment(t: float, result: StepResult) -> dict[str, float]:
         return {"t": t, "bus_distance_to_crossing_m": result.picture.distance_to_crossing}
 
     def _note_shared_fusion(self, t, person_id, local_sets, fused_position, result) -> None:
@@ -280,7 +283,7 @@ class RunRecorder:
         return stats
 
 
-def _fusion_inputs(result, person_id: str) -> dict[str, Zonotope]:
+def _fusion_inputs(result: StepResult, person_id: str) -> dict[str, Zonotope]:
     """The state sets the bus fused for ``person_id``: its own and the received ones that
     passed the consistency screen."""
     own = result.tracks[BUS_NODE].get(person_id)

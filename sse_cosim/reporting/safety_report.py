@@ -27,8 +27,7 @@ from matplotlib.figure import Figure
 
 from sse_cosim.files import atomic_path, read_plan, write_text_atomic
 from sse_cosim.reporting import plots
-from sse_cosim.runner.batch import RUNS_FOLDER
-from sse_cosim.runner.tasks import RunTask, TaskOutcome, finished_outcome
+from sse_cosim.reporting.outputs import RUNS_FOLDER, TaskOutcome, read_outcome
 
 SAFETY_PLAN = "safety.json"
 SAFETY_TABLE = "safety.csv"
@@ -80,8 +79,7 @@ class CampaignFolder:
 
     def outcome(self, key: str) -> TaskOutcome | None:
         """The run's recorded outcome; ``None`` while it has not finished."""
-        folder = self.path / RUNS_FOLDER / key
-        return finished_outcome(RunTask(key, "", str(folder)))
+        return read_outcome(key, self.path / RUNS_FOLDER / key)
 
 
 def read_campaign(folder: Path) -> CampaignFolder:

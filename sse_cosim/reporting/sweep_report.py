@@ -24,8 +24,7 @@ from matplotlib.figure import Figure
 
 from sse_cosim.files import atomic_path, read_plan
 from sse_cosim.reporting import plots
-from sse_cosim.runner.batch import RUNS_FOLDER
-from sse_cosim.runner.tasks import RunTask, TaskOutcome, finished_outcome
+from sse_cosim.reporting.outputs import RUNS_FOLDER, TaskOutcome, read_outcome
 
 SWEEP_PLAN = "sweep.json"
 SWEEP_TABLE = "sweep.csv"
@@ -94,8 +93,7 @@ class SweepFolder:
 
     def outcome(self, run: Mapping[str, Any]) -> TaskOutcome | None:
         """The run's recorded outcome; ``None`` while it has not finished."""
-        folder = self.run_folder(run["key"])
-        return finished_outcome(RunTask(run["key"], run["source"], str(folder)))
+        return read_outcome(run["key"], self.run_folder(run["key"]))
 
 
 def read_sweep(folder: Path) -> SweepFolder:

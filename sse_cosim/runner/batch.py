@@ -6,10 +6,9 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from sse_cosim.errors import UserError
-from sse_cosim.runner.executors import ExecutorName, execute
-from sse_cosim.runner.tasks import RunTask, TaskOutcome
-
-RUNS_FOLDER = "runs"
+from sse_cosim.reporting.outputs import RUNS_FOLDER, TaskOutcome
+from sse_cosim.runner.executors import Execution, execute
+from sse_cosim.runner.tasks import RunTask
 
 
 def scenario_files(paths: Sequence[Path]) -> list[Path]:
@@ -51,13 +50,9 @@ def batch_tasks(
 def run_batch(
     paths: Sequence[Path],
     out_dir: Path,
-    workers: int | None,
-    executor: ExecutorName = "local",
-    scheduler: str | None = None,
-    resume: bool = False,
+    execution: Execution,
     scene_times: Sequence[float] = (),
-    progress: bool = True,
 ) -> list[TaskOutcome]:
     """Run every scenario under ``paths``; outcomes in file order."""
     tasks = batch_tasks(scenario_files(paths), out_dir, scene_times)
-    return execute(tasks, workers, executor, scheduler, resume, progress, description="scenarios")
+    return execute(tasks, execution, description="scenarios")

@@ -11,13 +11,14 @@ import os
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from contextlib import contextmanager
+from dataclasses import dataclass
 from typing import Literal
 
 from tqdm import tqdm
 
+from sse_cosim.reporting.outputs import TaskOutcome
 from sse_cosim.runner.tasks import (
     RunTask,
-    TaskOutcome,
     WorkerPool,
     finished_outcome,
     run_in_worker,
@@ -26,33 +27,41 @@ from sse_cosim.runner.tasks import (
 ExecutorName = Literal["local", "dask"]
 
 
+@dataclass(frozen=True)
+class Execution:
+    """Where and how runs execute: ``workers`` processes (None: one per core) on
+    ``executor``, with a Dask ``scheduler`` address (None: a local cluster); ``resume`` skips
+    runs that already finished; ``progress`` shows a progress bar."""
+
+    workers: int | None = None
+    executor: ExecutorName = "local"
+    scheduler: str | None = None
+    resume: bool = False
+    progress: bool = True
+
+
 def default_workers() -> int:
     """The number of cores this process may use."""
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 def execute(
-    tasks: Sequence[RunTask],
-    workers: int | None = None,
-    executor: ExecutorName = "local",
-    scheduler: str | None = None,
-    resume: bool = False,
-    progress: bool = True,
-    description: str = "runs",
+    tasks: Sequence[RunTask], execution: Execution, description: str = "runs"
 ) -> list[TaskOutcome]:
-    """Run every task (skipping finished ones with ``resume``) and return outcomes in order."""
+    """Run every task (skipping finished ones with ``execution.resume``) and return outcomes
+    in order."""
     done: dict[str, TaskOutcome] = {}
-    if resume:
+    if execution.resume:
         for task in tasks:
             outcome = finished_outcome(task)
             if outcome is not None and outcome.ok:
                 done[task.key] = outcome
     todo = [t for t in tasks if t.key not in done]
-    workers = workers or default_workers()
+    workers = execution.workers or default_workers()
     bar = tqdm(total=len(tasks), initial=len(done), desc=description, unit="run",
-               disable=not progress, dynamic_ncols=True)
+               disable=not execution.progress, dynamic_ncols=True)
     failures = 0
-    with bar, _runner(executor, workers, scheduler) as submit_all:
+    with bar, _runner(execution.executor, workers, execution.scheduler) as submit_all:
         for outcome in submit_all(todo):
             done[outcome.key] = outcome
             failures += not outcome.ok

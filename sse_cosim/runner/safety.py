@@ -36,9 +36,10 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from sse_cosim.errors import UserError
 from sse_cosim.files import write_json_atomic
+from sse_cosim.reporting.outputs import TaskOutcome
 from sse_cosim.reporting.safety_report import SAFETY_PLAN
 from sse_cosim.runner.batch import scenario_files
-from sse_cosim.runner.executors import ExecutorName
+from sse_cosim.runner.executors import Execution
 from sse_cosim.runner.sweep import (
     SEED_PATH,
     Parameter,
@@ -48,7 +49,6 @@ from sse_cosim.runner.sweep import (
     run_key,
     run_planned,
 )
-from sse_cosim.runner.tasks import TaskOutcome
 from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
 from sse_cosim.scenario.model import Scenario
 
@@ -401,14 +401,9 @@ def run_campaign(
     plan: CampaignPlan,
     out_dir: Path,
     command: str,
-    workers: int | None = None,
-    executor: ExecutorName = "local",
-    scheduler: str | None = None,
-    resume: bool = False,
-    progress: bool = True,
+    execution: Execution,
 ) -> list[TaskOutcome]:
     """Write ``safety.json``, then run the feasible runs (summaries only) through the sweep's
     execution path; outcomes in plan order."""
     write_json_atomic(out_dir / SAFETY_PLAN, plan_document(campaign, plan, command))
-    return run_planned(plan.runs, out_dir, True, workers, executor, scheduler, resume,
-                       progress, "safety")
+    return run_planned(plan.runs, out_dir, True, execution, "safety")

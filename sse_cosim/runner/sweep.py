@@ -35,11 +35,12 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from sse_cosim.errors import UserError
 from sse_cosim.files import portable_path, write_json_atomic
+from sse_cosim.reporting.outputs import RUNS_FOLDER, TaskOutcome
 from sse_cosim.reporting.sweep_report import SWEEP_PLAN
-from sse_cosim.runner.batch import RUNS_FOLDER, scenario_files
-from sse_cosim.runner.executors import ExecutorName, execute
+from sse_cosim.runner.batch import scenario_files
+from sse_cosim.runner.executors import Execution, execute
 from sse_cosim.runner.parameters import parse_value
-from sse_cosim.runner.tasks import RunTask, TaskOutcome, record_failure
+from sse_cosim.runner.tasks import RunTask, record_failure
 from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
 
 SEED_PATH = "simulation.seed"
@@ -479,32 +480,23 @@ def run_sweep(
     runs: Sequence[PlannedRun],
     out_dir: Path,
     command: str,
-    summary_only: bool = False,
-    workers: int | None = None,
-    executor: ExecutorName = "local",
-    scheduler: str | None = None,
-    resume: bool = False,
-    progress: bool = True,
+    summary_only: bool,
+    execution: Execution,
 ) -> list[TaskOutcome]:
     """Write ``sweep.json``, then run the plan (:func:`run_planned`); outcomes in plan order."""
     write_json_atomic(out_dir / SWEEP_PLAN, plan_document(spec, runs, command, summary_only))
-    return run_planned(runs, out_dir, summary_only, workers, executor, scheduler, resume,
-                       progress, "sweep")
+    return run_planned(runs, out_dir, summary_only, execution, "sweep")
 
 
 def run_planned(
     runs: Sequence[PlannedRun],
     out_dir: Path,
-    summary_only: bool = False,
-    workers: int | None = None,
-    executor: ExecutorName = "local",
-    scheduler: str | None = None,
-    resume: bool = False,
-    progress: bool = True,
-    description: str = "sweep",
+    summary_only: bool,
+    execution: Execution,
+    description: str,
 ) -> list[TaskOutcome]:
     """Run planned runs into ``out_dir/runs/<key>``: invalid combinations are recorded as
-    failed, the rest run on ``executor``; outcomes in plan order.
+    failed, the rest run as ``execution`` says; outcomes in plan order.
 
     The one execution path of every planned run, whether a Cartesian sweep planned it or
     another planner (the safety campaign's constrained grid) built the list.
@@ -512,6 +504,6 @@ def run_planned(
     tasks = {run.key: run.task(out_dir / RUNS_FOLDER, summary_only) for run in runs}
     outcomes = {run.key: record_failure(tasks[run.key], run.error) for run in runs if run.error}
     valid = [tasks[run.key] for run in runs if not run.error]
-    for outcome in execute(valid, workers, executor, scheduler, resume, progress, description):
+    for outcome in execute(valid, execution, description):
         outcomes[outcome.key] = outcome
     return [outcomes[run.key] for run in runs]

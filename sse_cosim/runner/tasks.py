@@ -32,9 +32,8 @@ from pathlib import Path
 from typing import IO, Any
 
 from sse_cosim.files import write_json_atomic
-from sse_cosim.reporting.outputs import SUMMARY
+from sse_cosim.reporting.outputs import ERROR, SUMMARY, TaskOutcome, read_outcome
 
-ERROR = "error.json"
 TASKS_PER_WORKER = 100  # then a fresh process: no slow build-up over long sweeps
 
 
@@ -60,33 +59,9 @@ class RunTask:
         return cls(**data)
 
 
-@dataclass(frozen=True)
-class TaskOutcome:
-    """A finished task: its summary, or the one-line error that stopped it."""
-
-    key: str
-    summary: dict[str, Any] | None
-    error: str | None
-
-    @property
-    def ok(self) -> bool:
-        return self.error is None
-
-
 def finished_outcome(task: RunTask) -> TaskOutcome | None:
     """The outcome recorded in the task's folder, if the task already ran to its end."""
-    folder = Path(task.out_dir)
-    for name, is_summary in ((SUMMARY, True), (ERROR, False)):
-        path = folder / name
-        if path.is_file():
-            try:
-                data = json.loads(path.read_text(encoding="utf-8"))
-            except (OSError, json.JSONDecodeError):
-                return None
-            if is_summary:
-                return TaskOutcome(task.key, data, None)
-            return TaskOutcome(task.key, None, str(data.get("error", "unknown error")))
-    return None
+    return read_outcome(task.key, Path(task.out_dir))
 
 
 class WorkerProcess:

@@ -17,8 +17,9 @@ from typing import TextIO
 
 from sse_cosim.errors import SimulationError, UserError
 from sse_cosim.files import write_json_atomic
+from sse_cosim.reporting.outputs import ERROR
 from sse_cosim.runner.run import run_scenario_file
-from sse_cosim.runner.tasks import ERROR, RunTask
+from sse_cosim.runner.tasks import RunTask
 
 
 def run_task(task: RunTask) -> int:

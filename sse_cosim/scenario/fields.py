@@ -19,19 +19,31 @@ class FieldDoc:
 
 
 def field_docs(model: type[BaseModel] = Scenario, prefix: str = "") -> Iterator[FieldDoc]:
-    """Depth-first over the schema; tables keyed by name (sensors, rsus) show ``<name>``."""
+    """Depth-first over the schema; tables keyed by name (sensors, rsus) show ``<name>``.
+
+    A union of tables (the sensor kinds) lists the fields all its members share once, then
+    each member's own, their meaning led by ``[<kind>]``.
+    """
     for name, info in model.model_fields.items():
         path = f"{prefix}{name}"
         annotation = info.annotation
-        nested = _model_of(annotation)
-        if typing.get_origin(annotation) is dict and nested is not None:
-            yield from field_docs(nested, f"{path}.<{_key_name(name)}>.")
-        elif nested is not None:
-            yield from field_docs(nested, f"{path}.")
+        nested = _models_of(annotation)
+        if typing.get_origin(annotation) is dict and nested:
+            path = f"{path}.<{_key_name(name)}>."
+        elif nested:
+            path = f"{path}."
         else:
             default = "required" if info.is_required() else repr(info.get_default(
                 call_default_factory=True))
             yield FieldDoc(path, default, info.description or "")
+            continue
+        shared = [d for d in field_docs(nested[0], path)
+                  if all(d in field_docs(other, path) for other in nested[1:])]
+        yield from shared
+        for member in nested if len(nested) > 1 else ():
+            tag = typing.get_args(member.model_fields["kind"].annotation)[0]  # its Literal's value
+            yield from (FieldDoc(d.path, d.default, f"[{tag}] {d.description}")
+                        for d in field_docs(member, path) if d not in shared)
 
 
 def fields_markdown() -> str:
@@ -46,14 +58,11 @@ def _escape(text: str) -> str:
     return text.replace("|", "\\|")
 
 
-def _model_of(annotation) -> type[BaseModel] | None:
+def _models_of(annotation) -> list[type[BaseModel]]:
+    """The models an annotation holds (a union's members, a dict's values), in order."""
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    for arg in typing.get_args(annotation):
-        found = _model_of(arg)
-        if found is not None:
-            return found
-    return None
+        return [annotation]
+    return [m for arg in typing.get_args(annotation) for m in _models_of(arg)]
 
 
 def _key_name(field_name: str) -> str:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import tomllib
+import types
 import typing
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -18,6 +19,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from sse_cosim.errors import UserError
+from sse_cosim.scenario.base import TAG_MARK
 from sse_cosim.scenario.model import Scenario
 
 EXTENDS_KEY = "extends"
@@ -84,19 +86,33 @@ def _check_path(dotted: str, source: str) -> None:
 
 
 def _schema_has_table(parts: list[str]) -> bool:
-    """Whether the schema has a table at ``parts`` (dict-valued fields accept any key)."""
-    model: Any = Scenario
+    """Whether the schema has a table at ``parts`` (dict-valued fields accept any key; in a
+    union of tables, such as the sensor kinds, any member's table counts)."""
+    models: list[Any] = [Scenario]
     for part in parts:
-        if isinstance(model, _DictOf):
-            model = model.value  # any key: the entry has the dict's value type
-            continue
-        fields = getattr(model, "model_fields", None)
-        if fields is None or part not in fields:
-            return False
-        annotation = fields[part].annotation
-        origin = getattr(annotation, "__origin__", None)
-        model = _DictOf(typing.get_args(annotation)[1]) if origin is dict else annotation
-    return isinstance(model, _DictOf) or hasattr(model, "model_fields")
+        found: list[Any] = []
+        for model in models:
+            if isinstance(model, _DictOf):
+                found += _members(model.value)  # any key: the entry has the dict's value type
+                continue
+            fields = getattr(model, "model_fields", None)
+            if fields is None or part not in fields:
+                continue
+            annotation = fields[part].annotation
+            origin = getattr(annotation, "__origin__", None)
+            found += [_DictOf(typing.get_args(annotation)[1])] if origin is dict \
+                else _members(annotation)
+        models = found
+    return any(isinstance(m, _DictOf) or hasattr(m, "model_fields") for m in models)
+
+
+def _members(annotation: Any) -> list[Any]:
+    """The types an annotation admits: a union's members, an ``Annotated`` type's own."""
+    if typing.get_origin(annotation) is typing.Annotated:
+        return _members(typing.get_args(annotation)[0])
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
+        return [m for arg in typing.get_args(annotation) for m in _members(arg)]
+    return [annotation]
 
 
 @dataclass(frozen=True)
@@ -188,7 +204,8 @@ _FIXES = {
 def _user_error(exc: ValidationError, source: str) -> UserError:
     """The first validation problem as a one-line error naming file, field and fix."""
     err = exc.errors(include_url=False)[0]
-    field = ".".join(str(part) for part in err["loc"])
+    # a tagged union (sensor kinds) puts its tag, e.g. "kind=range", in the path: drop it
+    field = ".".join(str(part) for part in err["loc"] if TAG_MARK not in str(part))
     message = str(err["msg"]).removeprefix("Value error, ")
     head, _, rest = message.partition(": ")
     if err["type"] == "value_error" and rest and " " not in head:

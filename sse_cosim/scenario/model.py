@@ -7,24 +7,20 @@ SUMO's navigational angle (clockwise from north); the world adapter converts.
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
+from sse_cosim.scenario.base import NonNegativeFloat, PositiveFloat, StrictModel
+from sse_cosim.sensors.kinds import Sensor, SensorMount
 from sse_cosim.sets import available_fusion_methods, available_gain_methods
 from sse_cosim.sets.reduction import REDUCTION_METHODS
 
-PositiveFloat = Annotated[float, Field(gt=0)]
-NonNegativeFloat = Annotated[float, Field(ge=0)]
+__all__ = ["NonNegativeFloat", "PositiveFloat", "Sensor", "SensorMount", "StrictModel"]
+
 BUS_NODE = "bus"
 CAR_NODE = "car"
 Assumption = Literal["pedestrian_speed", "sensor_bounds", "shared_estimates"]
-
-
-class StrictModel(BaseModel):
-    """Base model: unknown keys are errors, values are checked on assignment too."""
-
-    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False)
 
 
 class Simulation(StrictModel):
@@ -105,31 +101,6 @@ class Pedestrian(StrictModel):
         "from t = 0 and starts walking in time; a time its walk cannot make is an error."
     )
     radius_m: PositiveFloat = Field(0.3, description="Body radius used for collisions (m).")
-
-
-class SensorMount(StrictModel):
-    forward_m: float = Field(
-        0.0, description="Offset along the carrier's heading from its reference point (m); "
-        "a vehicle's reference point is its front bumper's centre, a unit's its position."
-    )
-    left_m: float = Field(0.0, description="Offset to the carrier's left (m).")
-    yaw_deg: float = Field(
-        0.0, description="Boresight relative to the carrier's heading (deg, CCW)."
-    )
-
-
-class Sensor(StrictModel):
-    node: str = Field(description="Carrier: 'bus', 'car' or a road-side unit id.")
-    mount: SensorMount = Field(default_factory=SensorMount)
-    fov_deg: float = Field(90.0, gt=0, le=360, description="Opening angle of the sector (deg).")
-    range_m: PositiveFloat = Field(60.0, description="Range of the sector (m).")
-    noise_bound_m: tuple[PositiveFloat, PositiveFloat] = Field(
-        (0.5, 0.5), description="Noise bounds r (m) along the sensor's forward and lateral axes."
-    )
-    noise: Literal["uniform", "worst-case"] = Field(
-        "uniform", description="'uniform': uniform within the bound; 'worst-case': on the bound "
-        "(either sign)."
-    )
 
 
 class RoadSideUnit(StrictModel):
@@ -270,12 +241,14 @@ class SensorFault(FaultWindow):
         "are lost; phantom: a pedestrian that is not there is reported."
     )
     bias_m: tuple[float, float] = Field(
-        (0.0, 0.0), description="bias: offset added along the sensor's forward and lateral "
-        "axes (m); beyond the noise bound it contradicts the other sources."
+        (0.0, 0.0), description="bias: offset added along the measurement's two axes (m): a "
+        "camera's forward and lateral axes, a range sensor's measured bearing and across it; "
+        "beyond the noise bound it contradicts the other sources."
     )
     within_bound: bool = Field(
-        False, description="bias: clip the biased error to the noise bound, so the strip still "
-        "holds the truth (a fault inside the sensor's specification)."
+        False, description="bias: clip the biased error to the strips' half-widths (a camera's "
+        "noise bound), so the strips still hold the truth (a fault the estimator's bounds "
+        "cover)."
     )
     dropout_probability: float = Field(
         0.5, gt=0, le=1, description="dropout: probability that a step's frame is lost (seeded)."

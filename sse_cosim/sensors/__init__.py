@@ -1,8 +1,9 @@
 """Sensor layer: pure geometry of what each sensor sees and measures at one step.
 
 - :mod:`.geometry`: sectors, vectorized in-sector and line-of-sight tests, shadows, regions.
+- :mod:`.kinds`: what each kind of sensor sees and measures (camera, range), by name.
 - :mod:`.spec`: sensor specs from the scenario and their world poses on their carriers.
-- :mod:`.measurement`: y = H p + v as strips (paper eqs. senmodel and strip).
+- :mod:`.measurement`: y = H p + v as strips (paper eqs. senmodel and strip), noise draws.
 - :mod:`.observe`: every sensor's observation of a snapshot.
 """
 
@@ -19,20 +20,24 @@ from sse_cosim.sensors.geometry import (
     sight_masks,
     visibility_regions,
 )
-from sse_cosim.sensors.measurement import Detection, draw_noise, measure, measurement_matrix
-from sse_cosim.sensors.observe import SensorObservation, observe, seen_mask
-from sse_cosim.sensors.spec import (
+from sse_cosim.sensors.kinds import Camera, RangeBearing, SensorKind
+from sse_cosim.sensors.measurement import (
+    Detection,
     NoiseKind,
-    SensorSpec,
-    find_carrier,
-    locate,
-    specs_from_scenario,
+    draw_noise,
+    measure,
+    measurement_matrix,
 )
+from sse_cosim.sensors.observe import SensorObservation, observe, seen_mask
+from sse_cosim.sensors.spec import SensorSpec, find_carrier, locate, specs_from_scenario
 
 __all__ = [
     "Boxes",
+    "Camera",
     "Detection",
     "NoiseKind",
+    "RangeBearing",
+    "SensorKind",
     "SensorObservation",
     "SensorSpec",
     "box_distances",

@@ -5,12 +5,14 @@ the faulty outputs; it also reports, for bookkeeping, whether each fault is acti
 its output broke the bounds this step (a strip or an estimate that excludes the truth) --
 never used by the estimation, only by the recorder (:class:`FaultLog`).
 
-- Sensor faults change one sensor's observation from ``start_s`` to ``end_s``: ``bias`` adds
-  an offset along the sensor's axes to every measurement (``within_bound``: the error is
-  clipped to the noise bound, a fault inside the specification); ``stuck`` repeats the
-  detections of the fault's first step; ``dropout`` loses whole frames (no detection, nothing
-  seen) with a seeded probability; ``phantom`` reports a pedestrian that is not there, on a
-  straight track, with the sensor's own noise.
+- Sensor faults change one sensor's observation from ``start_s`` to ``end_s``, whatever its
+  kind (they act on strips): ``bias`` adds an offset along the strips' normals to every
+  measurement, i.e. a camera's forward and lateral axes, a range sensor's measured bearing
+  and across it (``within_bound``: the error is clipped to the strips' half-widths, so they
+  still hold the truth); ``stuck`` repeats the detections of the fault's first step;
+  ``dropout`` loses whole frames (no detection, nothing seen) with a seeded probability;
+  ``phantom`` reports a pedestrian that is not there, on a straight track, measured by the
+  sensor's own kind.
 - Node faults change the estimates a connected node sends: ``shift`` moves them, ``shrink``
   scales their generators (an over-confident or spoofed sender).
 - Link faults: ``loss`` drops every message sent in the window, ``latency`` delays them.
@@ -29,7 +31,7 @@ import numpy as np
 import shapely
 
 from sse_cosim.scenario.model import FaultWindow, LinkFault, NodeFault, Scenario, SensorFault
-from sse_cosim.sensors.measurement import Detection, measure
+from sse_cosim.sensors.measurement import Detection
 from sse_cosim.sensors.observe import SensorObservation
 from sse_cosim.sensors.spec import SensorSpec
 from sse_cosim.sets import Strips, Zonotope
@@ -117,9 +119,9 @@ class FaultInjector:
                 return obs
             nothing = shapely.Polygon()
             return replace(obs, detections={}, visible=None if obs.visible is None else nothing,
-                           occluded=_union(obs.visible, obs.occluded))
+                           occluded=_hidden_by_lost_frame(obs.visible, obs.occluded))
         if fault.kind == "bias":
-            detections = {pid: _biased(d, fault, spec, truth.get(pid))
+            detections = {pid: _biased(d, fault, truth.get(pid))
                           for pid, d in obs.detections.items()}
         elif fault.kind == "stuck":
             frozen = self._frozen.setdefault(key, dict(obs.detections))
@@ -127,7 +129,7 @@ class FaultInjector:
         else:  # phantom
             velocity = np.asarray(fault.phantom_velocity_mps)
             where = np.asarray(fault.phantom_xy_m) + (time - fault.start_s) * velocity
-            strips = measure(obs.pose, where[np.newaxis, :], spec.bounds, spec.noise, self.rng)[0]
+            strips = spec.kind.measure(obs.pose, where[np.newaxis, :], self.rng)[0]
             ghost = Detection(fault.sensor, obs.node, time, fault.phantom_id, strips)
             detections = {**obs.detections, fault.phantom_id: ghost}
         self._mark(key, any(pid not in truth or not d.strips.contains(truth[pid])
@@ -165,8 +167,7 @@ class FaultInjector:
                    if f.node == node and f.kind == "latency")
 
 
-def _biased(detection: Detection, fault: SensorFault, spec: SensorSpec,
-            truth: np.ndarray | None) -> Detection:
+def _biased(detection: Detection, fault: SensorFault, truth: np.ndarray | None) -> Detection:
     """The detection offset by the fault's bias (clipped to the bound if ``within_bound``)."""
     strips = detection.strips
     values = strips.values + np.asarray(fault.bias_m)
@@ -176,7 +177,7 @@ def _biased(detection: Detection, fault: SensorFault, spec: SensorSpec,
     return replace(detection, strips=Strips(strips.normals, values, strips.radii))
 
 
-def _union(*parts: shapely.Geometry | None) -> shapely.Geometry | None:
+def _hidden_by_lost_frame(*parts: shapely.Geometry | None) -> shapely.Geometry | None:
     """What a lost frame hides: the whole sector (None when regions were not requested)."""
     present = [p for p in parts if p is not None]
     return shapely.union_all(present) if present else None

@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import numpy as np
 
 from sse_cosim.sets import Strips
 from sse_cosim.world.snapshot import Pose
 
-NOISE_KINDS = ("uniform", "worst-case")
+NoiseKind = Literal["uniform", "worst-case"]
+NOISE_KINDS = get_args(NoiseKind)
 
 
 def measurement_matrix(pose: Pose) -> np.ndarray:

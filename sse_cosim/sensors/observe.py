@@ -16,7 +16,7 @@ from sse_cosim.sensors.geometry import (
     sight_masks,
     visibility_regions,
 )
-from sse_cosim.sensors.measurement import Detection, measure
+from sse_cosim.sensors.measurement import Detection
 from sse_cosim.sensors.spec import SensorSpec, locate
 from sse_cosim.world.snapshot import Pose, Snapshot
 
@@ -61,11 +61,11 @@ def observe(
 ) -> dict[str, SensorObservation]:
     """Every sensor's observation at this snapshot, by sensor name (``sensor_specs`` order).
 
-    A person is detected iff its centre is in the sector and the segment to it misses every
-    footprint but the carrier's. The tests run for all sensors × persons × footprints in one
-    vectorized pass; measurement strips draw from ``rng`` sensor by sensor (in order), persons
-    in snapshot order, so a seeded generator reproduces them. Regions (shapely) are only
-    computed when ``want_regions``.
+    A person is detected iff its centre is in the sensor's field of view (its kind's sector)
+    and the segment to it misses every footprint but the carrier's. The tests run for all
+    sensors × persons × footprints in one vectorized pass; the kinds' strips draw from ``rng``
+    sensor by sensor (in order), persons in snapshot order, so a seeded generator reproduces
+    them. Regions (shapely) are only computed when ``want_regions``.
     """
     vehicles = list(snapshot.vehicles.values())
     index = {v.id: i for i, v in enumerate(vehicles)}
@@ -101,7 +101,7 @@ def observe(
         hits = hits_of.get(row, [])
         detections: dict[str, Detection] = {}
         if hits:
-            strips = measure(pose, positions[hits], spec.bounds, spec.noise, rng)
+            strips = spec.kind.measure(pose, positions[hits], rng)
             detections = {
                 person_ids[h]: Detection(name, spec.node, snapshot.time, person_ids[h], st)
                 for h, st in zip(hits, strips, strict=True)

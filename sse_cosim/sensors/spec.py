@@ -1,43 +1,37 @@
-"""Sensor specifications and mounting: where a sensor is, given its carrier."""
+"""Sensor specifications and mounting: where a sensor is, given its carrier, and its kind."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING
 
-import numpy as np
 import shapely
 
 from sse_cosim.sensors.geometry import cached_sector_polygon, sector_polygon
+from sse_cosim.sensors.kinds import Camera, SensorKind
 from sse_cosim.world.snapshot import Pose, Snapshot, VehicleState
 
 if TYPE_CHECKING:  # the schema is only needed for type checking
     from sse_cosim.scenario.model import RoadSideUnit, Scenario, Sensor
 
-NoiseKind = Literal["uniform", "worst-case"]
-
 
 @dataclass(frozen=True)
 class SensorSpec:
-    """One sensor: its carrier, mounting, sector and noise.
+    """One sensor: its carrier, mounting and kind (what it sees and how it measures).
 
     ``node`` is the carrier: a vehicle role ('bus', 'car', ...) or vehicle id, or, when
     ``static_pose`` is set, a road-side unit standing at that pose. The mount offsets are in
     the carrier's frame from its reference point (a vehicle's front bumper centre, a unit's
-    position); ``yaw_rad`` turns the boresight CCW. ``noise_bound_m`` is (forward, lateral)
-    in the sensor's frame; ``resolution`` is the number of arc chords per quarter turn of
-    the sector polygon.
+    position); ``yaw_rad`` turns the boresight CCW. ``resolution`` is the number of arc
+    chords per quarter turn of the field-of-view polygon.
     """
 
     name: str
     node: str
-    fov_rad: float = 0.5 * math.pi
-    range_m: float = 60.0
-    noise_bound_m: tuple[float, float] = (0.5, 0.5)
-    noise: NoiseKind = "uniform"
+    kind: SensorKind = field(default_factory=Camera)
     forward_m: float = 0.0
     left_m: float = 0.0
     yaw_rad: float = 0.0
@@ -54,10 +48,7 @@ class SensorSpec:
         return cls(
             name=name,
             node=sensor.node,
-            fov_rad=math.radians(sensor.fov_deg),
-            range_m=float(sensor.range_m),
-            noise_bound_m=(float(sensor.noise_bound_m[0]), float(sensor.noise_bound_m[1])),
-            noise=sensor.noise,
+            kind=sensor.build(),
             forward_m=float(sensor.mount.forward_m),
             left_m=float(sensor.mount.left_m),
             yaw_rad=math.radians(sensor.mount.yaw_deg),
@@ -65,14 +56,19 @@ class SensorSpec:
         )
 
     @property
+    def fov_rad(self) -> float:
+        """Opening of the field of view (rad; >= 2 pi: all around)."""
+        return self.kind.fov_rad
+
+    @property
+    def range_m(self) -> float:
+        """Reach of the field of view (m)."""
+        return self.kind.range_m
+
+    @property
     def is_static(self) -> bool:
         """Whether the carrier is a road-side unit (fixed pose)."""
         return self.static_pose is not None
-
-    @property
-    def bounds(self) -> np.ndarray:
-        """Noise bounds r (forward, lateral), shape (2,)."""
-        return np.asarray(self.noise_bound_m, dtype=float)
 
     def mounted_on(self, carrier: Pose) -> Pose:
         """The sensor's world pose on a carrier at ``carrier`` (its reference pose).

@@ -3,12 +3,6 @@
 See ``docs/method.md`` for the map from the paper's equations to these functions.
 """
 
-from sse_cosim.sets.consistency import (
-    projection_interval,
-    strip_covers,
-    strip_disjoint,
-    zonotopes_disjoint,
-)
 from sse_cosim.sets.fusion import (
     FUSION_METHODS,
     available_fusion_methods,
@@ -21,6 +15,13 @@ from sse_cosim.sets.gains import (
     apply_gain,
     available_gain_methods,
     intersect_strips,
+)
+from sse_cosim.sets.overlap import (
+    have_common_point,
+    projection_interval,
+    strip_covers,
+    strip_disjoint,
+    zonotopes_disjoint,
 )
 from sse_cosim.sets.reduction import REDUCTION_METHODS
 from sse_cosim.sets.strips import Strips, zonotope_facet_strips
@@ -38,6 +39,7 @@ __all__ = [
     "available_gain_methods",
     "fuse",
     "fuse_with_weights",
+    "have_common_point",
     "intersect_strips",
     "projection_interval",
     "strip_covers",

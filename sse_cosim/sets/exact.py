@@ -59,8 +59,3 @@ def intersect_strips_exact(geometry: BaseGeometry, strips: Strips) -> BaseGeomet
             break
         result = result.intersection(_strip_polygon(normal, value, radius, result.bounds))
     return result
-
-
-def polygon_area(geometry: BaseGeometry) -> float:
-    """Area of a shapely geometry (0 for points, segments and the empty set)."""
-    return float(geometry.area)

@@ -16,9 +16,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from sse_cosim.sets._registry import lookup
-from sse_cosim.sets.consistency import projection_interval, strip_covers
 from sse_cosim.sets.enclosure import enclose_intersection
 from sse_cosim.sets.gains import intersect_strips
+from sse_cosim.sets.overlap import projection_interval, strip_covers
 from sse_cosim.sets.strips import Strips, zonotope_facet_strips
 from sse_cosim.sets.zonotope import FloatArray, Zonotope, full_rank
 
@@ -100,7 +100,7 @@ def enclose_fusion(zonotopes: Sequence[Zonotope]) -> Zonotope:
     :func:`enclosure.enclose_polygon`); the smallest input contains it too. Falls back to the
     smallest input (``volume`` fusion) when n != 2, when an input is not full-dimensional (it
     is then the smallest: volume 0), when the inputs share no point (inconsistent sources,
-    which :mod:`sse_cosim.sets.consistency` detects; any set is sound), or when no
+    which :mod:`sse_cosim.sets.overlap` detects; any set is sound), or when no
     enclosure is accepted.
     """
     index = _smallest(zonotopes)

@@ -26,8 +26,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from sse_cosim.sets._registry import lookup
-from sse_cosim.sets.consistency import strip_covers
 from sse_cosim.sets.enclosure import enclose_intersection, smaller_enclosure
+from sse_cosim.sets.overlap import strip_covers
 from sse_cosim.sets.strips import Strips
 from sse_cosim.sets.zonotope import (
     FloatArray,
@@ -43,7 +43,7 @@ if TYPE_CHECKING:  # cvxpy loads on first use: runs with closed-form gains skip 
 GainMethod = Callable[[Zonotope, Strips], FloatArray]
 """Chooses Λ (n, m) for Z and m strips with unit normals."""
 
-Correction = Callable[[Zonotope, Strips], Zonotope]
+CorrectionMethod = Callable[[Zonotope, Strips], Zonotope]
 """Encloses Z ∩ S_1 ∩ ... ∩ S_m (strips with unit normals, Z with generators) in a zonotope."""
 
 StripGain = Callable[[FloatArray, FloatArray, float], FloatArray]
@@ -282,7 +282,7 @@ GAIN_METHODS: dict[str, GainMethod] = {
 }
 
 
-def _by_gain(choose: GainMethod) -> Correction:
+def _by_gain(choose: GainMethod) -> CorrectionMethod:
     def correct(zonotope: Zonotope, strips: Strips) -> Zonotope:
         return apply_gain(zonotope, strips, choose(zonotope, strips))
 
@@ -300,7 +300,7 @@ def enclose_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
 
     Falls back to the ``volume`` result when n != 2, when Z is not full-dimensional, when
     Z ∩ S is empty (an inconsistent measurement: any set is sound, and
-    :mod:`sse_cosim.sets.consistency` is where that is detected, as for the gains), or when
+    :mod:`sse_cosim.sets.overlap` is where that is detected, as for the gains), or when
     no enclosure is found.
     """
 
@@ -317,7 +317,7 @@ def enclose_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
     return smaller_enclosure(*found, volume)
 
 
-CORRECTION_METHODS: dict[str, Correction] = {
+CORRECTION_METHODS: dict[str, CorrectionMethod] = {
     **{name: _by_gain(choose) for name, choose in GAIN_METHODS.items()},
     "enclose": enclose_correction,
 }

@@ -11,7 +11,9 @@ from pathlib import Path
 import pytest
 
 from sse_cosim.cli.main import EXIT_BAD_INPUT, EXIT_SIMULATION_FAILED, main
-from sse_cosim.runner.batch import RUNS_FOLDER, run_batch
+from sse_cosim.reporting.outputs import RUNS_FOLDER
+from sse_cosim.runner.batch import run_batch
+from sse_cosim.runner.executors import Execution
 from sse_cosim.world import sumo
 
 pytestmark = pytest.mark.sumo
@@ -131,8 +133,8 @@ def test_a_batch_records_each_failure_and_finishes_the_other_runs(tmp_path):
                                f'"{broken_network(tmp_path).as_posix()}"\n')
     bad_input = scenario_file(tmp_path, "bad_input", "[pedestrian]\nstart_pos_m = 450.0\n")
     out = tmp_path / "out"
-    outcomes = {o.key: o for o in run_batch([good, sumo_error, bad_input], out, workers=3,
-                                            progress=False)}
+    outcomes = {o.key: o for o in run_batch([good, sumo_error, bad_input], out,
+                                            Execution(workers=3, progress=False))}
     assert outcomes["good"].ok and outcomes["good"].summary["steps"] == 10
     assert "simulation failed" in outcomes["sumo_error"].error
     assert "pedestrian.start_pos_m" in outcomes["bad_input"].error

@@ -10,8 +10,10 @@ import pandas as pd
 import pytest
 from scipy.optimize import linprog
 
+from sse_cosim.reporting.outputs import RUNS_FOLDER
 from sse_cosim.reporting.paper import read_run_folders, write_paper_report
-from sse_cosim.runner.batch import RUNS_FOLDER, run_batch
+from sse_cosim.runner.batch import run_batch
+from sse_cosim.runner.executors import Execution
 
 pytestmark = pytest.mark.sumo
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
@@ -21,8 +23,8 @@ NAMES = [f"s{i}_{kind}" for i in (1, 2, 3) for kind in ("pedestrian", "no_pedest
 @pytest.fixture(scope="module")
 def batch(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("batch")
-    outcomes = run_batch([SCENARIOS / f"{n}.toml" for n in NAMES], out, workers=2,
-                         progress=False)
+    outcomes = run_batch([SCENARIOS / f"{n}.toml" for n in NAMES], out,
+                         Execution(workers=2, progress=False))
     assert all(o.ok for o in outcomes), [o.error for o in outcomes if not o.ok]
     write_paper_report(out, read_run_folders([out / RUNS_FOLDER]))
     return out

@@ -7,9 +7,9 @@ import itertools
 import numpy as np
 import pytest
 
+from sse_cosim.estimation.bus_fusion import fuse_at_bus
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver
-from sse_cosim.estimation.shared import fuse_at_bus
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips
 

@@ -50,6 +50,31 @@ def test_stale_estimates_are_predicted_to_now():
     assert abs(aged.volume() - grown**2) < 1e-9
 
 
+def test_the_picture_names_senders_whose_newest_message_reports_an_inconsistency():
+    model = MotionModel.from_config(Estimator(), DT)
+    link = V2XLink(V2X(latency_steps=0), np.random.default_rng(0))
+    link.send(Message("car", 0, {}, shapely.Polygon(), inconsistent=True), 5.0)
+    link.send(message("rsu1", 0), 5.0)
+    link.deliver(0)
+    assert link.picture(0, model).inconsistent == {"car"}
+    link.send(message("car", 1), 5.0)  # the newer message counts
+    link.deliver(1)
+    assert not link.picture(1, model).inconsistent
+
+
+def test_a_tracker_that_forgets_is_a_fresh_one():
+    model = MotionModel.from_config(Estimator(), DT)
+    walkable = shapely.box(-20, -20, 20, 20)
+    used, fresh = OccupancyTracker(model, DT, walkable), OccupancyTracker(model, DT, walkable)
+    small = {"ped": Zonotope(np.zeros(2), np.eye(2) * 0.5)}
+    large = {"ped": Zonotope(np.zeros(2), np.eye(2) * 3.0)}
+    used.update(0, small, {})
+    assert used.update(1, large, {})["ped"].area < fresh.update(1, large, {})["ped"].area
+    used.forget()
+    assert used.update(2, large, {})["ped"].equals(OccupancyTracker(model, DT, walkable)
+                                                   .update(2, large, {})["ped"])
+
+
 def test_dilate_circumscribes_the_disc():
     square = shapely.box(0, 0, 1, 1)
     grown = dilate(square, 1.0)

@@ -3,9 +3,11 @@
 A pedestrian follows p = s + e (a path s moving at most ``speed * DT`` per step, plus a jitter
 of norm at most ``jitter``, often at full size); nodes with one or more sensors at random
 poses measure it with bounded noise (uniform or on the bound); every node other than the bus
-sends its estimate, which reaches the bus ``latency`` steps later; the bus also gets "clear"
-regions (boxes that provably miss the pedestrian when they were seen) for negative
-information. Hooks corrupt a sensor's strips or a sender's estimate to inject faults.
+sends its estimate over a lossless V2X link, which delivers it ``latency`` steps later; the bus
+also gets "clear" regions (boxes that provably miss the pedestrian when they were seen) for
+negative information. Hooks corrupt a sensor's strips or a sender's estimate to inject faults.
+The nodes' observers, the link and the bus's screen, fusion and flags are the co-simulation's
+own (:class:`~sse_cosim.estimation.fusion_centre.FusionCentre`).
 """
 
 from __future__ import annotations
@@ -16,12 +18,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
-from sse_cosim.estimation.consistency import BusScreen, BusScreener, StepFlags, step_flags
+from sse_cosim.estimation.bus_screen import BusScreen
+from sse_cosim.estimation.flags import StepFlags, disagrees
+from sse_cosim.estimation.fusion_centre import FusionCentre
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver, Track
+from sse_cosim.estimation.observer import EstimatorSettings, LocalObservers, Track
 from sse_cosim.estimation.occupancy import ClearRegion
-from sse_cosim.estimation.shared import fuse_at_bus
-from sse_cosim.scenario.model import BUS_NODE, Estimator
+from sse_cosim.estimation.v2x import Message, V2XLink
+from sse_cosim.scenario.model import BUS_NODE, V2X, Estimator
 from sse_cosim.sets import Strips, Zonotope
 
 DT = 0.1
@@ -94,32 +98,33 @@ class Harness:
         truth, _ = trajectory(rng, steps, self.speed, self.jitter)
         settings = EstimatorSettings(self.gain, "girard", 8)
         nodes = sorted({s.node for s in self.sensors.values()} | {BUS_NODE})
-        observers = {n: NodeObserver(n, self.model, settings) for n in nodes}
-        screener = BusScreener(self.model, self.speed * DT)
-        sent: list[tuple[int, str, Zonotope]] = []
+        observers = LocalObservers(nodes, self.model, settings)
+        link = V2XLink(V2X(latency_steps=self.latency), np.random.default_rng(0))
+        centre = FusionCentre(self.model, settings, "strips", self.sensors, DT)
         records = []
         for k, p in enumerate(truth):
             detections = self._detections(rng, k, p)
-            tracks = {n: o.step(k, detections.get(n, {})) for n, o in observers.items()}
+            tracks = observers.step(k, detections)
             for node in nodes:
                 if node != BUS_NODE and PED in tracks[node]:
-                    estimate = tracks[node][PED].estimate
-                    if self.estimate_hook is not None:
-                        estimate = self.estimate_hook(k, node, estimate)
-                    sent.append((k, node, estimate))
-            received = {s: self.model.predict(z, k - t) for t, s, z in sent
-                        if t == k - self.latency}
+                    link.send(self._message(k, node, tracks[node], detections.get(node, {})), 0.0)
+            link.deliver(k)
+            shared = link.picture(k, self.model)
             clear = self._clear(rng, truth, k) if self.clear_regions else []
-            own = {PED: tracks[BUS_NODE][PED].estimate} if PED in tracks[BUS_NODE] else {}
             detected = frozenset({PED}) if any(PED in d for d in detections.values()) \
                 else frozenset()
-            screen = screener.screen(own, {PED: received} if received else {}, {PED: clear},
-                                     detected)
-            fused = fuse_at_bus({pid: tracks[BUS_NODE][pid] for pid in screen.own},
-                                screen.received, "strips", settings, self.model)
-            flags = step_flags(self.sensors, tracks, screen, False)
-            records.append(StepRecord(k, p, tracks, screen, fused, flags))
+            estimate = centre.step(tracks, shared, {PED: clear}, detected)
+            records.append(StepRecord(k, p, tracks, estimate.screen, estimate.fused,
+                                      estimate.flags))
         return records
+
+    def _message(self, k: int, node: str, tracks: dict[str, Track], seen: dict) -> Message:
+        """What ``node`` sends at step ``k``: its estimate, as the estimate hook distorts it."""
+        estimate = tracks[PED].estimate
+        if self.estimate_hook is not None:
+            estimate = self.estimate_hook(k, node, estimate)
+        return Message(node, k, {PED: estimate}, shapely.Polygon(), frozenset(seen),
+                       disagrees(tracks.values()))
 
     def _detections(self, rng, k: int, p: np.ndarray) -> dict[str, dict[str, dict]]:
         result: dict[str, dict[str, dict]] = {}

@@ -1,4 +1,5 @@
-"""The consistency vote, its exact tests, the hull, probation and negative information."""
+"""The consistency vote, the hull, probation and negative information (the exact tests:
+tests/sets/test_sets_overlap.py)."""
 
 from __future__ import annotations
 
@@ -6,39 +7,20 @@ import numpy as np
 import pytest
 import shapely
 
-from sse_cosim.estimation.consistency import (
+from sse_cosim.estimation.bus_screen import contradicted
+from sse_cosim.estimation.occupancy import ClearRegion
+from sse_cosim.estimation.vote import (
     READMIT_STEPS,
     Probation,
-    contradicted,
-    have_common_point,
     interval_hull,
     largest_consistent_groups,
     vote,
 )
-from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.sets import Zonotope
 
 
 def box(x: float, y: float, half: float = 1.0) -> Zonotope:
     return Zonotope(np.array([x, y]), np.eye(2) * half)
-
-
-def test_common_point_of_three_sets_that_meet_pairwise_only():
-    """Three strips of a triangle meet two by two but share no point (2-D Helly needs three)."""
-    t = 0.05  # half-thickness; triangle (-2, 0), (2, 0), (0, 2)
-    sides = [Zonotope(np.array([0.0, 0.0]), np.array([[2.0, 0.0], [0.0, t]])),
-             Zonotope(np.array([1.0, 1.0]), np.array([[1.0, t], [-1.0, t]])),
-             Zonotope(np.array([-1.0, 1.0]), np.array([[1.0, -t], [1.0, t]]))]
-    for a in range(3):
-        for b in range(a + 1, 3):
-            assert have_common_point([sides[a], sides[b]])
-    assert not have_common_point(sides)
-    assert have_common_point([box(0, 0), box(1.5, 0), box(0.7, 1.5)])
-
-
-def test_touching_sets_count_as_meeting_and_a_gap_above_the_tolerance_does_not():
-    assert have_common_point([box(0, 0), box(2.0, 0), box(1.0, 2.0)])
-    assert not have_common_point([box(0, 0), box(2.0 + 1e-4, 0)])
 
 
 def test_unique_majority_leaves_out_the_odd_one():

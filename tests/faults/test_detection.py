@@ -7,9 +7,10 @@ import numpy as np
 import shapely
 from synthetic import DT, PED, Harness, SensorSetup, axes, contains
 
-from sse_cosim.estimation.consistency import READMIT_STEPS, BusScreener
+from sse_cosim.estimation.bus_screen import BusScreener
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import ClearRegion
+from sse_cosim.estimation.vote import READMIT_STEPS
 from sse_cosim.scenario.model import BUS_NODE, Estimator
 from sse_cosim.sets import Strips, Zonotope
 

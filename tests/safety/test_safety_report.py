@@ -12,17 +12,15 @@ import pytest
 from safety_helpers import campaign_file, slow_walkers_cannot
 
 from sse_cosim.files import write_json_atomic
-from sse_cosim.reporting.outputs import SUMMARY
+from sse_cosim.reporting.outputs import ERROR, RUNS_FOLDER, SUMMARY
 from sse_cosim.reporting.safety_report import (
     SAFETY_TABLE,
     heat_map_name,
     report_path,
     write_safety_report,
 )
-from sse_cosim.runner.batch import RUNS_FOLDER
 from sse_cosim.runner.safety import SAFETY_PLAN, load_campaign, plan_campaign, plan_document
 from sse_cosim.runner.sweep import PlannedRun
-from sse_cosim.runner.tasks import ERROR
 
 SAFE = {
     "collisions": 0, "containment_violations": 0, "containment_violations_by_set": {},

@@ -12,7 +12,7 @@ import math
 
 from hypothesis import HealthCheck, settings
 
-from sse_cosim.sensors import SensorSpec
+from sse_cosim.sensors import Camera, SensorSpec
 from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
 
 SETTINGS = settings(
@@ -63,12 +63,16 @@ def snapshot(
 def paper_specs(noise: str = "uniform") -> dict[str, SensorSpec]:
     """The four sensors of scenarios S1-S3 (bus, car, two road-side units)."""
     return {
-        "bus_front": SensorSpec("bus_front", "bus", math.radians(90), 60.0, (0.5, 0.5), noise),
-        "car_front": SensorSpec("car_front", "car", math.radians(100), 60.0, (1.0, 1.0), noise),
+        "bus_front": SensorSpec(
+            "bus_front", "bus", Camera(math.radians(90), 60.0, (0.5, 0.5), noise)
+        ),
+        "car_front": SensorSpec(
+            "car_front", "car", Camera(math.radians(100), 60.0, (1.0, 1.0), noise)
+        ),
         "rsu1_cam": SensorSpec(
-            "rsu1_cam", "rsu1", math.radians(90), 40.0, (1.0, 1.0), noise, static_pose=RSU1
+            "rsu1_cam", "rsu1", Camera(math.radians(90), 40.0, (1.0, 1.0), noise), static_pose=RSU1
         ),
         "rsu2_cam": SensorSpec(
-            "rsu2_cam", "rsu2", math.radians(90), 40.0, (1.0, 1.0), noise, static_pose=RSU2
+            "rsu2_cam", "rsu2", Camera(math.radians(90), 40.0, (1.0, 1.0), noise), static_pose=RSU2
         ),
     }

@@ -19,9 +19,10 @@ from sensors_scene import (
     truck,
 )
 
-from sse_cosim.scenario.model import RoadSideUnit, Scenario, Sensor, SensorMount
+from sse_cosim.scenario.model import RoadSideUnit, Scenario, SensorMount
 from sse_cosim.sensors import (
     Boxes,
+    Camera,
     SensorSpec,
     in_sector,
     line_of_sight,
@@ -31,6 +32,7 @@ from sse_cosim.sensors import (
     specs_from_scenario,
     visibility_regions,
 )
+from sse_cosim.sensors.kinds import CameraConfig
 from sse_cosim.world.snapshot import Pose
 
 PED = (190.0, -7.0)  # on the south sidewalk, level with the truck's middle
@@ -142,10 +144,9 @@ def test_the_trucks_own_sensor_ignores_the_truck():
     # A sensor on the truck's front bumper looking back along it (yaw 180°): the segment to
     # (180, -4.75) runs through the truck's own body, which does not hide anything from it; the
     # same sensor on a unit standing there is blinded by the truck.
-    on_truck = SensorSpec("truck_rear", "truck", math.radians(90), 30.0, yaw_rad=math.pi)
-    on_unit = SensorSpec(
-        "unit", "unit", math.radians(90), 30.0, yaw_rad=math.pi, static_pose=TRUCK_FRONT
-    )
+    rear = Camera(math.radians(90), 30.0)
+    on_truck = SensorSpec("truck_rear", "truck", rear, yaw_rad=math.pi)
+    on_unit = SensorSpec("unit", "unit", rear, yaw_rad=math.pi, static_pose=TRUCK_FRONT)
     snap = snapshot([truck(), bus(150.0)], {"p": (180.0, -4.75)})
     obs = observe(snap, {"a": on_truck, "b": on_unit}, np.random.default_rng(0), True)
     assert set(obs["a"].detections) == {"p"}
@@ -199,7 +200,7 @@ def test_specs_from_the_scenario_schema_and_mounting():
         name="t",
         rsus={"rsu1": RoadSideUnit(x_m=212.0, y_m=-9.5, heading_deg=165.0)},
         sensors={
-            "bus_side": Sensor(
+            "bus_side": CameraConfig(
                 node="bus",
                 mount=SensorMount(forward_m=-2.0, left_m=1.0, yaw_deg=90.0),
                 fov_deg=120.0,
@@ -207,12 +208,12 @@ def test_specs_from_the_scenario_schema_and_mounting():
                 noise_bound_m=(0.3, 0.7),
                 noise="worst-case",
             ),
-            "rsu1_cam": Sensor(node="rsu1", fov_deg=360.0, range_m=40.0),
+            "rsu1_cam": CameraConfig(node="rsu1", fov_deg=360.0, range_m=40.0),
         },
     )
     specs = specs_from_scenario(scenario)
     side = specs["bus_side"]
-    assert (side.node, side.noise, side.noise_bound_m, side.range_m) == (
+    assert (side.node, side.kind.noise, side.kind.noise_bound_m, side.range_m) == (
         "bus",
         "worst-case",
         (0.3, 0.7),

@@ -1,4 +1,5 @@
-"""Consistency checks (sensor-failure detection) against shapely."""
+"""The overlap tests (sensor-failure detection) against shapely, and the common point of
+many sets."""
 
 import numpy as np
 from hypothesis import given
@@ -6,7 +7,14 @@ from hypothesis import strategies as st
 from sets_strategies import SETTINGS, zonotopes
 from shapely.geometry import box
 
-from sse_cosim.sets import Strips, Zonotope, strip_covers, strip_disjoint, zonotopes_disjoint
+from sse_cosim.sets import (
+    Strips,
+    Zonotope,
+    have_common_point,
+    strip_covers,
+    strip_disjoint,
+    zonotopes_disjoint,
+)
 from sse_cosim.sets.exact import intersect_strips_exact, zonotope_polygon
 
 
@@ -67,3 +75,25 @@ def test_zonotopes_disjoint_in_4d_and_for_points():
     inside = Zonotope(z.generators @ rng.uniform(-1, 1, 6), [])
     assert not zonotopes_disjoint(inside, z)
     assert zonotopes_disjoint(Zonotope(z.interval_hull()[1] + 1.0, []), z)
+
+
+def square(x: float, y: float, half: float = 1.0) -> Zonotope:
+    return Zonotope(np.array([x, y]), np.eye(2) * half)
+
+
+def test_common_point_of_three_sets_that_meet_pairwise_only():
+    """Three strips of a triangle meet two by two but share no point (2-D Helly needs three)."""
+    t = 0.05  # half-thickness; triangle (-2, 0), (2, 0), (0, 2)
+    sides = [Zonotope(np.array([0.0, 0.0]), np.array([[2.0, 0.0], [0.0, t]])),
+             Zonotope(np.array([1.0, 1.0]), np.array([[1.0, t], [-1.0, t]])),
+             Zonotope(np.array([-1.0, 1.0]), np.array([[1.0, -t], [1.0, t]]))]
+    for a in range(3):
+        for b in range(a + 1, 3):
+            assert have_common_point([sides[a], sides[b]])
+    assert not have_common_point(sides)
+    assert have_common_point([square(0, 0), square(1.5, 0), square(0.7, 1.5)])
+
+
+def test_touching_sets_count_as_meeting_and_a_gap_above_the_tolerance_does_not():
+    assert have_common_point([square(0, 0), square(2.0, 0), square(1.0, 2.0)])
+    assert not have_common_point([square(0, 0), square(2.0 + 1e-4, 0)])

@@ -1,0 +1,179 @@
+"""The stages of a simulation step between the world's snapshot and the controller's picture.
+
+Each stage takes what the previous ones produced and returns its own output; none reaches back
+into another's state. Sets are zonotopes (:mod:`sse_cosim.sets`), regions shapely geometries
+in network coordinates (m).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+import shapely
+
+from sse_cosim.estimation.flags import disagrees
+from sse_cosim.estimation.fusion_centre import BusEstimate
+from sse_cosim.estimation.kalman import KalmanTracker, all_detections
+from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.observer import Track
+from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker
+from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
+from sse_cosim.scenario.model import BUS_NODE
+from sse_cosim.sensors import SensorObservation, SensorSpec, observe
+from sse_cosim.sensors.faults import FaultInjector
+from sse_cosim.sets import Strips
+from sse_cosim.world.snapshot import Snapshot
+
+Observations = dict[str, SensorObservation]  # sensor name -> its observation at this step
+Tracks = Mapping[str, Mapping[str, Track]]  # node -> pedestrian id -> local track
+
+
+def sense(snapshot: Snapshot, specs: Mapping[str, SensorSpec], faults: FaultInjector,
+          rng: np.random.Generator) -> Observations:
+    """Every sensor's observation (visibility, detections, strips |H x - y| <= r, paper eqs.
+    senmodel and strip), as the scenario's injected faults distort it."""
+    faults.begin_step(snapshot.time)
+    return faults.corrupt_observations(snapshot, observe(snapshot, specs, rng, want_regions=True))
+
+
+def detections_by_node(observations: Observations) -> dict[str, dict[str, dict[str, Strips]]]:
+    """Node -> pedestrian id -> sensor name -> the strips of that node's sensors that see it."""
+    result: dict[str, dict[str, dict[str, Strips]]] = {}
+    for obs in observations.values():
+        for person_id, detection in obs.detections.items():
+            result.setdefault(obs.node, {}).setdefault(person_id, {})[obs.sensor] = \
+                detection.strips
+    return result
+
+
+def views_of(node: str, observations: Observations) -> list[SensorObservation]:
+    """The observations of ``node``'s sensors."""
+    return [o for o in observations.values() if o.node == node]
+
+
+def union_or_empty(geometries: Iterable[shapely.Geometry | None]) -> shapely.Geometry:
+    """The union of the geometries given, None and empty ones left out (an empty polygon if
+    nothing is left)."""
+    parts = [g for g in geometries if g is not None and not g.is_empty]
+    return shapely.union_all(parts) if parts else shapely.Polygon()
+
+
+@dataclass(frozen=True)
+class Received:
+    """What reached the bus over V2X by this step.
+
+    ``picture``: every sender's newest message brought to this step; ``fresh_views``: the
+    visible regions of the messages delivered now that were seen exactly the link's latency
+    ago (the unobserved area places them at that step; a view delayed longer by a link fault
+    is left out rather than placed at the wrong step).
+    """
+
+    picture: SharedPicture
+    fresh_views: list[shapely.Geometry]
+
+
+class Sharing:
+    """V2X: every node other than the bus that is in the scene sends the bus its estimates and
+    visible region, as its injected faults distort them, over a link with the scenario's (and
+    the injected) range, latency and losses."""
+
+    def __init__(self, link: V2XLink, faults: FaultInjector, model: MotionModel) -> None:
+        self.link = link
+        self.faults = faults
+        self.model = model
+
+    def send(self, step: int, snapshot: Snapshot, observations: Observations,
+             tracks: Tracks) -> None:
+        """Queue every sender's message of ``step``."""
+        bus_xy = snapshot.role(BUS_NODE).footprint.front.position
+        for node, node_tracks in tracks.items():
+            if node == BUS_NODE:
+                continue
+            node_obs = [o for o in views_of(node, observations) if o.pose is not None]
+            if not node_obs or self.faults.link_lost(node):
+                continue
+            position = node_obs[0].pose.position
+            estimates = self.faults.corrupt_estimates(
+                node, {pid: t.estimate for pid, t in node_tracks.items()}, snapshot, self.model)
+            message = Message(
+                node, step, estimates, union_or_empty(o.visible for o in node_obs),
+                frozenset(pid for o in node_obs for pid in o.detections),
+                disagrees(node_tracks.values()),
+            )
+            self.link.send(message, float(np.hypot(*(position - bus_xy))),
+                           self.faults.extra_latency(node))
+
+    def receive(self, step: int) -> Received:
+        """Deliver what is due by ``step``."""
+        delivered = self.link.deliver(step)
+        latency = self.link.config.latency_steps
+        return Received(self.link.picture(step, self.model),
+                        [m.visible_region for m in delivered if step - m.sent_step == latency])
+
+
+def clear_regions(
+    bus_views: Sequence[SensorObservation], own: Mapping[str, Track], shared: SharedPicture
+) -> dict[str, list[ClearRegion]]:
+    """Pedestrian id -> the regions seen without it: by the bus's sensors now, and by every
+    sender that did not detect it (negative information), for every pedestrian the bus or a
+    sender knows of."""
+    return {
+        pid: [ClearRegion(o.visible, 0) for o in bus_views if pid not in o.detections]
+        + shared.clear_of(pid)
+        for pid in own.keys() | shared.estimates.keys()
+    }
+
+
+def detected_now(own: Mapping[str, Track], shared: SharedPicture) -> frozenset[str]:
+    """Pedestrians the bus detects now or a sender detected in its newest message."""
+    return frozenset(pid for pid, t in own.items() if t.detected).union(
+        *shared.detected.values())
+
+
+class KnownRegions(Protocol):
+    """Where each known pedestrian can be (pedestrian id -> region), for the controller."""
+
+    def update(self, step: int, observations: Observations, estimate: BusEstimate,
+               clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, shapely.Geometry]: ...
+
+
+class RefinedRegions:
+    """The fused sets refined with negative information
+    (:class:`~sse_cosim.estimation.occupancy.OccupancyTracker`). When the bus's picture turns
+    inconsistent the refinement's history is forgotten: it may hold a faulty source."""
+
+    def __init__(self, tracker: OccupancyTracker) -> None:
+        self.tracker = tracker
+        self._was_inconsistent = False
+
+    def update(self, step: int, observations: Observations, estimate: BusEstimate,
+               clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, shapely.Geometry]:
+        inconsistent = estimate.flags.inconsistent
+        if inconsistent and not self._was_inconsistent:
+            self.tracker.forget()
+        self._was_inconsistent = inconsistent
+        return self.tracker.update(step, estimate.fused, clear)
+
+
+class KalmanRegions:
+    """The baseline: each pedestrian's 3-sigma ellipse of a Kalman filter over every node's
+    detections (:mod:`sse_cosim.estimation.kalman`), in place of the refined sets."""
+
+    def __init__(self, tracker: KalmanTracker) -> None:
+        self.tracker = tracker
+
+    def update(self, step: int, observations: Observations, estimate: BusEstimate,
+               clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, shapely.Geometry]:
+        self.tracker.step(step, all_detections(observations.values()))
+        return self.tracker.regions()
+
+
+def known_regions(filter_name: str, model: MotionModel, step_length: float,
+                  walkable: shapely.Geometry) -> KnownRegions:
+    """The region stage of ``estimator.filter``: ``zonotope`` or ``kalman``."""
+    if filter_name == "kalman":
+        return KalmanRegions(KalmanTracker(model))
+    return RefinedRegions(OccupancyTracker(model, step_length, walkable))

@@ -1,0 +1,81 @@
+"""The step's stages between the snapshot and the picture, on hand-made inputs (no SUMO)."""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+
+from sse_cosim.estimation.bus_screen import BusScreen
+from sse_cosim.estimation.flags import StepFlags
+from sse_cosim.estimation.fusion_centre import BusEstimate
+from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.observer import Track
+from sse_cosim.estimation.occupancy import OccupancyTracker
+from sse_cosim.estimation.v2x import SharedPicture
+from sse_cosim.pipeline.stages import (
+    RefinedRegions,
+    clear_regions,
+    detected_now,
+    detections_by_node,
+    union_or_empty,
+    views_of,
+)
+from sse_cosim.scenario.model import BUS_NODE, Estimator
+from sse_cosim.sensors import Detection, SensorObservation
+from sse_cosim.sets import Strips, Zonotope
+
+DT = 0.1
+STRIPS = Strips(np.eye(2), np.zeros(2), np.ones(2))
+
+
+def observation(sensor: str, node: str, seen: tuple[str, ...], box) -> SensorObservation:
+    detections = {pid: Detection(sensor, node, 0.0, pid, STRIPS) for pid in seen}
+    return SensorObservation(sensor, node, 0.0, None, detections, shapely.box(*box), None)
+
+
+def test_union_or_empty_skips_missing_and_empty_parts():
+    assert union_or_empty([None, shapely.Polygon()]).is_empty
+    assert union_or_empty([shapely.box(0, 0, 1, 1), None, shapely.box(1, 0, 2, 1)]).area == 2.0
+
+
+def test_detections_are_grouped_by_node_pedestrian_and_sensor():
+    observations = {"front": observation("front", BUS_NODE, ("a",), (0, 0, 1, 1)),
+                    "near": observation("near", BUS_NODE, ("a", "b"), (0, 0, 1, 1)),
+                    "cam": observation("cam", "rsu1", ("b",), (0, 0, 1, 1))}
+    grouped = detections_by_node(observations)
+    assert {n: {p: list(s) for p, s in d.items()} for n, d in grouped.items()} == {
+        BUS_NODE: {"a": ["front", "near"], "b": ["near"]}, "rsu1": {"b": ["cam"]}}
+    assert [o.sensor for o in views_of(BUS_NODE, observations)] == ["front", "near"]
+
+
+def test_clear_regions_and_detections_join_the_bus_and_the_senders():
+    views = [observation("front", BUS_NODE, ("a",), (0, 0, 1, 1)),
+             observation("near", BUS_NODE, (), (5, 5, 6, 6))]
+    z = Zonotope(np.zeros(2), np.eye(2))
+    own = {"a": Track("a", z, 3, True)}
+    shared = SharedPicture({"b": {"rsu1": z}}, {"rsu1": shapely.box(9, 9, 10, 10)}, {"rsu1": 1},
+                           {"rsu1": frozenset({"b"})})
+    clear = clear_regions(views, own, shared)
+    assert [(c.region.bounds, c.age) for c in clear["a"]] == [
+        ((5, 5, 6, 6), 0), ((9, 9, 10, 10), 1)]
+    assert [(c.region.bounds, c.age) for c in clear["b"]] == [((0, 0, 1, 1), 0), ((5, 5, 6, 6), 0)]
+    assert detected_now(own, shared) == {"a", "b"}
+
+
+def test_refined_regions_forget_their_history_when_the_picture_turns_inconsistent():
+    model = MotionModel.from_config(Estimator(), DT)
+    walkable = shapely.box(-20, -20, 20, 20)
+    small = {"ped": Zonotope(np.zeros(2), np.eye(2) * 0.5)}
+    large = {"ped": Zonotope(np.zeros(2), np.eye(2) * 3.0)}
+
+    def estimate(fused, inconsistent: bool) -> BusEstimate:
+        return BusEstimate(BusScreen(), fused, StepFlags(inconsistent=inconsistent))
+
+    regions = RefinedRegions(OccupancyTracker(model, DT, walkable))
+    regions.update(0, {}, estimate(small, False), {})
+    kept = regions.update(1, {}, estimate(large, False), {})["ped"].area
+    regions.update(2, {}, estimate(small, False), {})
+    forgot = regions.update(3, {}, estimate(large, True), {})["ped"].area
+    assert kept < forgot  # the small set's history no longer cuts the large one
+    regions.update(4, {}, estimate(small, True), {})  # still inconsistent: nothing new to forget
+    assert regions.update(5, {}, estimate(large, True), {})["ped"].area < forgot
