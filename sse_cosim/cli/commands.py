@@ -18,7 +18,11 @@ from sse_cosim.cli.options import OUT_HELP, check_scheduler, execution_options, 
               help="Also draw the scene at this time (s); repeatable. The first shared "
                    "fusion is always drawn.")
 @click.option("--set", "overrides", multiple=True, metavar="PATH=VALUE",
-              help="Override a scenario field, e.g. --set sensors.bus_front.range_m=40.")
+              help="Override a scenario field; repeatable. PATH takes the patterns of "
+                   "`sweep --param` (globs, [field=glob] filters), and every field it "
+                   "selects takes VALUE; a pattern that selects nothing is an error. "
+                   "E.g. --set sensors.bus_front.range_m=40, "
+                   "--set 'sensors.*[node!=bus].noise_bound_m=[1,1]'.")
 def run(scenario: Path, out_dir: Path | None, scene_times: tuple[float, ...],
         overrides: tuple[str, ...]) -> None:
     """Run one SCENARIO file in SUMO and write its folder.
@@ -27,12 +31,16 @@ def run(scenario: Path, out_dir: Path | None, scene_times: tuple[float, ...],
     position set), summary.json (speeds, detections, set sizes, violations), scenario.json
     (the resolved scenario) and plots (speed, set areas, scenes).
     """
-    from sse_cosim.runner.parameters import parse_assignment
-    from sse_cosim.runner.run import run_scenario_file
+    from sse_cosim.errors import UserError
+    from sse_cosim.runner.parameters import blame_assignments, load_with_assignments
+    from sse_cosim.runner.run import run_scenario
 
     out_dir = writable_folder(out_dir or Path("runs") / scenario.stem, "--out")
-    values = dict(parse_assignment(text, "--set") for text in overrides)
-    summary = run_scenario_file(scenario, out_dir, values, scene_times=scene_times)
+    resolved, owners = load_with_assignments(scenario, overrides)
+    try:
+        summary = run_scenario(resolved, str(scenario), out_dir, scene_times=scene_times)
+    except UserError as exc:  # a check on the road network: --set may have set the field
+        raise blame_assignments(exc, owners, always=False) from None
     _echo_summary(summary, out_dir)
 
 

@@ -31,7 +31,8 @@ class RunsFailed(click.ClickException):
               help="Seeds, written into simulation.seed: [1,2,3] or range(1,4) "
                    "(default: each scenario's own seed).")
 @click.option("--set", "fixed", multiple=True, metavar="PATH=VALUE",
-              help="A fixed override for every run, e.g. --set simulation.duration_s=20.")
+              help="A fixed override for every run, e.g. --set simulation.duration_s=20; "
+                   "PATH takes the patterns below and must select a field in every scenario.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path, file_okay=False),
               default=Path("results/sweep"), show_default=True, help=OUT_HELP)
 @execution_options("Keep finished runs; redo failed and unfinished ones.")

@@ -45,12 +45,12 @@ from sse_cosim.runner.sweep import (
     Parameter,
     ParameterEntry,
     PlannedRun,
-    expand_pattern,
     run_key,
     run_planned,
 )
 from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
 from sse_cosim.scenario.model import Scenario
+from sse_cosim.scenario.paths import expand_pattern
 
 if TYPE_CHECKING:
     from sse_cosim.world.roadmap import RoadMap

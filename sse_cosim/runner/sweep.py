@@ -1,11 +1,9 @@
 """Parameter sweeps: scenarios x parameter values x seeds, one run per combination.
 
 A parameter is a dotted path into the scenario (``v2x.latency_steps``) and the values it
-takes. A part of the path may be a glob over the keys at that place
-(``sensors.*_cam.noise_bound_m``) and may end in a filter on a field of the tables it
-selects (``sensors.*[node=rsu*].noise_bound_m``, ``sensors.*[node!=bus].noise_bound_m``).
-Patterns are expanded against each scenario's resolved fields; every field a pattern
-selects takes the same value, and a pattern that selects nothing is an error.
+takes; the path may be a pattern (:mod:`sse_cosim.scenario.paths`: globs over keys, filters
+on a field). Patterns are expanded against each scenario's resolved fields; every field a
+pattern selects takes the same value, and a pattern that selects nothing is an error.
 
 Everything is checked before anything runs: a path that names no field, or a value whose
 shape does not fit its field (a number for a list field), stops the sweep with a
@@ -27,7 +25,6 @@ import tomllib
 from collections import Counter
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from fnmatch import fnmatchcase
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -39,16 +36,16 @@ from sse_cosim.reporting.outputs import RUNS_FOLDER, TaskOutcome
 from sse_cosim.reporting.sweep_report import SWEEP_PLAN
 from sse_cosim.runner.batch import scenario_files
 from sse_cosim.runner.executors import Execution, execute
-from sse_cosim.runner.parameters import parse_value
+from sse_cosim.runner.parameters import parse_value, split_assignment
 from sse_cosim.runner.tasks import RunTask, record_failure
 from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
+from sse_cosim.scenario.paths import PART_FILTER, expand_pattern, split_path
 
 SEED_PATH = "simulation.seed"
 CLI = "command line"
 VALUES_FIX = "write [v1, v2, ...], range(start, stop[, step]) or linspace(start, stop, num)"
 KEY_TEXT_MAX = 90  # characters of the readable part of a run key
 _CALL = re.compile(r"^(range|linspace)\((.*)\)$")
-_FILTER = re.compile(r"^(?P<keys>.*)\[(?P<field>\w+)(?P<op>!?=)(?P<glob>[^\]]*)\]$")
 _UNSAFE = re.compile(r"[^A-Za-z0-9._=+-]+")
 
 
@@ -106,11 +103,9 @@ def linspace_values(start: float, stop: float, num: int) -> list[int | float]:
 
 def parse_parameter(text: str) -> Parameter:
     """``--param PATH=VALUES`` (the first ``=`` outside brackets separates them)."""
-    depth = 0
-    for i, char in enumerate(text):
-        depth += {"[": 1, "]": -1}.get(char, 0)
-        if char == "=" and depth == 0 and text[:i].strip() and text[i + 1:].strip():
-            return Parameter(text[:i].strip(), tuple(parse_values(text[i + 1:], "--param")))
+    parts = split_assignment(text)
+    if parts is not None:
+        return Parameter(parts[0], tuple(parse_values(parts[1], "--param")))
     raise UserError(CLI, "--param", f"{text!r} is not PATH=VALUES",
                     "write it like v2x.latency_steps=[0, 1, 2] or v2x.latency_steps=range(0,5)")
 
@@ -291,39 +286,6 @@ def plan_sweep(spec: SweepSpec) -> list[PlannedRun]:
     return runs
 
 
-def expand_pattern(pattern: str, fields: Mapping[str, Any], source: str) -> list[tuple[str, Any]]:
-    """The concrete dotted paths in ``fields`` that ``pattern`` selects, with their values."""
-    found: list[tuple[tuple[str, ...], Any]] = [((), fields)]
-    for part in split_path(pattern, source):
-        keys_glob, select = _part_filter(part)
-        matched = [
-            ((*prefix, key), node[key])
-            for prefix, node in found if isinstance(node, Mapping)
-            for key in node if fnmatchcase(key, keys_glob) and select(node[key])
-        ]
-        if not matched:
-            raise _no_match(pattern, part, found, source)
-        found = matched
-    return [(".".join(path), value) for path, value in found]
-
-
-def split_path(pattern: str, source: str = CLI) -> list[str]:
-    """Dotted parts of ``pattern``; dots inside ``[...]`` belong to their part."""
-    parts, depth, current = [], 0, ""
-    for char in pattern:
-        depth += {"[": 1, "]": -1}.get(char, 0)
-        if char == "." and depth == 0:
-            parts.append(current)
-            current = ""
-        else:
-            current += char
-    parts.append(current)
-    if not all(parts):
-        raise UserError(source, pattern or "(empty)", "is not a dotted path",
-                        "write it as table.field, e.g. sensors.bus_front.noise_bound_m")
-    return parts
-
-
 def run_key(stem: str, labelled: Sequence[tuple[str, Any]], seed: int,
             overrides: Mapping[str, Any]) -> str:
     """``<stem>__<label>=<value>__...__seed<n>__<hash>``: readable, safe in file names.
@@ -409,34 +371,9 @@ def _validation_error(data: Mapping[str, Any], overrides: Mapping[str, Any],
     return None
 
 
-def _part_filter(part: str):
-    """``keys_glob`` and a predicate on the selected value for ``glob[field=glob]``."""
-    match = _FILTER.match(part)
-    if match is None:
-        return part, lambda _value: True
-    name, op, glob = match["field"], match["op"], match["glob"]
-
-    def select(value: Any) -> bool:
-        hit = isinstance(value, Mapping) and fnmatchcase(str(value.get(name)), glob)
-        return hit if op == "=" else isinstance(value, Mapping) and not hit
-
-    return match["keys"], select
-
-
-def _no_match(pattern: str, part: str, found, source: str) -> UserError:
-    prefix, node = found[0]
-    where = ".".join(prefix) or "the scenario"
-    if not isinstance(node, Mapping):
-        return UserError(source, pattern, f"{where} is a value, not a table",
-                         "check the path (`sse-cosim fields` lists every field)")
-    keys = ", ".join(list(node)[:12]) + (", ..." if len(node) > 12 else "")
-    return UserError(source, pattern, f"{part!r} matches nothing in {where} (it has: {keys})",
-                     "check the path (`sse-cosim fields` lists every field)")
-
-
 def _labels(patterns: Sequence[str]) -> list[str]:
     """Short labels for keys: the last part of each pattern, more parts if they collide."""
-    parts = [[_FILTER.sub(r"\g<keys>", p) for p in split_path(pattern)] for pattern in patterns]
+    parts = [[PART_FILTER.sub(r"\g<keys>", p) for p in split_path(pattern)] for pattern in patterns]
     for depth in range(1, max((len(p) for p in parts), default=1) + 1):
         labels = [".".join(p[-depth:]) for p in parts]
         if len(set(labels)) == len(labels):

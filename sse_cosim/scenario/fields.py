@@ -35,7 +35,7 @@ def field_docs(model: type[BaseModel] = Scenario, prefix: str = "") -> Iterator[
         else:
             default = "required" if info.is_required() else repr(info.get_default(
                 call_default_factory=True))
-            yield FieldDoc(path, default, info.description or "")
+            yield FieldDoc(path, default, _with_accepted(info.description or "", annotation))
             continue
         shared = [d for d in field_docs(nested[0], path)
                   if all(d in field_docs(other, path) for other in nested[1:])]
@@ -56,6 +56,23 @@ def fields_markdown() -> str:
 def _escape(text: str) -> str:
     """Keep Markdown table cells whole."""
     return text.replace("|", "\\|")
+
+
+def _with_accepted(description: str, annotation) -> str:
+    """``description`` followed by the values an enumerated field accepts, from its type."""
+    values = _literal_values(annotation)
+    if not values:
+        return description
+    accepted = "Accepted values: " + ", ".join(f"`{v}`" for v in values) + "."
+    return f"{description} {accepted}".strip()
+
+
+def _literal_values(annotation) -> list:
+    """The values of the ``Literal`` an annotation holds (alone, in a union or as a list's
+    items), in order."""
+    if typing.get_origin(annotation) is typing.Literal:
+        return list(typing.get_args(annotation))
+    return [v for arg in typing.get_args(annotation) for v in _literal_values(arg)]
 
 
 def _models_of(annotation) -> list[type[BaseModel]]:

@@ -58,7 +58,19 @@ def generator_volume(generators: FloatArray) -> float:
     generators = generators[:, np.any(generators != 0, axis=0)]
     n, e = generators.shape
     blocks = generators[:, subset_indices(e, n)].transpose(1, 0, 2)
-    return float(2.0**n * np.abs(np.linalg.det(blocks)).sum())
+    return float(2.0**n * abs_determinants(blocks).sum())
+
+
+def abs_determinants(blocks: FloatArray) -> FloatArray:
+    """|det| of each square block (k, n, n), as the product of |diag R| of its QR factors.
+
+    ``np.linalg.det`` goes through LU and logarithms, and warns (divide by zero) on the
+    singular or subnormal blocks of a degenerate set, such as the constant-velocity model's
+    4-D sets whose velocity generators have shrunk to nothing; Q is orthogonal, so QR gives
+    the same |det| with neither a division by a pivot nor a logarithm.
+    """
+    r = np.linalg.qr(blocks, mode="r")
+    return np.abs(np.diagonal(r, axis1=-2, axis2=-1)).prod(axis=-1)
 
 
 def cofactor_vectors(generators: FloatArray) -> FloatArray:

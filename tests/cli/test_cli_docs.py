@@ -22,3 +22,14 @@ def test_help_explains_every_command(command, capsys):
     text = capsys.readouterr().out
     assert text.startswith("Usage: sse-cosim")
     assert len(text.splitlines()) > 5
+
+
+@pytest.mark.parametrize(("path", "values"), [
+    ("sensors.<sensor name>.noise", ["uniform", "worst-case"]),
+    ("estimator.state_model", ["position", "constant-velocity"]),
+    ("breaks_assumptions", ["pedestrian_speed", "sensor_bounds", "shared_estimates"]),
+])
+def test_field_table_names_the_accepted_values_of_enumerated_fields(path, values):
+    """Read from the field's type: the README never goes stale on, e.g., `worst-case`."""
+    row = next(line for line in fields_markdown().splitlines() if line.startswith(f"| `{path}`"))
+    assert "Accepted values: " + ", ".join(f"`{v}`" for v in values) + "." in row

@@ -1,5 +1,6 @@
 """Zonotope operations against independent exact computations (shapely, qhull, brute force)."""
 
+import warnings
 from itertools import combinations, product
 
 import numpy as np
@@ -12,7 +13,7 @@ from shapely.geometry import Point, Polygon
 
 from sse_cosim.sets import REDUCTION_METHODS, Zonotope, zonotope_facet_strips
 from sse_cosim.sets.exact import zonotope_polygon
-from sse_cosim.sets.zonotope import cofactor_vectors
+from sse_cosim.sets.zonotope import cofactor_vectors, generator_volume, subset_indices
 
 
 def directions(n: int, count: int = 200, seed: int = 0) -> np.ndarray:
@@ -197,3 +198,21 @@ def test_from_interval_and_remove_zero_generators():
     assert np.array_equal(box.generators, [[1.0, 0.0], [0.0, 0.0], [0.0, 2.0]])
     with pytest.raises(ValueError, match="lo <= hi"):
         Zonotope.from_interval([1.0], [0.0])
+
+
+def test_volume_of_a_degenerate_4d_set_warns_of_nothing():
+    """A constant-velocity set whose velocity generators have shrunk to subnormal numbers:
+    ``np.linalg.det`` warned "divide by zero" on it; the volume is still the sum of |det|."""
+    generators = np.array([
+        [-6.16452880e-01, -1.65178051e-01, 6.22522714e-322, 1.09229576e-16, 1.0],
+        [1.65178051e-01, -6.16452880e-01, 2.48515020e-321, -8.62924100e-33, 0.0],
+        [2.27978136e-01, 6.10865575e-02, -2.32210854e-322, -4.03955532e-17, 0.0],
+        [-6.10865575e-02, 2.27978136e-01, -9.18962101e-322, 1.08028620e-34, 0.5],
+    ])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        volume = generator_volume(generators)
+    with np.errstate(all="ignore"):
+        blocks = generators[:, subset_indices(5, 4)].transpose(1, 0, 2)
+        expected = 16.0 * np.abs(np.linalg.det(blocks)).sum()
+    assert volume == pytest.approx(expected, abs=1e-12)  # both ~1e-25: the set is flat
