@@ -6,6 +6,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 DEVSTAMP := $(VENV)/.installed-dev
+BENCHSTAMP := $(VENV)/.installed-bench
 
 .PHONY: run test bench safety lint clean
 
@@ -26,11 +27,15 @@ run: $(STAMP)
 	$(BIN)/sse-cosim sweep --file sweeps/noise.toml --out results/sweep/ --summaries-only
 	$(BIN)/sse-cosim report results/ --out results/
 
+$(BENCHSTAMP): pyproject.toml | $(BIN)/python
+	$(BIN)/pip install --quiet -e ".[dask,bench]"
+	touch $@ $(STAMP)
+
 test: $(DEVSTAMP)
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q
 
-bench: $(STAMP)
+bench: $(BENCHSTAMP)
 	$(BIN)/sse-cosim bench --out results/
 
 # The safety campaign (sweeps/safety.toml, about 45 minutes on two cores): results/safety/

@@ -46,6 +46,8 @@ def markdown(r: dict) -> str:
         lines += _loop(r["loop_cost"], t)
     if "gain_methods" in r:
         lines += _gains(r["gain_methods"])
+    if "kernels" in r:
+        lines += _kernels(r["kernels"])
     if "scaling" in r:
         lines += _scaling(r["scaling"], t)
     if "throughput" in r:
@@ -76,6 +78,12 @@ def _summary(r: dict, t: dict) -> list[str]:
                 rows.append((f"1b co-sim ({c['gain_method']}) / (a)", f"{c['ratio_to_a']:.1f}×",
                              f"≤ {t['loop_b_ratio_to_a']:.0f}×",
                              c["ratio_to_a"] <= t["loop_b_ratio_to_a"]))
+    for op, ratio in r.get("kernels", {}).get("ratios", {}).items():
+        value = ratio["compiled / zonoopt"]
+        if value is not None:
+            limit = t["kernels_ratio_to_zonoopt"]
+            rows.append((f"kernel {op}: compiled / ZonoOpt", f"{value:.2f}×", f"≤ {limit:.0f}×",
+                         value <= limit))
     if "scaling" in r:
         k = r["scaling"]["exponent_in_pedestrians_x_sensors"]
         rows.append(("3 cost exponent in pedestrians × sensors", f"{k:.2f}", "≤ 1", k <= 1.0))
@@ -162,6 +170,22 @@ def _gains(g: dict) -> list[str]:
                                                      for k, v in g["result_area_m2"].items()),
               ""]
     return lines
+
+
+def _kernels(k: dict) -> list[str]:
+    lines = ["## Compiled kernels", "",
+             "µs per call, same process: the compiled kernel (numba) through the public "
+             "function, its NumPy reference, and ZonoOpt"
+             + ("" if k["zonoopt"] else " (not installed: `pip install -e \".[bench]\"`)")
+             + ". Problems: " + "; ".join(f"{op} {p}" for op, p in k["problems"].items()) + ".",
+             "", "| operation | compiled | reference | ZonoOpt | compiled / ZonoOpt "
+             "| reference / compiled |", "|---|---|---|---|---|---|"]
+    for op, us in k["us_per_call"].items():
+        ratio = k["ratios"][op]
+        lines.append(f"| {op} | {us['compiled']:,.1f} | {us['reference']:,.1f} | "
+                     f"{_f(us.get('zonoopt'))} | {_f(ratio['compiled / zonoopt'], 2)} | "
+                     f"{ratio['reference / compiled']:.1f}× |")
+    return [*lines, ""]
 
 
 def _scaling(s: dict, t: dict) -> list[str]:

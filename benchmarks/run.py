@@ -16,6 +16,7 @@ from pathlib import Path
 from benchmarks import (
     baseline,
     gain_methods,
+    kernels,
     loop_cost,
     report,
     scaling,
@@ -28,6 +29,7 @@ from benchmarks.common import machine
 TARGETS = {
     "loop_a_ratio_to_bare": 20.0,
     "loop_b_ratio_to_a": 20.0,
+    "kernels_ratio_to_zonoopt": 2.0,
     "scaling_exponent": 1.0,
     "throughput_speedup_2_workers": 1.8,
     "tightness_best_mean": 1.3,
@@ -59,6 +61,8 @@ def run_all(out: Path, quick: bool = False, log: Callable[[str], None] = print,
 
     stage("gain_methods", lambda: gain_methods.run(number=20 if quick else 200,
                                                    repeats=2 if quick else 5))
+    stage("kernels", lambda: kernels.run(number=50 if quick else 2000,
+                                         repeats=2 if quick else 5))
     stage("loop_cost", lambda: loop_cost.run(
         repeats=1 if quick else 3,
         configs={"a_frobenius": "frobenius", "b_cvxpy_frobenius": "cvxpy-frobenius"}

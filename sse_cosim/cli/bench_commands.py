@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[2]
               default=Path("results"), show_default=True, help="Output folder.")
 @click.option("--quick", is_flag=True, help="A tiny version of each benchmark (smoke test).")
 @click.option("--only", multiple=True,
-              type=click.Choice(["gain_methods", "loop_cost", "tightness", "baseline",
+              type=click.Choice(["gain_methods", "kernels", "loop_cost", "tightness", "baseline",
                                  "soundness", "scaling", "throughput"]),
               help="Run only this benchmark; repeatable.")
 def bench(out_dir: Path, quick: bool, only: tuple[str, ...]) -> None:

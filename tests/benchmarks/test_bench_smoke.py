@@ -35,8 +35,8 @@ def quick(tmp_path_factory) -> tuple[dict, Path]:
 def test_every_benchmark_runs_and_reports(quick):
     _, out = quick
     data = json.loads((out / "benchmarks.json").read_text())
-    for key in ("machine", "gain_methods", "loop_cost", "tightness", "baseline", "soundness",
-                "scaling", "throughput"):
+    for key in ("machine", "gain_methods", "kernels", "loop_cost", "tightness", "baseline",
+                "soundness", "scaling", "throughput"):
         assert key in data, key
     assert {"cpu", "cores", "python", "sumo"} <= set(data["machine"])
     assert data["command"].endswith("--quick")

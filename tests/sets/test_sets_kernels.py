@@ -1,0 +1,79 @@
+"""The compiled kernels (sets/kernels.py) against their NumPy references, and their soundness."""
+
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+from sets_strategies import SETTINGS, point_in, random_generators, zonotope_with_strips
+
+from sse_cosim.sets import Strips, Zonotope, gains, intersect_strips, kernels
+from sse_cosim.sets.reduction import girard_reduce, girard_reduce_reference
+from sse_cosim.sets.zonotope import generator_volume, generator_volume_reference
+
+KINDS = ("well", "elongated", "near-parallel", "zero-and-parallel")
+
+
+@st.composite
+def generator_matrices(draw: st.DrawFn, n: int = 2, max_generators: int = 24) -> np.ndarray:
+    """(n, e) generators, e >= 0, of every kind of sets_strategies plus all-zero columns, at
+    scales 1e-3 .. 1e3."""
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    e = draw(st.integers(0, max_generators))
+    g = random_generators(rng, n, e, draw(st.sampled_from(KINDS))) if e else np.zeros((n, 0))
+    if draw(st.booleans()):
+        g = np.hstack([g, np.zeros((n, draw(st.integers(1, 3))))])
+    return g * draw(st.sampled_from([1e-3, 1.0, 1e3]))
+
+
+@SETTINGS
+@given(generator_matrices())
+def test_compiled_area_is_the_reference_bit_for_bit(g):
+    assert generator_volume(g) == generator_volume_reference(g)
+
+
+@SETTINGS
+@given(st.integers(0, 2**32 - 1), st.integers(0, 3000))
+def test_pairwise_sum_is_numpys_sum_bit_for_bit(seed, count):
+    values = np.abs(np.random.default_rng(seed).normal(size=count)) * 10.0 ** (seed % 7 - 3)
+    assert kernels.pairwise_sum(values, 0, count) == values.sum()
+
+
+@SETTINGS
+@given(generator_matrices(n=2), st.integers(2, 12))
+def test_compiled_girard_reduction_is_the_reference_bit_for_bit(g, order):
+    np.testing.assert_array_equal(girard_reduce(g, order), girard_reduce_reference(g, order))
+
+
+@SETTINGS
+@given(generator_matrices(n=3, max_generators=16), st.integers(3, 10))
+def test_compiled_girard_reduction_matches_in_3d(g, order):
+    np.testing.assert_array_equal(girard_reduce(g, order), girard_reduce_reference(g, order))
+
+
+def _barely_touching(zonotope: Zonotope, strips: Strips) -> Strips:
+    """The same normals, each strip moved so that it only just touches Z's boundary."""
+    support = np.abs(strips.normals @ zonotope.generators).sum(axis=1)
+    values = strips.normals @ zonotope.center + support + strips.radii * (1 - 1e-9)
+    return Strips(strips.normals, values, strips.radii)
+
+
+@SETTINGS
+@given(zonotope_with_strips(2), st.booleans(), st.integers(0, 2**32 - 1))
+def test_compiled_frobenius_intersection_matches_the_reference_and_is_sound(case, touch, seed):
+    zonotope, strips = case
+    if touch:
+        strips = _barely_touching(zonotope, strips)
+    unit = strips.normalized()
+    reference = gains.apply_gain(zonotope, unit, gains.frobenius_gain_reference(zonotope, unit))
+    compiled = intersect_strips(zonotope, strips, "frobenius")
+    scale = max(np.abs(zonotope.generators).max(), np.abs(zonotope.center).max())
+    np.testing.assert_allclose(gains.frobenius_gain(zonotope, unit),
+                               gains.frobenius_gain_reference(zonotope, unit),
+                               rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(compiled.center, reference.center, rtol=0, atol=1e-9 * scale)
+    assert compiled.generators.shape == reference.generators.shape
+    np.testing.assert_allclose(compiled.generators, reference.generators,
+                               rtol=0, atol=1e-9 * scale)
+    rng = np.random.default_rng(seed)
+    points = np.array([point_in(zonotope, rng) for _ in range(200)])
+    inside = np.abs(points @ unit.normals.T - unit.values) <= unit.radii
+    assert compiled.contains(points[inside.all(axis=1)], tol=1e-9 * scale).all()
