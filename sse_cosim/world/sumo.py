@@ -402,13 +402,13 @@ class SumoWorld:
             if vid == BUS_ID:
                 self._bus_distance = float(values[libsumo.VAR_DISTANCE])
         persons: dict[str, PersonState] = {}
-        crossing = self.roadmap.crossing_id
+        crossings = {c.id for c in self.roadmap.crossings}
         for pid, values in libsumo.person.getAllSubscriptionResults().items():
             persons[pid] = PersonState(
                 id=pid,
                 position=self._person_position(pid, values),
                 speed=float(values[libsumo.VAR_SPEED]),
-                on_crossing=values[libsumo.VAR_ROAD_ID] == crossing)
+                on_crossing=values[libsumo.VAR_ROAD_ID] in crossings)
         return Snapshot(time=self._time, vehicles=vehicles, persons=persons)
 
     def _person_position(self, pid: str, values: dict[int, Any]) -> tuple[float, float]:

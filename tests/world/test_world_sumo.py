@@ -99,7 +99,7 @@ def test_pedestrian_walks_over_the_zebra(name: str,
     on = [t for t, p in tracks if p.on_crossing]
     assert on, "the pedestrian never stepped onto the crossing"
     assert on[0] == pytest.approx(sc.pedestrian.steps_onto_crossing_s, abs=STEPS_EARLY)
-    assert all(run.roadmap.crossing.buffer(0.5).contains(_point(p))
+    assert all(run.roadmap.crossing_area.buffer(0.5).contains(_point(p))
                for _, p in tracks if p.on_crossing)
     after = [p for t, p in tracks if t > on[-1]]
     assert after and after[-1].position[1] > 6.0, "the pedestrian did not reach the north side"
