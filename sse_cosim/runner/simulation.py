@@ -100,10 +100,8 @@ def simulate(
             timer.start()
             snapshot = world.step()
             bus = snapshot.role(BUS_NODE)
-            if bus is None:
-                if world.bus_arrived:
-                    return SimulationInfo(step, True, world.roadmap)
-                continue  # not inserted yet: world.step() refuses a bus that never is
+            if bus is None:  # arrived (world.step() refuses a bus missing at its departure)
+                return SimulationInfo(step, world.bus_arrived, world.roadmap)
             timer.lap("sumo")
             observations = sense(snapshot, specs, faults, noise_rng)
             timer.lap("geometry")
