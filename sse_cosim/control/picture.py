@@ -249,11 +249,11 @@ def _arrival(sources: Iterable[shapely.Geometry], zone: shapely.Geometry, speed:
 
 def _route_crossings(route_line: shapely.LineString, corridor: shapely.Geometry,
                      areas: Sequence[shapely.Polygon]) -> tuple[RouteCrossing, ...]:
-    """The crossings among ``areas`` that the ``corridor`` around the route touches, with their
-    extent along the route, nearest first."""
+    """The crossings among ``areas`` that the ``corridor`` around the route overlaps (touching
+    is not enough), with their extent along the route, nearest first."""
     crossings = []
     for area in areas:
-        if not corridor.intersects(area):
+        if shapely.intersection(corridor, area).area <= 0.0:
             continue
         along = [route_line.project(shapely.Point(p)) for p in _boundary_points(area)]
         crossings.append(RouteCrossing(area, min(along), max(along)))

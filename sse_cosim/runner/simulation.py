@@ -92,7 +92,7 @@ def simulate(
         )
         policy = make_policy(context)
         known = known_regions(config.filter, model, dt, context.walkable)
-        # hidden ground is tracked near the crossing; outside the window it counts as occupied
+        # hidden ground is tracked near the crossings on the route; outside it counts as occupied
         unobserved = UnobservedArea(
             context.walkable, model, dt, scenario.v2x.latency_steps, window=context.window,
         )

@@ -44,13 +44,18 @@ def roadmap() -> RoadMap:
     return load_roadmap(build_network(SOURCES))
 
 
-@pytest.fixture(scope="module")
-def context(roadmap: RoadMap) -> SceneContext:
-    sc = load_scenario(SCENARIO, {"bus.route_edges": ROUTE})
+def scene(roadmap: RoadMap, route: list[str]) -> SceneContext:
+    """The static picture of S1's bus driving ``route`` on the two-zebra road."""
+    sc = load_scenario(SCENARIO, {"bus.route_edges": route})
     est = sc.estimator
-    return SceneContext.build(roadmap, ROUTE, sc.bus, sc.controller, est.max_pedestrian_speed_mps,
+    return SceneContext.build(roadmap, route, sc.bus, sc.controller, est.max_pedestrian_speed_mps,
                               est.position_jitter_m, sc.pedestrian.radius_m,
                               sc.simulation.step_length_s)
+
+
+@pytest.fixture(scope="module")
+def context(roadmap: RoadMap) -> SceneContext:
+    return scene(roadmap, ROUTE)
 
 
 def test_the_road_map_lists_both_crossings(roadmap: RoadMap) -> None:
@@ -100,6 +105,16 @@ def test_the_paper_policys_crossing_is_the_nearest_not_yet_cleared(context: Scen
     picture = assess(context, front, 10.0, empty, empty, [])
     assert picture.crossing_ahead and picture.distance_to_crossing == pytest.approx(28.0)
     assert picture.reach_radius_m > 0.0
+
+
+def test_a_route_without_crossings_has_no_crossing_ahead(roadmap: RoadMap) -> None:
+    context = scene(roadmap, ["DE"])  # from D, past the second zebra, to the dead end
+    assert context.crossings == () and context.zones == ()
+    assert context.crossing_at(10.0) is None and context.reach_radius(10.0) == 0.0
+    empty = shapely.Polygon()
+    front = np.array(context.route_line.interpolate(10.0).coords[0])
+    picture = assess(context, front, 10.0, empty, empty, [])
+    assert picture.distance_to_crossing is None and not picture.crossing_ahead
 
 
 @pytest.mark.sumo
