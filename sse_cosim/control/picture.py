@@ -115,7 +115,9 @@ class SceneContext:
         still reach it before the bus, keeping its nominal speed, has cleared it; capped by
         ``interest_radius_m``. (The paper policy's notion of "near the crossing".)"""
         crossing = self.crossing_at(front_s)
-        to_clear = -1.0 if crossing is None else crossing.end_m - front_s + self.bus.length_m
+        if crossing is None:
+            return 0.0
+        to_clear = crossing.end_m - front_s + self.bus.length_m
         if to_clear <= 0:
             return 0.0
         radius = self.pedestrian_speed * to_clear / self.bus.nominal_speed_mps
