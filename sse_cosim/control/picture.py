@@ -7,7 +7,8 @@ width plus a margin.
 
 A **conflict zone** is walkable ground that the bus's body sweeps, widened by a pedestrian's
 radius: the only places where a pedestrian who stays on walkable ground can touch the bus
-(on this road, the zebra). Each zone has an extent ``[start_m, end_m]`` along the route: the
+(every crossing on the route, and any other walkable ground the route runs over; on the
+paper's road, the zebra). Each zone has an extent ``[start_m, end_m]`` along the route: the
 front bumper reaches it at ``start_m`` and the rear has cleared it at ``end_m + length``.
 
 Every step the picture says, per zone ahead, the **earliest arrival**: the soonest any
@@ -20,6 +21,11 @@ and the position strays at most eps from it):
 
 The straight-line distance never exceeds the walk on walkable ground, so the arrival is an
 under-estimate: sound. The speed policies (:mod:`sse_cosim.control.speed`) decide on it.
+
+Hidden ground is tracked in a *window*: within ``interest_radius_m`` of every crossing on the
+route and of every conflict zone; walkable ground outside it always counts as occupied. The
+paper policy looks at one crossing at a time: the nearest on the route that the bus has not
+cleared (:meth:`SceneContext.crossing_at`).
 """
 
 from __future__ import annotations
@@ -51,13 +57,22 @@ class ConflictZone:
 
 
 @dataclass(frozen=True)
+class RouteCrossing:
+    """A crossing the bus's body sweeps: its ``area`` and its extent along the route (m), from
+    the nearest to the farthest vertex of its convex hull."""
+
+    area: shapely.Polygon
+    start_m: float
+    end_m: float
+
+
+@dataclass(frozen=True)
 class SceneContext:
     """What does not change during a run: the route, walkable ground, the conflict zones."""
 
     route_line: shapely.LineString
-    walkable: shapely.Geometry  # sidewalks, walking areas and the crossing
-    crossing: shapely.Polygon
-    crossing_span: tuple[float, float]  # (start, end) of the crossing along the route (m)
+    walkable: shapely.Geometry  # sidewalks, walking areas and the crossings
+    crossings: tuple[RouteCrossing, ...]  # the crossings on the route, nearest first
     bus: Bus
     config: Controller
     pedestrian_speed: float  # the estimator's speed bound (m/s)
@@ -73,24 +88,36 @@ class SceneContext:
     ) -> SceneContext:
         """Prepare the static geometry for a bus driving ``route_edges``."""
         route_line = roadmap.route_line(route_edges)
-        walkable = shapely.union(roadmap.sidewalks, roadmap.crossing)
-        along = [route_line.project(shapely.Point(p)) for p in _boundary_points(roadmap.crossing)]
-        window = roadmap.crossing.buffer(config.interest_radius_m)
+        walkable = shapely.union(roadmap.sidewalks, roadmap.crossing_area)
+        corridor = route_line.buffer(0.5 * bus.width_m + pedestrian_radius, cap_style="flat")
+        crossings = _route_crossings(route_line, corridor, [c.area for c in roadmap.crossings])
+        swept = _swept_walkable(route_line, corridor, walkable)
+        window = _window(crossings, swept, config.interest_radius_m)
         beyond = shapely.difference(walkable, window)
-        half_width = 0.5 * bus.width_m + pedestrian_radius
         zones = tuple(
             ConflictZone(polygon, start, end,
                          _arrival([beyond], polygon, pedestrian_speed, 2.0 * jitter))
-            for polygon, start, end in _swept_walkable(route_line, walkable, half_width))
-        return cls(route_line, walkable, roadmap.crossing, (min(along), max(along)), bus, config,
-                   pedestrian_speed, jitter, BusDynamics.of(bus, config, step_length), window,
-                   zones)
+            for polygon, start, end in swept)
+        return cls(route_line, walkable, crossings, bus, config, pedestrian_speed, jitter,
+                   BusDynamics.of(bus, config, step_length), window, zones)
+
+    def crossing_at(self, front_s: float) -> RouteCrossing | None:
+        """The nearest crossing on the route that the bus (front at ``front_s``) has not
+        cleared with its rear; once it has cleared them all, the last one; None if the route
+        has no crossing. (The paper policy's "the crossing".)"""
+        for crossing in self.crossings:
+            if crossing.end_m + self.bus.length_m > front_s:
+                return crossing
+        return self.crossings[-1] if self.crossings else None
 
     def reach_radius(self, front_s: float) -> float:
-        """How far from the crossing an unseen pedestrian can be and still reach it before the
-        bus, keeping its nominal speed, has cleared it; capped by ``interest_radius_m``.
-        (The paper policy's notion of "near the crossing".)"""
-        to_clear = self.crossing_span[1] - front_s + self.bus.length_m
+        """How far from the crossing (:meth:`crossing_at`) an unseen pedestrian can be and
+        still reach it before the bus, keeping its nominal speed, has cleared it; capped by
+        ``interest_radius_m``. (The paper policy's notion of "near the crossing".)"""
+        crossing = self.crossing_at(front_s)
+        if crossing is None:
+            return 0.0
+        to_clear = crossing.end_m - front_s + self.bus.length_m
         if to_clear <= 0:
             return 0.0
         radius = self.pedestrian_speed * to_clear / self.bus.nominal_speed_mps
@@ -139,7 +166,9 @@ class Picture:
 
     front_s: float  # bus front along its route (m)
     speed_mps: float  # the bus's actual speed (m/s)
-    distance_to_crossing: float  # front to the crossing's near edge (m); negative once on it
+    # front to the near edge of SceneContext.crossing_at (m); negative once on it; None if the
+    # route has no crossing
+    distance_to_crossing: float | None
     crossing_ahead: bool
     reach_radius_m: float  # how far from the crossing a pedestrian still matters (paper policy)
     own_occluded_m2: float  # hidden in the bus's own view and possibly holding a pedestrian
@@ -168,11 +197,14 @@ def assess(
     """
     cfg = context.config
     front_s = context.route_line.project(shapely.Point(front_xy))
-    to_crossing = context.crossing_span[0] - front_s
-    crossing_ahead = context.crossing_span[1] > front_s and to_crossing <= cfg.crossing_horizon_m
+    crossing = context.crossing_at(front_s)
+    to_crossing = None if crossing is None else crossing.start_m - front_s
+    crossing_ahead = (crossing is not None and crossing.end_m > front_s
+                      and crossing.start_m - front_s <= cfg.crossing_horizon_m)
     own_hidden = shapely.intersection(own_occluded, unobserved)
     reach = context.reach_radius(front_s)
-    relevant = context.crossing.buffer(reach) if reach > 0 else shapely.Polygon()
+    relevant = crossing.area.buffer(reach) if crossing is not None and reach > 0 \
+        else shapely.Polygon()
     hidden_in_reach = shapely.intersection(own_hidden, relevant)
     near_path = context.path_ahead(front_s, cfg.crossing_horizon_m, cfg.path_margin_m)
     stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0)
@@ -181,7 +213,7 @@ def assess(
     return Picture(
         front_s=float(front_s),
         speed_mps=float(speed),
-        distance_to_crossing=float(to_crossing),
+        distance_to_crossing=None if to_crossing is None else float(to_crossing),
         crossing_ahead=bool(crossing_ahead),
         reach_radius_m=float(reach),
         own_occluded_m2=float(own_hidden.area),
@@ -217,11 +249,33 @@ def _arrival(sources: Iterable[shapely.Geometry], zone: shapely.Geometry, speed:
     return max(0.0, min(distances) - slack) / speed
 
 
-def _swept_walkable(route_line: shapely.LineString, walkable: shapely.Geometry,
-                    half_width: float) -> list[tuple[shapely.Geometry, float, float]]:
-    """Each connected piece of walkable ground within ``half_width`` of the route, with its
-    extent along the route (min and max of its vertices' projections), in route order."""
-    corridor = route_line.buffer(half_width, cap_style="flat")
+def _route_crossings(route_line: shapely.LineString, corridor: shapely.Geometry,
+                     areas: Sequence[shapely.Polygon]) -> tuple[RouteCrossing, ...]:
+    """The crossings among ``areas`` that the ``corridor`` around the route overlaps (touching
+    is not enough), with their extent along the route, nearest first."""
+    crossings = []
+    for area in areas:
+        if shapely.intersection(corridor, area).area <= 0.0:
+            continue
+        along = [route_line.project(shapely.Point(p)) for p in _boundary_points(area)]
+        crossings.append(RouteCrossing(area, min(along), max(along)))
+    return tuple(sorted(crossings, key=lambda c: c.start_m))
+
+
+def _window(crossings: Sequence[RouteCrossing],
+            swept: Sequence[tuple[shapely.Geometry, float, float]],
+            radius: float) -> shapely.Geometry:
+    """Where hidden ground is tracked: within ``radius`` of every crossing on the route and of
+    every swept piece of walkable ground that no crossing covers."""
+    covered = shapely.union_all([c.area for c in crossings])
+    others = [piece for piece, _, _ in swept if not piece.within(covered)]
+    return shapely.union_all([*(c.area for c in crossings), *others]).buffer(radius)
+
+
+def _swept_walkable(route_line: shapely.LineString, corridor: shapely.Geometry,
+                    walkable: shapely.Geometry) -> list[tuple[shapely.Geometry, float, float]]:
+    """Each connected piece of walkable ground inside the ``corridor`` around the route, with
+    its extent along the route (min and max of its vertices' projections), in route order."""
     pieces = []
     for part in shapely.get_parts(shapely.intersection(corridor, walkable)):
         if part.area <= 0.0:

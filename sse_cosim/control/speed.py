@@ -23,9 +23,10 @@ guarantee and its assumptions: ``docs/controller.md``.
 4. such hidden area in the bus's own view while the crossing is farther off: cautious;
 5. otherwise nominal.
 
-"Near the crossing" is a reachability radius (``SceneContext.reach_radius``): a hidden place
-matters only if a pedestrian starting there could reach the crossing before the bus, at its
-nominal speed, has cleared it.
+"The crossing" is the nearest crossing on the route that the bus has not cleared
+(``SceneContext.crossing_at``); "near the crossing" is a reachability radius
+(``SceneContext.reach_radius``): a hidden place matters only if a pedestrian starting there
+could reach that crossing before the bus, at its nominal speed, has cleared it.
 """
 
 from __future__ import annotations

@@ -17,8 +17,9 @@ Shared views arrive ``latency`` steps late: U is kept exactly up to step k - lat
 those views were taken) and carried to step k with the bus's own views. Every buffer uses
 polygons that circumscribe their discs, so each step over-approximates.
 
-The picture asks about U only near the crossing, so U is tracked in a bounded area B around
-that window (B ⊇ window (+) disc(eps)) and the walkable ground outside B counts as possibly
+The picture asks about U only near the crossings on the route (the window: any shape, in
+several pieces with several crossings), so U is tracked in a bounded area B around that
+window (B ⊇ window (+) disc(eps)) and the walkable ground outside B counts as possibly
 occupied at every step: with O = (walkable (+) disc(eps)) minus B,
 
     Ũ_k = ((Ũ_{k-1} ∪ O) (+) disc(v dt)) ∩ ((walkable minus views_k) (+) disc(eps)) ∩ B

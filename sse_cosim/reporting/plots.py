@@ -79,7 +79,7 @@ def scene(frame: SceneFrame, roadmap: RoadMap, nodes: Sequence[str], title: str)
     """Footprints, fields of view, shadows, strips, local and fused zonotopes at one time."""
     fig, ax = plt.subplots(figsize=(10, 5))
     _fill(ax, roadmap.sidewalks, "0.85", "sidewalk")
-    _fill(ax, roadmap.crossing, "w", "zebra", hatch="||")
+    _fill(ax, roadmap.crossing_area, "w", "zebra", hatch="||")
     for _name, (node, visible, occluded) in frame.sectors.items():
         color = node_color(node, nodes)
         _fill(ax, visible, color, None, alpha=0.12)

@@ -92,7 +92,7 @@ def simulate(
         )
         policy = make_policy(context)
         known = known_regions(config.filter, model, dt, context.walkable)
-        # hidden ground is tracked near the crossing; outside the window it counts as occupied
+        # hidden ground is tracked near the crossings on the route; outside it counts as occupied
         unobserved = UnobservedArea(
             context.walkable, model, dt, scenario.v2x.latency_steps, window=context.window,
         )
@@ -100,10 +100,8 @@ def simulate(
             timer.start()
             snapshot = world.step()
             bus = snapshot.role(BUS_NODE)
-            if bus is None:
-                if world.bus_arrived:
-                    return SimulationInfo(step, True, world.roadmap)
-                continue  # not inserted yet: world.step() refuses a bus that never is
+            if bus is None:  # arrived (world.step() refuses a bus missing at its departure)
+                return SimulationInfo(step, world.bus_arrived, world.roadmap)
             timer.lap("sumo")
             observations = sense(snapshot, specs, faults, noise_rng)
             timer.lap("geometry")

@@ -179,10 +179,11 @@ class Controller(StrictModel):
     )
     interest_radius_m: PositiveFloat = Field(
         15.0,
-        description="Radius around the crossing within which hidden walkable ground is tracked "
-        "(m); beyond it every walkable place counts as possibly occupied (the safe policy's "
-        "source farthest out). The paper policy's reach radius (pedestrian speed bound x time "
-        "for the bus to clear the crossing) is capped by it.",
+        description="Radius around every crossing on the bus's route (and any other conflict "
+        "zone) within which hidden walkable ground is tracked (m); beyond it every walkable "
+        "place counts as possibly occupied (the safe policy's source farthest out). The paper "
+        "policy's reach radius (pedestrian speed bound x time for the bus to clear the "
+        "crossing) is capped by it.",
     )
     occlusion_threshold_m2: NonNegativeFloat = Field(
         0.5, description="Unresolved occluded area of interest above which the bus slows (m^2)."

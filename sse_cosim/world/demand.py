@@ -5,9 +5,10 @@ Ids: the bus is ``bus``, the parked truck ``truck``, the connected car ``car``, 
 ``pedestrian``. Every type has ``speedDev="0"`` and ``sigma="0"`` (no random speed factors, no
 dawdling), so one seed gives one run.
 
-The pedestrian walks an explicit path: its start sidewalk, the walking area, the zebra, the
-walking area on the far side, its end sidewalk. (Left to SUMO's router, a pedestrian whose
-end lies far down the opposite sidewalk would rather cross at the dead end of the road.)
+The pedestrian walks an explicit path: its start sidewalk, the walking area, a zebra, the
+walking area on the far side, its end sidewalk; of the network's crossings, the one that makes
+the walk shortest. (Left to SUMO's router, a pedestrian whose end lies far down the opposite
+sidewalk would rather cross at the dead end of the road.)
 
 The pedestrian exists from t=0: the estimator assumes that an undetected pedestrian has been
 somewhere on walkable ground since the start, so it may not appear later where sensors already
@@ -26,6 +27,7 @@ from __future__ import annotations
 import heapq
 import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -282,10 +284,11 @@ def _plan_pedestrian(net: sumolib.net.Net, scenario: Scenario, roadmap: RoadMap,
     _sidewalk(net, ped.end_edge, "pedestrian.end_edge", source)
     _check_pos(net, ped.start_edge, ped.start_pos_m, "pedestrian.start_pos_m", source)
     _check_pos(net, ped.end_edge, ped.end_pos_m, "pedestrian.end_pos_m", source)
-    path = pedestrian_path(net, ped.start_edge, ped.end_edge, roadmap.crossing_id)
+    path = pedestrian_path(net, (ped.start_edge, ped.start_pos_m), (ped.end_edge, ped.end_pos_m),
+                           [c.id for c in roadmap.crossings])
     if path is None:
         raise UserError(source, "pedestrian.end_edge", f"no walk from {ped.start_edge!r} over "
-                        f"the zebra to {ped.end_edge!r}",
+                        f"a zebra to {ped.end_edge!r}",
                         "end the pedestrian on a sidewalk across the road from its start")
     distance = distance_to_crossing(net, path, ped.start_pos_m)
     walk_s = distance / ped.walking_speed_mps
@@ -310,25 +313,40 @@ def _plan_pedestrian(net: sumolib.net.Net, scenario: Scenario, roadmap: RoadMap,
     )
 
 
-def pedestrian_path(net: sumolib.net.Net, start: str, end: str, crossing: str) -> list[str] | None:
-    """The shortest pedestrian path from edge ``start`` over the crossing to edge ``end``.
+def pedestrian_path(net: sumolib.net.Net, start: tuple[str, float], end: tuple[str, float],
+                    crossings: Sequence[str]) -> list[str] | None:
+    """The shortest walk from ``start`` to ``end`` (each an edge and a position on it, m) over
+    exactly one of ``crossings``, as a list of edges; None if there is none.
 
     Walking areas and crossings can be walked either way, so the pedestrian graph is
-    undirected; the path reaches one walking area of the crossing without using the crossing,
-    crosses, and goes on from the other one.
+    undirected; for each crossing and direction, the walk reaches one of the crossing's
+    walking areas without using any crossing, crosses, and goes on from the other one.
     """
     graph = _pedestrian_graph(net)
-    ends = [e for e in graph.get(crossing, {}) if net.getEdge(e).getFunction() == "walkingarea"]
     best: tuple[float, list[str]] | None = None
-    for a, b in ((ends[0], ends[1]), (ends[1], ends[0])) if len(ends) == 2 else ():
-        first = _shortest(graph, start, a, avoid=crossing)
-        second = _shortest(graph, b, end, avoid=crossing)
-        if first is None or second is None:
-            continue
-        cost = first[0] + second[0]
-        if best is None or cost < best[0]:
-            best = (cost, [*first[1], crossing, *second[1]])
+    for crossing in crossings:
+        ends = [e for e in graph.get(crossing, {})
+                if net.getEdge(e).getFunction() == "walkingarea"]
+        for a, b in ((ends[0], ends[1]), (ends[1], ends[0])) if len(ends) == 2 else ():
+            first = _shortest(graph, start[0], a, avoid=crossings)
+            second = _shortest(graph, b, end[0], avoid=crossings)
+            if first is None or second is None:
+                continue
+            path = [*first[1], crossing, *second[1]]
+            length = walk_length(net, path, start[1], end[1])
+            if best is None or length < best[0]:
+                best = (length, path)
     return None if best is None else best[1]
+
+
+def walk_length(net: sumolib.net.Net, path: Sequence[str], start_pos: float,
+                end_pos: float) -> float:
+    """Length (m) of a walk along ``path`` from ``start_pos`` on its first edge to ``end_pos``
+    on its last (at least three edges: a sidewalk, ..., a sidewalk)."""
+    first, last = net.getEdge(path[0]), net.getEdge(path[-1])
+    head = first.getLength() - start_pos if _walks_forward(net, path) else start_pos
+    tail = last.getLength() - end_pos if _walks_forward(net, path[::-1]) else end_pos
+    return head + sum(net.getEdge(e).getLength() for e in path[1:-1]) + tail
 
 
 def standing_point(net: sumolib.net.Net, path: list[str] | tuple[str, ...], start_pos: float,
@@ -367,7 +385,7 @@ def distance_to_crossing(net: sumolib.net.Net, path: list[str] | tuple[str, ...]
     raise ValueError("the path has no crossing")
 
 
-def _walks_forward(net: sumolib.net.Net, path: list[str] | tuple[str, ...]) -> bool:
+def _walks_forward(net: sumolib.net.Net, path: Sequence[str]) -> bool:
     """Whether the walk leaves ``path[0]`` at its end (along the edge's direction)."""
     nxt = net.getEdge(path[1])
     return net.getEdge(path[0]).getToNode() in (nxt.getFromNode(), nxt.getToNode())
@@ -386,7 +404,7 @@ def _pedestrian_graph(net: sumolib.net.Net) -> dict[str, dict[str, float]]:
 
 
 def _shortest(graph: dict[str, dict[str, float]], start: str, goal: str,
-              avoid: str) -> tuple[float, list[str]] | None:
+              avoid: Sequence[str]) -> tuple[float, list[str]] | None:
     queue: list[tuple[float, str, list[str]]] = [(0.0, start, [start])]
     seen: set[str] = set()
     while queue:
@@ -397,7 +415,7 @@ def _shortest(graph: dict[str, dict[str, float]], start: str, goal: str,
             continue
         seen.add(node)
         for nxt, weight in graph.get(node, {}).items():
-            if nxt != avoid and nxt not in seen:
+            if nxt not in avoid and nxt not in seen:
                 heapq.heappush(queue, (cost + weight, nxt, [*path, nxt]))
     return None
 

@@ -2,11 +2,13 @@
 
 Pure: no SUMO process is needed, so the controller and the sensor models can use it on their
 own. Coordinates are SUMO network metres (x east, y north); the network keeps its source
-coordinates (no offset), so the crossing node C is at (200, 0).
+coordinates (no offset), so the paper's crossing node C is at (200, 0).
 
-Lane kinds follow the cross-section of ``sumo_net/``: a *sidewalk* admits pedestrians only, a
-*parking strip* admits parked vehicles only (vClass ``custom1``), a *driving lane* admits
-road vehicles (passenger cars, buses, ...).
+Lane kinds follow the cross-section of ``sumo_net/``: a *sidewalk* admits pedestrians and no
+road vehicles (pedestrians only on the paper's road; a footpath shared with bicycles counts
+too), a *parking strip* admits parked vehicles only (vClass ``custom1``), a *driving lane*
+admits road vehicles (passenger cars, buses, ...) and no pedestrians. A network may hold any
+number of crossings, none included; the road map holds them all.
 """
 
 from __future__ import annotations
@@ -44,11 +46,21 @@ class LaneGeometry:
         return lane_area(self.shape, self.width)
 
 
+@dataclass(frozen=True)
+class Crossing:
+    """One pedestrian crossing: its SUMO edge ``id``, the junction ``node`` it lies in and its
+    ``area`` (the crossing lane widened to its width)."""
+
+    id: str
+    node: str
+    area: shapely.Polygon
+
+
 @dataclass(frozen=True, eq=False)
 class RoadMap:
-    """The road: crossing, sidewalks, lanes and edge lengths (see module docstring).
+    """The road: crossings, sidewalks, lanes and edge lengths (see module docstring).
 
-    ``crossing`` is the zebra's area, ``crossing_center`` its centre, shape (2,);
+    ``crossings`` holds every crossing of the network, ordered by id;
     ``sidewalks`` is the union of the sidewalk lanes and the walking areas; ``driving_lanes``
     holds the lanes of normal edges that road vehicles use, ``parking_lanes`` the parking
     strips, ``sidewalk_lanes`` the sidewalks, ``internal_lanes`` the vehicle lanes inside
@@ -58,10 +70,7 @@ class RoadMap:
     """
 
     net_path: Path
-    crossing_id: str
-    crossing_node: str
-    crossing: shapely.Polygon
-    crossing_center: np.ndarray
+    crossings: tuple[Crossing, ...]
     sidewalks: shapely.Polygon | shapely.MultiPolygon
     driving_lanes: dict[str, LaneGeometry]
     parking_lanes: dict[str, LaneGeometry]
@@ -69,6 +78,11 @@ class RoadMap:
     internal_lanes: dict[str, LaneGeometry]
     edge_lengths: dict[str, float]
     junction_lanes: dict[tuple[str, str], str] = field(default_factory=dict)
+
+    @property
+    def crossing_area(self) -> shapely.Geometry:
+        """The union of every crossing's area (empty without crossings)."""
+        return shapely.union_all([c.area for c in self.crossings])
 
     def lane(self, lane_id: str) -> LaneGeometry:
         """Any lane known to the map, by id; KeyError when there is none."""
@@ -148,8 +162,8 @@ def _geometry(lane: sumolib.net.lane.Lane) -> LaneGeometry:
 
 
 def is_sidewalk(lane: sumolib.net.lane.Lane) -> bool:
-    """Pedestrians only."""
-    return lane.getPermissions() == {"pedestrian"}
+    """Pedestrians and no road vehicles (a footpath shared with bicycles counts)."""
+    return lane.allows("pedestrian") and not any(lane.allows(c) for c in DRIVING_VCLASSES)
 
 
 def is_parking_strip(lane: sumolib.net.lane.Lane) -> bool:
@@ -173,12 +187,12 @@ def _read(path: Path) -> RoadMap:
     sidewalk: dict[str, LaneGeometry] = {}
     internal: dict[str, LaneGeometry] = {}
     edge_lengths: dict[str, float] = {}
-    crossings: list[sumolib.net.edge.Edge] = []
+    crossings: list[Crossing] = []
     walking_areas: list[shapely.Polygon] = []
     for edge in net.getEdges(withInternal=True):
         function = edge.getFunction()
         if function == "crossing":
-            crossings.append(edge)
+            crossings.append(_crossing(edge))
             continue
         if function == "walkingarea":
             ring = np.asarray(edge.getLane(0).getShape(), dtype=float)[:, :2]
@@ -200,21 +214,11 @@ def _read(path: Path) -> RoadMap:
                 parking[lane.getID()] = _geometry(lane)
             elif is_driving_lane(lane):
                 driving[lane.getID()] = _geometry(lane)
-    if len(crossings) != 1:
-        raise UserError(str(path), "", f"the network has {len(crossings)} pedestrian crossings, "
-                        "expected exactly one (the zebra)", "define one <crossing> in the .con.xml")
-    crossing_edge = crossings[0]
-    crossing_lane = crossing_edge.getLane(0)
-    crossing = lane_area(np.asarray(crossing_lane.getShape(), dtype=float)[:, :2],
-                         float(crossing_lane.getWidth()))
     sidewalk_union = shapely.union_all(
         [g.polygon() for g in sidewalk.values()] + walking_areas)
     return RoadMap(
         net_path=path,
-        crossing_id=crossing_edge.getID(),
-        crossing_node=crossing_edge.getFromNode().getID(),
-        crossing=crossing,
-        crossing_center=np.array(crossing.centroid.coords[0]) + 0.0,  # no -0.0
+        crossings=tuple(sorted(crossings, key=lambda c: c.id)),
         sidewalks=sidewalk_union,
         driving_lanes=driving,
         parking_lanes=parking,
@@ -223,6 +227,13 @@ def _read(path: Path) -> RoadMap:
         edge_lengths=edge_lengths,
         junction_lanes=_junction_lanes(net),
     )
+
+
+def _crossing(edge: sumolib.net.edge.Edge) -> Crossing:
+    """A crossing edge as a :class:`Crossing`."""
+    lane = edge.getLane(0)
+    area = lane_area(np.asarray(lane.getShape(), dtype=float)[:, :2], float(lane.getWidth()))
+    return Crossing(edge.getID(), edge.getFromNode().getID(), area)
 
 
 def _junction_lanes(net: sumolib.net.Net) -> dict[tuple[str, str], str]:

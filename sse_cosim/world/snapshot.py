@@ -84,7 +84,7 @@ class PersonState:
     id: str
     position: tuple[float, float]
     speed: float  # m/s
-    on_crossing: bool = False
+    on_crossing: bool = False  # on any of the network's crossings
 
 
 @dataclass(frozen=True)

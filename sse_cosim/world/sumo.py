@@ -11,9 +11,12 @@ Its ``time`` is the time SUMO's own outputs (FCD etc.) give that state: the firs
 t=0 with the actors that depart at t=0 standing at their departure places, i.e. one step less
 than ``libsumo.simulation.getTime()`` after the step.
 
-Insertion. SUMO keeps a vehicle waiting while there is no room where it departs; ``step()``
-raises :class:`UserError` naming ``bus.depart_pos_m`` (``car.depart_pos_m``) once the bus (the
-car) has waited ``INSERTION_WAIT_S`` past its departure.
+Insertion. SUMO inserts a vehicle only where it has room and where the vehicle behind it can
+still brake for it; otherwise it keeps the vehicle waiting and inserts it later, at the same
+position (a car placed ahead of the fast bus on the bus's lane would then appear behind the
+bus). So ``step()`` raises :class:`UserError` naming ``bus.depart_pos_m``
+(``car.depart_pos_m``) as soon as the bus (the car) is not on the road at its departure: a
+scenario's actors start where and when it says, or the run is refused.
 
 The pedestrian exists from t=0 and stands at its start until its walk starts (see
 :mod:`sse_cosim.world.demand`); meanwhile the snapshot places it at the plan's standing point
@@ -82,7 +85,6 @@ with contextlib.redirect_stdout(io.StringIO()):
 log = logging.getLogger(__name__)
 
 BUS_SPEED_MODE = 31
-INSERTION_WAIT_S = 2.0  # how long a vehicle may wait for room at its departure (s)
 CONFIG_FILE_NAME = "sumo.sumocfg"
 LOG_FILE_NAME = "sumo.log"
 _VEHICLE_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED)
@@ -196,8 +198,8 @@ class SumoWorld:
     def step(self) -> Snapshot:
         """Advance SUMO by one step and return the new state.
 
-        Raises :class:`UserError` once a vehicle has waited :data:`INSERTION_WAIT_S` past its
-        departure without SUMO finding room to insert it where the scenario places it.
+        Raises :class:`UserError` when a vehicle is not on the road at its departure (SUMO
+        found no room to insert it where the scenario places it).
         """
         self._require_open()
         try:
@@ -314,8 +316,8 @@ class SumoWorld:
                                   "(use it inside 'with SumoWorld(...) as world:')")
 
     def _check_insertions(self) -> None:
-        """Every vehicle is inserted within :data:`INSERTION_WAIT_S` of its departure; one that
-        is not stands where the scenario leaves it no room (SUMO would keep it waiting)."""
+        """Every vehicle is on the road from its departure on; SUMO would keep one it has no
+        room for waiting and insert it later (see module docstring)."""
         bus, car = self.scenario.bus, self.scenario.car
         self._check_inserted(BUS_ID, 0.0, "bus.depart_pos_m",
                              f"at {bus.depart_pos_m:g} m on edge {bus.route_edges[0]!r}",
@@ -324,15 +326,17 @@ class SumoWorld:
             self._check_inserted(CAR_ID, car.depart_s, "car.depart_pos_m",
                                  f"at {car.depart_pos_m:g} m on edge {car.route_edges[0]!r} "
                                  f"(car.depart_s = {car.depart_s:g} s)",
-                                 "move car.depart_pos_m, or change car.depart_s, to where and "
-                                 "when there is room")
+                                 "place the car where nothing stands and, on the bus's lane, "
+                                 "far enough ahead of the bus for it to brake (or behind it), "
+                                 "or change car.depart_s")
 
     def _check_inserted(self, vid: str, depart_s: float, field: str, where: str,
                         fix: str) -> None:
-        if vid in self._departed or self._time < depart_s + INSERTION_WAIT_S - 1e-9:
+        if vid in self._departed or self._time < depart_s - 1e-9:
             return
-        raise UserError(self.scenario_name, field, f"SUMO found no room to insert the "
-                        f"{ROLES[vid]} {where} within {INSERTION_WAIT_S:g} s of its departure "
+        raise UserError(self.scenario_name, field, f"SUMO cannot insert the {ROLES[vid]} "
+                        f"{where} at its departure: no room there, or the vehicle behind it "
+                        "could not brake for it; SUMO would insert it later, behind that vehicle "
                         f"(see {self.run_dir / LOG_FILE_NAME})", fix)
 
     def _write_files(self) -> Path:
@@ -402,13 +406,13 @@ class SumoWorld:
             if vid == BUS_ID:
                 self._bus_distance = float(values[libsumo.VAR_DISTANCE])
         persons: dict[str, PersonState] = {}
-        crossing = self.roadmap.crossing_id
+        crossings = {c.id for c in self.roadmap.crossings}
         for pid, values in libsumo.person.getAllSubscriptionResults().items():
             persons[pid] = PersonState(
                 id=pid,
                 position=self._person_position(pid, values),
                 speed=float(values[libsumo.VAR_SPEED]),
-                on_crossing=values[libsumo.VAR_ROAD_ID] == crossing)
+                on_crossing=values[libsumo.VAR_ROAD_ID] in crossings)
         return Snapshot(time=self._time, vehicles=vehicles, persons=persons)
 
     def _person_position(self, pid: str, values: dict[int, Any]) -> tuple[float, float]:

@@ -1,6 +1,6 @@
 """SUMO failures: one line naming the scenario, exit status 3, SUMO closed, files whole; in a
-batch the failure is recorded and the other runs go on. A vehicle SUMO finds no room to insert
-is a scenario that places it badly: one line naming the field, exit status 2."""
+batch the failure is recorded and the other runs go on. A vehicle SUMO does not insert at its
+departure is a scenario that places it badly: one line naming the field, exit status 2."""
 
 from __future__ import annotations
 
@@ -108,8 +108,8 @@ def test_a_bus_that_is_never_inserted_is_bad_input(tmp_path, capsys, monkeypatch
     path = scenario_file(tmp_path, "blocked", "", duration_s=5.0)
     code, line = run_cli(["run", str(path), "--out", str(tmp_path / "out")], capsys)
     assert code == EXIT_BAD_INPUT
-    assert line.startswith(f"sse-cosim: {path}: bus.depart_pos_m: SUMO found no room to insert "
-                           "the bus at 0 m on edge 'WC' within 2 s")
+    assert line.startswith(f"sse-cosim: {path}: bus.depart_pos_m: SUMO cannot insert the bus at "
+                           "0 m on edge 'WC' at its departure")
     assert "-- move bus.depart_pos_m" in line
     assert not sumo.libsumo.isLoaded()
 
@@ -121,9 +121,26 @@ def test_a_car_without_room_at_its_departure_is_bad_input(tmp_path, capsys):
                          duration_s=5.0, base=S2)
     code, line = run_cli(["run", str(path), "--out", str(tmp_path / "out")], capsys)
     assert code == EXIT_BAD_INPUT
-    assert line.startswith(f"sse-cosim: {path}: car.depart_pos_m: SUMO found no room to insert "
-                           "the car at 0 m on edge 'WC' (car.depart_s = 0 s) within 2 s")
+    assert line.startswith(f"sse-cosim: {path}: car.depart_pos_m: SUMO cannot insert the car at "
+                           "0 m on edge 'WC' (car.depart_s = 0 s) at its departure")
     assert "car.depart_s" in line.partition(" -- ")[2]
+    assert not sumo.libsumo.isLoaded()
+
+
+@pytest.mark.parametrize("depart_pos_m", [15.0, 60.0])
+def test_a_car_ahead_of_the_bus_that_the_bus_could_not_brake_for_is_bad_input(
+        depart_pos_m, tmp_path, capsys):
+    """A car placed ahead of the bus on the bus's lane, slower than the bus and too close for
+    it to brake: SUMO would insert it only once the bus has passed, i.e. behind the bus (at
+    15 m within two seconds). The run is refused at the car's departure instead."""
+    path = scenario_file(tmp_path, "car_ahead", '[car]\nroute_edges = ["WC", "CE"]\n'
+                         f"depart_pos_m = {depart_pos_m}\n", duration_s=5.0, base=S2)
+    code, line = run_cli(["run", str(path), "--out", str(tmp_path / "out")], capsys)
+    assert code == EXIT_BAD_INPUT
+    assert line.startswith(f"sse-cosim: {path}: car.depart_pos_m: SUMO cannot insert the car at "
+                           f"{depart_pos_m:g} m on edge 'WC' (car.depart_s = 0 s) at its "
+                           "departure: no room there, or the vehicle behind it could not brake")
+    assert "far enough ahead of the bus" in line.partition(" -- ")[2]
     assert not sumo.libsumo.isLoaded()
 
 

@@ -62,7 +62,8 @@ def test_level_speeds_are_the_configured_reductions():
 
 
 def test_reach_radius_shrinks_as_the_bus_nears_and_vanishes_once_past(context):
-    start, end = context.crossing_span
+    (crossing,) = context.crossings
+    start, end = crossing.start_m, crossing.end_m
     radii = [context.reach_radius(s) for s in (start - 60, start - 30, start - 5)]
     assert radii[0] > radii[1] > radii[2] > 0
     assert radii[0] <= context.config.interest_radius_m
@@ -70,7 +71,7 @@ def test_reach_radius_shrinks_as_the_bus_nears_and_vanishes_once_past(context):
 
 
 def test_a_pedestrian_in_the_lane_ahead_triggers_an_emergency_stop(context):
-    start, _ = context.crossing_span
+    start = context.crossings[0].start_m
     front = np.array(context.route_line.interpolate(start - 20.0).coords[0])
     in_lane = shapely.Point(front + np.array([10.0, 0.0])).buffer(0.5)
     on_far_sidewalk = shapely.Point(front[0] + 10.0, 7.0).buffer(0.5)
@@ -82,7 +83,7 @@ def test_a_pedestrian_in_the_lane_ahead_triggers_an_emergency_stop(context):
 
 
 def test_hidden_area_counts_only_within_reach_of_the_crossing(context):
-    start, _ = context.crossing_span
+    start = context.crossings[0].start_m
     front = np.array(context.route_line.interpolate(start - 40.0).coords[0])
     near = shapely.box(196.0, -8.0, 198.0, -6.0)  # sidewalk right at the zebra
     far = shapely.box(150.0, -8.0, 152.0, -6.0)  # sidewalk 46 m before it
@@ -94,7 +95,8 @@ def test_hidden_area_counts_only_within_reach_of_the_crossing(context):
 
 def test_the_zebra_is_the_one_conflict_zone_on_the_route(context):
     (zone,) = context.zones
-    start, end = context.crossing_span
+    (crossing,) = context.crossings
+    start, end = crossing.start_m, crossing.end_m
     assert zone.start_m == pytest.approx(start, abs=1e-6)
     assert zone.end_m == pytest.approx(end, abs=1e-6)
     # the swept corridor: half the bus plus a pedestrian's radius either side of the lane
@@ -105,7 +107,7 @@ def test_the_zebra_is_the_one_conflict_zone_on_the_route(context):
 
 
 def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
-    start, _ = context.crossing_span
+    start = context.crossings[0].start_m
     front = np.array(context.route_line.interpolate(start - 40.0).coords[0])
     (zone,) = context.zones
     south = zone.polygon.bounds[1]

@@ -13,11 +13,10 @@ from sse_cosim.world.roadmap import load_roadmap
 
 
 def test_crossing(net_path: Path) -> None:
-    roadmap = load_roadmap(net_path)
-    assert roadmap.crossing.bounds == pytest.approx((198.0, -6.0, 202.0, 6.0))
-    assert roadmap.crossing.area == pytest.approx(48.0)
-    assert roadmap.crossing_center == pytest.approx(np.array([200.0, 0.0]))
-    assert roadmap.crossing_node == "C"
+    (crossing,) = load_roadmap(net_path).crossings
+    assert crossing.area.bounds == pytest.approx((198.0, -6.0, 202.0, 6.0))
+    assert crossing.area.area == pytest.approx(48.0)
+    assert (crossing.id, crossing.node) == (":C_c0", "C")
 
 
 def test_sidewalks_include_walking_areas(net_path: Path) -> None:

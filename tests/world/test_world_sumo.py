@@ -99,7 +99,7 @@ def test_pedestrian_walks_over_the_zebra(name: str,
     on = [t for t, p in tracks if p.on_crossing]
     assert on, "the pedestrian never stepped onto the crossing"
     assert on[0] == pytest.approx(sc.pedestrian.steps_onto_crossing_s, abs=STEPS_EARLY)
-    assert all(run.roadmap.crossing.buffer(0.5).contains(_point(p))
+    assert all(run.roadmap.crossing_area.buffer(0.5).contains(_point(p))
                for _, p in tracks if p.on_crossing)
     after = [p for t, p in tracks if t > on[-1]]
     assert after and after[-1].position[1] > 6.0, "the pedestrian did not reach the north side"
@@ -140,9 +140,9 @@ def test_pedestrian_waits_at_its_start_until_its_walk_starts(overrides: dict,
 
 
 def test_a_car_without_room_at_its_departure_is_a_user_error(tmp_path: Path) -> None:
-    """A connected car placed where a slow bus stands: SUMO keeps it waiting; two seconds
-    after its departure the world refuses the scenario, naming car.depart_pos_m."""
-    from sse_cosim.world.sumo import INSERTION_WAIT_S, SumoWorld
+    """A connected car placed where a slow bus stands: SUMO keeps it waiting; at its
+    departure the world refuses the scenario, naming car.depart_pos_m."""
+    from sse_cosim.world.sumo import SumoWorld
 
     sc = scenario("s2_no_pedestrian", **{"bus.nominal_speed_mps": 0.5, "car.depart_s": 0.5,
                                          "car.route_edges": ["WC", "CE"]})
@@ -150,9 +150,22 @@ def test_a_car_without_room_at_its_departure_is_a_user_error(tmp_path: Path) -> 
     with pytest.raises(UserError) as info, SumoWorld(sc, tmp_path, "blocked.toml") as world:
         for _ in range(50):
             times.append(world.step().time)
-    assert times[-1] == pytest.approx(0.5 + INSERTION_WAIT_S - 0.1)  # refused at the next step
+    assert times[-1] == pytest.approx(0.4)  # refused at the step of its departure
     assert (info.value.source, info.value.field) == ("blocked.toml", "car.depart_pos_m")
-    assert "no room to insert the car" in info.value.problem and "car.depart_s" in info.value.fix
+    assert "cannot insert the car" in info.value.problem and "car.depart_s" in info.value.fix
+
+
+def test_a_car_far_enough_ahead_of_the_bus_starts_where_the_scenario_says(tmp_path: Path) -> None:
+    """On the bus's lane, far enough ahead for the bus to brake for it, the car is on the road
+    from its departure, at its departure position, ahead of the bus (too close ahead it is
+    refused: tests/bad_input/test_sumo_failures.py)."""
+    sc = scenario("s2_no_pedestrian", **{"car.route_edges": ["WC", "CE"],
+                                         "car.depart_pos_m": 120.0})
+    snapshots = run_world(sc, tmp_path, steps=5).snapshots
+    car, bus = snapshots[0].role("car"), snapshots[0].role("bus")
+    assert car is not None and bus is not None
+    assert (car.footprint.front.x, car.footprint.front.y) == pytest.approx((120.0, -1.75))
+    assert bus.footprint.front.x == pytest.approx(0.0)
 
 
 @pytest.mark.parametrize("name", ["s1_pedestrian", "s2_pedestrian", "s3_no_pedestrian"])
