@@ -163,9 +163,11 @@ class SafePolicy:
     as the one the pass was proven with stays admissible, since the pedestrians that could
     reach the zone in time were all inside the sets when it was proven. If no level and no
     comfortable stop keeps a plan, the bus brakes at the emergency deceleration. Under the
-    assumptions of docs/controller.md, the plans proven at one step stay valid at the next
-    (the comfortable stop of the previous step is still a stop or a stand), so the emergency
-    brake is never needed; it remains as the answer to a broken assumption.
+    assumptions of docs/controller.md, with commands acting over the next step as in SUMO,
+    the plans proven at one step stay valid at the next (the comfortable stop of the previous
+    step is still a stop or a stand), so the emergency brake is never needed; it remains as
+    the answer to a broken assumption (and to commands delayed by the whole reaction time,
+    which the one-step prediction does not model: docs/controller.md).
     """
 
     def __init__(self, dynamics: BusDynamics, nominal_mps: float, config: Controller) -> None:
@@ -200,7 +202,12 @@ class SafePolicy:
                 if ceiling - k * quantum >= quantum - 1e-9]
 
     def _plans(self, picture: Picture, command: float) -> list[Plan] | None:
-        """One plan per zone if ``command`` keeps one for every zone, else None."""
+        """One plan per zone if ``command`` keeps one for every zone, else None.
+
+        The plans form one manoeuvre: hold the command through the nearest zones that it
+        passes, then stop (comfortably). So once a zone is not passed, every zone beyond it
+        needs a stop or a stand too, proven from where and when the passes end.
+        """
         if command == 0.0 and picture.speed_mps < STANDING_MPS:
             return []  # standing still touches nobody
         dyn = self.dynamics
@@ -209,26 +216,51 @@ class SafePolicy:
         position, speed = 0.0, picture.speed_mps
         for _ in range(steps):
             position, speed = dyn.advance(position, speed, command)
-        stand_time = steps * dyn.step + dyn.stopping_time(speed) + dyn.step
-        plans = []
+        start = _StopStart(position, speed, steps * dyn.step)
+        plans, passing = [], True
         for zone in picture.zones:
-            plan = self._zone_plan(zone, picture.speed_mps, command, position, speed, stand_time)
+            plan = self._stop_or_stand(zone, command, start)
+            if plan is None and passing:
+                plan = self._pass(zone, picture.speed_mps, command)
+                if plan is not None:  # a later stop starts once this zone is cleared
+                    # (the bus may follow a faster earlier command for the reaction time)
+                    fastest = max(picture.speed_mps + dyn.accel * dyn.reaction_time, command)
+                    start = _StopStart(zone.to_clear_m, fastest, dyn.pass_time(
+                        zone.to_clear_m, picture.speed_mps, command))
             if plan is None:
                 return None
+            passing = passing and plan.kind == "pass"
             plans.append(plan)
         return plans
 
-    def _zone_plan(self, zone: ZoneOutlook, speed_now: float, command: float, position: float,
-                   speed: float, stand_time: float) -> Plan | None:
+    def _stop_or_stand(self, zone: ZoneOutlook, command: float, start: _StopStart) -> Plan | None:
+        """A comfortable stop ordered at ``start`` ends before the zone, or has the bus
+        standing (one step of margin) before anyone can arrive there."""
         dyn = self.dynamics
-        if position + dyn.stopping_distance(speed) + self.config.stopping_margin_m \
+        if start.position + dyn.stopping_distance(start.speed) + self.config.stopping_margin_m \
                 <= zone.to_start_m:
             return Plan(zone.index, "stop", command)
-        if stand_time <= zone.arrival_s:
+        if start.time + dyn.stopping_time(start.speed) + dyn.step <= zone.arrival_s:
             return Plan(zone.index, "stand", command)
+        return None
+
+    def _pass(self, zone: ZoneOutlook, speed_now: float, command: float) -> Plan | None:
+        """Holding the command, the rear clears the zone a step before anyone can arrive (or a
+        pass committed earlier still holds)."""
+        dyn = self.dynamics
         if dyn.pass_time(zone.to_clear_m, speed_now, command) + dyn.step < zone.arrival_s:
             return Plan(zone.index, "pass", command)
         committed = self.committed.get(zone.index)
         if committed is not None and command >= committed:
             return Plan(zone.index, "pass", committed)
         return None
+
+
+@dataclass(frozen=True)
+class _StopStart:
+    """Where (m along the route from the front now), at what speed at most (m/s) and how late
+    at most (s from now) a comfortable stop may be ordered."""
+
+    position: float
+    speed: float
+    time: float

@@ -200,3 +200,39 @@ def test_no_contact_while_moving_whenever_the_pedestrian_steps_out(
 def test_the_bus_passes_once_the_pedestrian_has_crossed(hidden_m):
     _, reached = closed_loop(100.0, hidden_m, 2.0, 2.5)
     assert reached > 100.0 + ZONE_LENGTH + BUS.length_m
+
+
+def two_zone_loop(first_start: float, gap_m: float, hidden_m: float, step_out_s: float) -> bool:
+    """Two zebras on the route, ``gap_m`` apart: someone always stands on the second, and a
+    pedestrian hidden ``hidden_m`` from the first steps toward it at the speed bound at
+    ``step_out_s``. Commands act at the next step, as in SUMO. True if the bus is never
+    moving while in contact: in the first zone with the pedestrian in it, or in the second."""
+    safe, speed_bound = policy(), 2.5
+    s, v = 0.0, BUS.nominal_speed_mps
+    second_start = first_start + ZONE_LENGTH + BUS.length_m + gap_m
+    ped = -hidden_m
+    for k in range(round(40.0 / DT)):
+        arrival = max(0.0, -ped) / speed_bound if ped < ZONE_LENGTH else math.inf
+        outlook = tuple(
+            ZoneOutlook(i, start - s, start + ZONE_LENGTH + BUS.length_m - s, arrive)
+            for i, (start, arrive) in enumerate(((first_start, arrival), (second_start, 0.0)))
+            if start + ZONE_LENGTH + BUS.length_m - s > 0)
+        s, v = DYN.advance(s, v, safe.decide(picture(v, outlook)).command_mps)
+        if (k + 1) * DT >= step_out_s:
+            ped += speed_bound * DT
+        in_first = 0.0 <= ped <= ZONE_LENGTH and first_start < s < (
+            first_start + ZONE_LENGTH + BUS.length_m)
+        if (in_first or s > second_start) and v > 0.0:
+            return False
+    return True
+
+
+@settings(max_examples=300, deadline=None)
+@given(first_start=st.floats(90.0, 200.0), gap_m=st.floats(0.0, 60.0),
+       hidden_m=st.floats(0.0, 30.0), step_out_s=st.floats(0.0, 12.0))
+def test_a_pass_through_one_zone_leaves_room_to_stop_before_the_next(
+        first_start, gap_m, hidden_m, step_out_s):
+    """The plans form one manoeuvre: a pass through the first zebra counts only if the bus can
+    still stop before the second once it has cleared the first (checked zone by zone, the
+    bus could commit to a pass and then find no room to stop beyond it)."""
+    assert two_zone_loop(first_start, gap_m, hidden_m, step_out_s)
