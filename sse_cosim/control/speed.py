@@ -223,9 +223,8 @@ class SafePolicy:
             if plan is None and passing:
                 plan = self._pass(zone, picture.speed_mps, command)
                 if plan is not None:  # a later stop starts once this zone is cleared
-                    # (the bus may follow a faster earlier command for the reaction time)
-                    fastest = max(picture.speed_mps + dyn.accel * dyn.reaction_time, command)
-                    start = _StopStart(zone.to_clear_m, fastest, dyn.pass_time(
+                    # holding the command, the speed moves from the predicted one toward it
+                    start = _StopStart(zone.to_clear_m, max(speed, command), dyn.pass_time(
                         zone.to_clear_m, picture.speed_mps, command))
             if plan is None:
                 return None
