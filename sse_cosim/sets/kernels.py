@@ -110,13 +110,8 @@ def girard_reduce(generators: FloatArray, max_generators: int) -> FloatArray:
     """Girard's reduction of G (n, e) to at most ``max_generators`` (>= n) columns: zero columns
     dropped; the max_generators - n largest by ‖g‖₁ − ‖g‖∞ kept (stable order); the rest
     enclosed in the axis-aligned box diag(Σ_j |g_j|), its zero columns dropped."""
-    n, e = generators.shape
-    nonzero = np.zeros(e, dtype=np.bool_)
-    for j in range(e):
-        for i in range(n):
-            if generators[i, j] != 0.0:
-                nonzero[j] = True
-    g = np.ascontiguousarray(generators[:, nonzero])
+    n = generators.shape[0]
+    g = _nonzero_columns(generators)
     k = g.shape[1]
     if k <= max_generators:
         return g
@@ -165,21 +160,47 @@ def _reflect(v: FloatArray, vv: float, matrix: FloatArray, first: int, first_col
 
 
 @njit(cache=True)
+def _project(normals: FloatArray, generators: FloatArray) -> FloatArray:
+    """HG (m, e) for H (m, n) and G (n, e), each entry summed over i in order."""
+    m, e = normals.shape[0], generators.shape[1]
+    hg = np.zeros((m, e))
+    for s in range(m):
+        for j in range(e):
+            for i in range(generators.shape[0]):
+                hg[s, j] += normals[s, i] * generators[i, j]
+    return hg
+
+
+@njit(cache=True)
+def _nonzero_columns(matrix: FloatArray) -> FloatArray:
+    """The columns of ``matrix`` (n, e) that have a nonzero entry, contiguous, in order."""
+    keep = np.zeros(matrix.shape[1], dtype=np.bool_)
+    for j in range(matrix.shape[1]):
+        for i in range(matrix.shape[0]):
+            if matrix[i, j] != 0.0:
+                keep[j] = True
+    return np.ascontiguousarray(matrix[:, keep])
+
+
+@njit(cache=True)
 def frobenius_gain(generators: FloatArray, normals: FloatArray, radii: FloatArray) -> FloatArray:
     """Λ (n, m) minimizing ‖G - Λ HG‖_F² + ‖Λ diag(r)‖_F² (Prop. 1, Frobenius gain), G (n, e),
     H (m, n), r (m,) > 0: the least-squares solution of [HG, diag(r)]ᵀ Λᵀ ≈ [G, 0]ᵀ by
     Householder QR ([HG, diag(r)] has rank m as r > 0, so R is invertible)."""
+    return _gain(generators, _project(normals, generators), radii)
+
+
+@njit(cache=True)
+def _gain(generators: FloatArray, hg: FloatArray, radii: FloatArray) -> FloatArray:
+    """:func:`frobenius_gain` from HG (m, e) already computed."""
     n, e = generators.shape
-    m = normals.shape[0]
+    m = hg.shape[0]
     rows = e + m
     a = np.zeros((rows, m))  # [HG, diag(r)]ᵀ
     b = np.zeros((rows, n))  # [G, 0]ᵀ
     for j in range(e):
         for s in range(m):
-            total = 0.0
-            for i in range(n):
-                total += normals[s, i] * generators[i, j]
-            a[j, s] = total
+            a[j, s] = hg[s, j]
         for i in range(n):
             b[j, i] = generators[i, j]
     for s in range(m):
@@ -217,12 +238,8 @@ def intersect_frobenius(center: FloatArray, generators: FloatArray, normals: Flo
     H (m, n), y and r (m,) -> c' (n,), G' (n, <= e + m)."""
     n, e = generators.shape
     m = normals.shape[0]
-    gain = frobenius_gain(generators, normals, radii)
-    hg = np.zeros((m, e))
-    for s in range(m):
-        for j in range(e):
-            for i in range(n):
-                hg[s, j] += normals[s, i] * generators[i, j]
+    hg = _project(normals, generators)
+    gain = _gain(generators, hg, radii)
     innovation = values.copy()  # y - Hc
     for s in range(m):
         for i in range(n):
@@ -240,9 +257,4 @@ def intersect_frobenius(center: FloatArray, generators: FloatArray, normals: Flo
             full[i, j] = total
     if not (np.isfinite(new_center).all() and np.isfinite(full).all()):
         raise ValueError("zonotope center and generators must be finite")
-    keep = np.zeros(e + m, dtype=np.bool_)
-    for j in range(e + m):
-        for i in range(n):
-            if full[i, j] != 0.0:
-                keep[j] = True
-    return new_center, np.ascontiguousarray(full[:, keep])
+    return new_center, _nonzero_columns(full)
