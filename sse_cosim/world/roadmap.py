@@ -79,10 +79,15 @@ class RoadMap:
     edge_lengths: dict[str, float]
     junction_lanes: dict[tuple[str, str], str] = field(default_factory=dict)
 
-    @property
+    @functools.cached_property
     def crossing_area(self) -> shapely.Geometry:
         """The union of every crossing's area (empty without crossings)."""
         return shapely.union_all([c.area for c in self.crossings])
+
+    @functools.cached_property
+    def crossing_ids(self) -> frozenset[str]:
+        """The SUMO edge ids of the crossings."""
+        return frozenset(c.id for c in self.crossings)
 
     def lane(self, lane_id: str) -> LaneGeometry:
         """Any lane known to the map, by id; KeyError when there is none."""

@@ -406,13 +406,12 @@ class SumoWorld:
             if vid == BUS_ID:
                 self._bus_distance = float(values[libsumo.VAR_DISTANCE])
         persons: dict[str, PersonState] = {}
-        crossings = {c.id for c in self.roadmap.crossings}
         for pid, values in libsumo.person.getAllSubscriptionResults().items():
             persons[pid] = PersonState(
                 id=pid,
                 position=self._person_position(pid, values),
                 speed=float(values[libsumo.VAR_SPEED]),
-                on_crossing=values[libsumo.VAR_ROAD_ID] in crossings)
+                on_crossing=values[libsumo.VAR_ROAD_ID] in self.roadmap.crossing_ids)
         return Snapshot(time=self._time, vehicles=vehicles, persons=persons)
 
     def _person_position(self, pid: str, values: dict[int, Any]) -> tuple[float, float]:
