@@ -10,7 +10,7 @@ from typing import Any
 from sse_cosim.errors import UserError
 from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
 from sse_cosim.scenario.model import Scenario
-from sse_cosim.scenario.paths import expand_pattern, is_pattern
+from sse_cosim.scenario.paths import expand_pattern, is_pattern, top_level_positions
 
 
 def parse_value(text: str) -> Any:
@@ -24,13 +24,11 @@ def parse_value(text: str) -> Any:
 def split_assignment(text: str) -> tuple[str, str] | None:
     """``PATH=VALUE`` split at the first ``=`` outside brackets (a filter such as
     ``sensors.*[node!=bus]`` holds one), both sides stripped; None if a side is empty."""
-    depth = 0
-    for i, char in enumerate(text):
-        depth += {"[": 1, "]": -1}.get(char, 0)
-        if char == "=" and depth == 0:
-            path, value = text[:i].strip(), text[i + 1:].strip()
-            return (path, value) if path and value else None
-    return None
+    positions = top_level_positions(text, "=")
+    if not positions:
+        return None
+    path, value = text[:positions[0]].strip(), text[positions[0] + 1:].strip()
+    return (path, value) if path and value else None
 
 
 def parse_assignment(text: str, option: str) -> tuple[str, Any]:

@@ -8,6 +8,7 @@ and may end in a filter on a field of the tables it selects (``sensors.*[node=rs
 
 from __future__ import annotations
 
+import itertools
 import re
 from collections.abc import Mapping
 from fnmatch import fnmatchcase
@@ -40,17 +41,21 @@ def expand_pattern(pattern: str, fields: Mapping[str, Any], source: str) -> list
     return [(".".join(path), value) for path, value in found]
 
 
+def top_level_positions(text: str, separator: str) -> list[int]:
+    """Where ``separator`` stands in ``text`` outside ``[...]`` (a filter may hold dots and
+    ``=``)."""
+    depth, positions = 0, []
+    for i, char in enumerate(text):
+        depth += {"[": 1, "]": -1}.get(char, 0)
+        if char == separator and depth == 0:
+            positions.append(i)
+    return positions
+
+
 def split_path(pattern: str, source: str = "command line") -> list[str]:
     """Dotted parts of ``pattern``; dots inside ``[...]`` belong to their part."""
-    parts, depth, current = [], 0, ""
-    for char in pattern:
-        depth += {"[": 1, "]": -1}.get(char, 0)
-        if char == "." and depth == 0:
-            parts.append(current)
-            current = ""
-        else:
-            current += char
-    parts.append(current)
+    cuts = [-1, *top_level_positions(pattern, "."), len(pattern)]
+    parts = [pattern[start + 1:end] for start, end in itertools.pairwise(cuts)]
     if not all(parts):
         raise UserError(source, pattern or "(empty)", "is not a dotted path",
                         "write it as table.field, e.g. sensors.bus_front.noise_bound_m")
