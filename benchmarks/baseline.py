@@ -18,7 +18,9 @@ from benchmarks.common import PlainObserver, Recording, contains_lp_batch, fuse_
 from benchmarks.tightness import DT, record
 from sse_cosim.estimation.kalman import KalmanTracker
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.scenario.model import BUS_NODE, Estimator
+from sse_cosim.scenario.model import Estimator
+
+BUS = "bus"  # the automated vehicle's id (its node)
 
 PEDESTRIAN_SCENARIOS = [f"scenarios/s{i}_pedestrian.toml" for i in (1, 2, 3)]
 
@@ -43,7 +45,7 @@ def open_loop(recording: Recording) -> dict:
                 continue
             steps += 1
             kf_misses += not regions[pid].covers(shapely.Point(truth))
-            inputs = [local[BUS_NODE][pid]] if pid in local[BUS_NODE] else []
+            inputs = [local[BUS][pid]] if pid in local[BUS] else []
             inputs += [model.predict(plain[s].estimate_at(pid, sent), rec.step - sent)
                        for s, sent in sorted(rec.received.get(pid, {}).items())
                        if plain[s].estimate_at(pid, sent) is not None]

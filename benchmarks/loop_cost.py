@@ -20,8 +20,10 @@ from sse_cosim.reporting.recorder import RunRecorder
 from sse_cosim.runner.simulation import simulate
 from sse_cosim.runner.timing import STAGES, StageTimer
 from sse_cosim.scenario.loader import load_scenario
-from sse_cosim.scenario.model import BUS_NODE, Estimator, Scenario
+from sse_cosim.scenario.model import Estimator, Scenario
 from sse_cosim.world.sumo import SumoWorld
+
+BUS = "bus"  # the automated vehicle's id (its node)
 
 SCENARIO = "scenarios/s3_pedestrian.toml"
 FUSION = Estimator().fusion_method  # the default fusion, the same in every configuration
@@ -42,10 +44,10 @@ def bare_sumo(scenario: Scenario, steps: int, folder: Path) -> float:
         for _ in range(steps):
             start = time.perf_counter()
             snapshot = world.step()
-            bus = snapshot.role(BUS_NODE)
+            bus = snapshot.vehicles.get(BUS)
             if bus is not None:
-                world.set_bus_speed(scenario.bus.nominal_speed_mps)
-            if bus is None and world.bus_arrived:
+                world.set_speed(BUS, scenario.automated[BUS].nominal_speed_mps)
+            if bus is None and world.arrived(BUS):
                 break
             elapsed += time.perf_counter() - start
             counted += bus is not None

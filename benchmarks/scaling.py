@@ -21,7 +21,7 @@ from benchmarks.common import PlainObserver, fuse_inputs, median
 from sse_cosim.control.picture import SceneContext, assess
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea
-from sse_cosim.scenario.model import Bus, Controller, Estimator
+from sse_cosim.scenario.model import AutomatedVehicle, Controller, Estimator
 from sse_cosim.sensors import Camera, SensorSpec, observe
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import load_roadmap
@@ -52,8 +52,8 @@ def _pedestrians(count: int, rng: np.random.Generator) -> tuple[np.ndarray, np.n
 
 
 def _snapshot(step: int, bus_x: float, people: np.ndarray) -> Snapshot:
-    bus = VehicleState("bus", "bus", Footprint(Pose(bus_x, -1.6, 0.0), 12.0, 2.55), 10.0)
-    truck = VehicleState("truck", "truck", Footprint(Pose(186.0, -4.8, 0.0), 10.0, 2.5), 0.0)
+    bus = VehicleState("bus", "automated", Footprint(Pose(bus_x, -1.6, 0.0), 12.0, 2.55), 10.0)
+    truck = VehicleState("truck", "parked", Footprint(Pose(186.0, -4.8, 0.0), 10.0, 2.5), 0.0)
     persons = {f"p{i}": PersonState(f"p{i}", (float(x), float(y)), 1.2)
                for i, (x, y) in enumerate(people)}
     return Snapshot(step * DT, {"bus": bus, "truck": truck}, persons)
@@ -67,8 +67,8 @@ def measure(pedestrians: int, sensors: int, steps: int, warmup: int, roadmap) ->
     specs = _specs(sensors)
     nodes = sorted({s.node for s in specs.values()})
     observers = {n: PlainObserver(model, config.gain_method) for n in nodes}
-    context = SceneContext.build(roadmap, ["WC", "CE"], Bus(), Controller(), model.max_speed,
-                                 model.jitter, 0.3, DT)
+    context = SceneContext.build(roadmap, ["WC", "CE"], AutomatedVehicle(), Controller(),
+                                 model.max_speed, model.jitter, 0.3, DT)
     occupancy = OccupancyTracker(model, DT, context.walkable)  # as in the loop
     unobserved = UnobservedArea(context.walkable, model, DT, 1, window=context.window)
     people, velocity = _pedestrians(pedestrians, rng)

@@ -26,9 +26,11 @@ from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.reporting.recorder import RunRecorder
 from sse_cosim.runner.simulation import simulate
 from sse_cosim.scenario.loader import load_scenario
-from sse_cosim.scenario.model import BUS_NODE, Estimator, Scenario
+from sse_cosim.scenario.model import Estimator, Scenario
 from sse_cosim.sets import Strips
 from sse_cosim.sets.exact import intersect_strips_exact, predict_exact
+
+BUS = "bus"  # the automated vehicle's id (its node)
 
 SCENARIOS = [f"scenarios/s{i}_{kind}.toml" for i in (1, 2, 3)
              for kind in ("pedestrian", "no_pedestrian")]
@@ -117,9 +119,9 @@ def _replay(recording: Recording, gains: Sequence[str], fusions: Sequence[str],
                 area = geometry.area
                 for g in gains:
                     local[g].append(zs[g][node][pid].volume() / area)
-        for pid in set(ex[BUS_NODE]) | set(rec.received):
+        for pid in set(ex[BUS]) | set(rec.received):
             senders = rec.received.get(pid, {})
-            parts = [ex[BUS_NODE][pid]] if pid in ex[BUS_NODE] else []
+            parts = [ex[BUS][pid]] if pid in ex[BUS] else []
             parts += [exact[s].predict(exact[s].history[pid][sent], rec.step - sent)
                       for s, sent in sorted(senders.items())
                       if sent in exact[s].history.get(pid, {})]
@@ -127,13 +129,13 @@ def _replay(recording: Recording, gains: Sequence[str], fusions: Sequence[str],
                 continue  # nothing to fuse: the local figures cover it
             target = shapely.intersection_all(parts).area
             for g in gains:
-                inputs = [zs[g][BUS_NODE][pid]] if pid in zs[g][BUS_NODE] else []
+                inputs = [zs[g][BUS][pid]] if pid in zs[g][BUS] else []
                 inputs += [model.predict(plain[g][s].estimate_at(pid, sent), rec.step - sent)
                            for s, sent in sorted(senders.items())
                            if plain[g][s].estimate_at(pid, sent) is not None]
                 for f in fusions:
-                    z = fuse_inputs(inputs, f, model, plain[g][BUS_NODE].settings.max_generators,
-                                    plain[g][BUS_NODE].settings.reduction_method)
+                    z = fuse_inputs(inputs, f, model, plain[g][BUS].settings.max_generators,
+                                    plain[g][BUS].settings.reduction_method)
                     fused[(g, f)].append(z.volume() / target)
     return {"local": local, "fused": {f"{g}|{f}": v for (g, f), v in fused.items()}}
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from sse_cosim.scenario.model import Bus, Controller
+from sse_cosim.scenario.model import AutomatedVehicle, Controller
 
 
 @dataclass(frozen=True)
@@ -30,7 +30,7 @@ class BusDynamics:
     step: float
 
     @classmethod
-    def of(cls, bus: Bus, controller: Controller, step_length: float) -> BusDynamics:
+    def of(cls, bus: AutomatedVehicle, controller: Controller, step_length: float) -> BusDynamics:
         return cls(bus.accel_mps2, bus.comfortable_decel_mps2, bus.emergency_decel_mps2,
                    controller.reaction_time_s, step_length)
 

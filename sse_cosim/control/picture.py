@@ -39,7 +39,7 @@ import shapely
 from shapely.ops import substring
 
 from sse_cosim.control.kinematics import BusDynamics
-from sse_cosim.scenario.model import Bus, Controller
+from sse_cosim.scenario.model import AutomatedVehicle, Controller
 from sse_cosim.world.roadmap import RoadMap
 
 
@@ -73,7 +73,7 @@ class SceneContext:
     route_line: shapely.LineString
     walkable: shapely.Geometry  # sidewalks, walking areas and the crossings
     crossings: tuple[RouteCrossing, ...]  # the crossings on the route, nearest first
-    bus: Bus
+    bus: AutomatedVehicle
     config: Controller
     pedestrian_speed: float  # the estimator's speed bound (m/s)
     jitter: float  # how far a position strays from its speed-bounded path (m)
@@ -83,8 +83,9 @@ class SceneContext:
 
     @classmethod
     def build(
-        cls, roadmap: RoadMap, route_edges: Sequence[str], bus: Bus, config: Controller,
-        pedestrian_speed: float, jitter: float, pedestrian_radius: float, step_length: float,
+        cls, roadmap: RoadMap, route_edges: Sequence[str], bus: AutomatedVehicle,
+        config: Controller, pedestrian_speed: float, jitter: float, pedestrian_radius: float,
+        step_length: float,
     ) -> SceneContext:
         """Prepare the static geometry for a bus driving ``route_edges``."""
         route_line = roadmap.route_line(route_edges)

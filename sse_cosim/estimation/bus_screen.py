@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import ARC_SAFETY, QUAD_SEGMENTS, ClearRegion
 from sse_cosim.estimation.vote import CONSISTENCY_TOL, Probation, interval_hull, vote
-from sse_cosim.scenario.model import BUS_NODE
 from sse_cosim.sets import Zonotope
 from sse_cosim.sets.exact import zonotope_polygon
 
@@ -59,7 +58,8 @@ class BusScreen:
     sender -> the estimates fused (a conflict leaves only their hull, under
     :data:`HULL_SOURCE`); ``excluded`` / ``conflicts``: pedestrian id -> flagged sources;
     ``gone``: pedestrians that left the scene (nobody detects them, and every set of them lies
-    where some node looked and saw nobody).
+    where some node looked and saw nobody); ``node``: the screening vehicle's id (the source
+    name of its own estimates).
     """
 
     own: frozenset[str] = frozenset()
@@ -67,10 +67,12 @@ class BusScreen:
     excluded: dict[str, frozenset[str]] = field(default_factory=dict)
     conflicts: dict[str, frozenset[str]] = field(default_factory=dict)
     gone: frozenset[str] = frozenset()
+    node: str = ""
 
     def inputs(self, person_id: str, own_estimate: Zonotope | None) -> dict[str, Zonotope]:
-        """The sets fused for ``person_id`` by source, given the bus's own estimate of it."""
-        mine = {BUS_NODE: own_estimate} \
+        """The sets fused for ``person_id`` by source, given the vehicle's own estimate of
+        it."""
+        mine = {self.node: own_estimate} \
             if person_id in self.own and own_estimate is not None else {}
         return mine | self.received.get(person_id, {})
 
@@ -82,11 +84,14 @@ class BusScreen:
 
 
 class BusScreener:
-    """The bus's screen of its fusion inputs, with each pedestrian's sources on probation."""
+    """An automated vehicle's screen of its fusion inputs (``node`` its id), with each
+    pedestrian's sources on probation."""
 
-    def __init__(self, model: MotionModel, reach: float, tol: float = CONSISTENCY_TOL) -> None:
+    def __init__(self, model: MotionModel, reach: float, node: str,
+                 tol: float = CONSISTENCY_TOL) -> None:
         self.model = model
         self.reach = reach  # how far a path moves in one step (m)
+        self.node = node
         self.tol = tol
         self._probation: dict[str, Probation] = {}
 
@@ -115,7 +120,7 @@ class BusScreener:
         excluded: dict[str, frozenset[str]] = {}
         conflicts: dict[str, frozenset[str]] = {}
         for person_id in sorted(own.keys() | received.keys()):
-            sources = ({BUS_NODE: own[person_id]} if person_id in own else {}) | {
+            sources = ({self.node: own[person_id]} if person_id in own else {}) | {
                 s: received[person_id][s] for s in sorted(received.get(person_id, {}))}
             names = [s for s, z in sources.items() if not self._contradicted(
                 z, clear.get(person_id, ()))]
@@ -134,11 +139,12 @@ class BusScreener:
             else:
                 left_out = frozenset(sources) - frozenset(chosen)
                 if chosen:
-                    kept_own |= {person_id} if BUS_NODE in chosen else set()
-                    kept[person_id] = {s: sources[s] for s in chosen if s != BUS_NODE}
+                    kept_own |= {person_id} if self.node in chosen else set()
+                    kept[person_id] = {s: sources[s] for s in chosen if s != self.node}
             if left_out:
                 excluded[person_id] = left_out
-        return BusScreen(frozenset(kept_own), kept, excluded, conflicts, frozenset(gone))
+        return BusScreen(frozenset(kept_own), kept, excluded, conflicts, frozenset(gone),
+                         self.node)
 
     def _contradicted(self, estimate: Zonotope, clear: Sequence[ClearRegion]) -> bool:
         return contradicted(self.model.position_matrix @ estimate, clear, self.model.jitter,

@@ -8,7 +8,6 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 from sse_cosim.estimation.bus_screen import CONFLICT, BusScreen
-from sse_cosim.scenario.model import BUS_NODE
 
 
 class ScreenedTrack(Protocol):
@@ -39,9 +38,11 @@ def step_flags(
     tracks: Mapping[str, Mapping[str, ScreenedTrack]],
     screen: BusScreen,
     remote_inconsistency: bool,
+    own_node: str,
 ) -> StepFlags:
     """Flags of every sensor and node; ``remote_inconsistency``: a sender reported that its
-    own sources disagreed (the newest message of some sender says so).
+    own sources disagreed (the newest message of some sender says so); ``own_node``: the
+    screening vehicle's id.
 
     A node is ``excluded`` when the bus left one of its estimates out, in ``conflict`` when
     its own sensors and prediction disagree unattributably or it is a suspect of such a
@@ -55,6 +56,6 @@ def step_flags(
     for node, node_tracks in tracks.items():
         in_conflict = any(t.conflict for t in node_tracks.values())
         nodes[node] = at_bus.get(node) or (CONFLICT if in_conflict else "")
-    own = tracks.get(BUS_NODE, {})
+    own = tracks.get(own_node, {})
     inconsistent = bool(at_bus) or remote_inconsistency or disagrees(own.values())
     return StepFlags({s: s in left_out for s in sensors}, nodes, inconsistent)

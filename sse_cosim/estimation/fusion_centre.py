@@ -22,7 +22,6 @@ from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, Track
 from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.v2x import SharedPicture
-from sse_cosim.scenario.model import BUS_NODE
 from sse_cosim.sets import Zonotope
 
 
@@ -40,15 +39,17 @@ class BusEstimate:
 
 
 class FusionCentre:
-    """The bus's screen, fusion and flags, with the screen's probation kept across steps."""
+    """An automated vehicle's screen, fusion and flags (``node`` its id), with the screen's
+    probation kept across steps."""
 
     def __init__(self, model: MotionModel, settings: EstimatorSettings, fusion_method: str,
-                 sensors: Iterable[str], step_length: float) -> None:
+                 sensors: Iterable[str], step_length: float, node: str) -> None:
+        self.node = node
         self.model = model
         self.settings = settings
         self.fusion_method = fusion_method
         self.sensors = list(sensors)
-        self._screener = BusScreener(model, model.max_speed * step_length)
+        self._screener = BusScreener(model, model.max_speed * step_length, node)
 
     def step(
         self,
@@ -59,15 +60,15 @@ class FusionCentre:
     ) -> BusEstimate:
         """Screen, fuse and flag one step.
 
-        ``tracks``: node -> pedestrian id -> local track (the bus's own among them);
+        ``tracks``: node -> pedestrian id -> local track (the vehicle's own among them);
         ``shared``: what the senders' newest messages say, brought to this step; ``clear``:
         pedestrian id -> regions seen without it; ``detected``: pedestrians some node
         detects now.
         """
-        own = tracks[BUS_NODE]
+        own = tracks[self.node]
         screen = self._screener.screen({pid: t.estimate for pid, t in own.items()},
                                        shared.estimates, clear, detected)
         fused = fuse_at_bus({pid: own[pid] for pid in screen.own}, screen.received,
                             self.fusion_method, self.settings, self.model)
-        flags = step_flags(self.sensors, tracks, screen, bool(shared.inconsistent))
+        flags = step_flags(self.sensors, tracks, screen, bool(shared.inconsistent), self.node)
         return BusEstimate(screen, fused, flags)

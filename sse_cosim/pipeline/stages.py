@@ -21,7 +21,6 @@ from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import Track
 from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker
 from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
-from sse_cosim.scenario.model import BUS_NODE
 from sse_cosim.sensors import SensorObservation, SensorSpec, observe
 from sse_cosim.sensors.faults import FaultInjector
 from sse_cosim.sets import Strips
@@ -76,11 +75,13 @@ class Received:
 
 
 class Sharing:
-    """V2X: every node other than the bus that is in the scene sends the bus its estimates and
-    visible region, as its injected faults distort them, over a link with the scenario's (and
-    the injected) range, latency and losses."""
+    """V2X to one automated vehicle (``receiver``, its id): every other node that is in the
+    scene sends it its estimates and visible region, as its injected faults distort them, over
+    a link with the scenario's (and the injected) range, latency and losses."""
 
-    def __init__(self, link: V2XLink, faults: FaultInjector, model: MotionModel) -> None:
+    def __init__(self, link: V2XLink, faults: FaultInjector, model: MotionModel,
+                 receiver: str) -> None:
+        self.receiver = receiver
         self.link = link
         self.faults = faults
         self.model = model
@@ -88,9 +89,9 @@ class Sharing:
     def send(self, step: int, snapshot: Snapshot, observations: Observations,
              tracks: Tracks) -> None:
         """Queue every sender's message of ``step``."""
-        bus_xy = snapshot.role(BUS_NODE).footprint.front.position
+        receiver_xy = snapshot.vehicles[self.receiver].footprint.front.position
         for node, node_tracks in tracks.items():
-            if node == BUS_NODE:
+            if node == self.receiver:
                 continue
             node_obs = [o for o in views_of(node, observations) if o.pose is not None]
             if not node_obs or self.faults.link_lost(node):
@@ -103,7 +104,7 @@ class Sharing:
                 frozenset(pid for o in node_obs for pid in o.detections),
                 disagrees(node_tracks.values()),
             )
-            self.link.send(message, float(np.hypot(*(position - bus_xy))),
+            self.link.send(message, float(np.hypot(*(position - receiver_xy))),
                            self.faults.extra_latency(node))
 
     def receive(self, step: int) -> Received:

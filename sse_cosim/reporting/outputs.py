@@ -19,7 +19,7 @@ import shapely
 
 from sse_cosim.files import atomic_path, write_json_atomic, write_text_atomic
 from sse_cosim.reporting.recorder import RegionRecord, RunRecorder
-from sse_cosim.scenario.model import Scenario
+from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.world.roadmap import RoadMap
 
 if TYPE_CHECKING:
@@ -147,7 +147,8 @@ def _write_trace(path: Path, trace: pd.DataFrame) -> None:
 
 def label(scenario: Scenario) -> str:
     """``S1 with pedestrian`` / ``S1 without pedestrian``."""
-    return f"{scenario.name} {'with' if scenario.pedestrian.present else 'without'} pedestrian"
+    with_ = "with" if present(scenario.pedestrians) else "without"
+    return f"{scenario.name} {with_} pedestrian"
 
 
 def _write_plots(out_dir, scenario, recorder, trace, roadmap) -> None:

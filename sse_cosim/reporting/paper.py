@@ -61,6 +61,12 @@ class RunFolder:
         return str(self.scenario.get("controller", {}).get("policy", "safe"))
 
     @property
+    def nominal_speed_mps(self) -> float:
+        """The nominal speed of the run's first automated vehicle (the paper's bus)."""
+        first = next(v for v in self.scenario["automated"].values() if v["present"])
+        return float(first["nominal_speed_mps"])
+
+    @property
     def faults(self) -> bool:
         """Whether the scenario injects any fault."""
         return any(self.scenario.get("faults", {}).values())
@@ -107,7 +113,7 @@ def table1(runs: Sequence[RunFolder], policy: str = "safe") -> pd.DataFrame:
             "sensors": " + ".join(_node_label(n) for n in nodes),
             "average_speed_mps": round(s["average_speed_mps"], 2),
             "paper_average_speed": paper,
-            "nominal_speed_mps": run.scenario["bus"]["nominal_speed_mps"],
+            "nominal_speed_mps": run.nominal_speed_mps,
             "first_detection_bus_to_crossing_m": _round(first.get("bus_distance_to_crossing_m")),
             "min_distance_bus_pedestrian_m": _round(s["min_distance_bus_pedestrian_m"]),
             "containment_violations": s["containment_violations"],

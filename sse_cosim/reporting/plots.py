@@ -85,8 +85,8 @@ def scene(frame: SceneFrame, roadmap: RoadMap, nodes: Sequence[str], title: str)
         _fill(ax, visible, color, None, alpha=0.12)
         _fill(ax, occluded, "tab:red", None, alpha=0.18)
     _fill(ax, frame.unobserved, "none", "unobserved walkable area", hatch="xxx")
-    for role, polygon in frame.footprints.items():
-        _fill(ax, polygon, {"bus": "tab:blue", "truck": "tab:red"}.get(role, "gold"), role,
+    for vid, polygon in frame.footprints.items():
+        _fill(ax, polygon, {"bus": "tab:blue", "truck": "tab:red"}.get(vid, "gold"), vid,
               alpha=0.8)
     view = _view_box(frame)
     for node, normal, value, radius in frame.strips:

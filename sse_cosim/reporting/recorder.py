@@ -16,7 +16,7 @@ import numpy as np
 import shapely
 
 from sse_cosim.control.speed import SpeedLevel
-from sse_cosim.scenario.model import BUS_NODE, Scenario
+from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors.faults import FaultLog
 from sse_cosim.sets import Zonotope
 
@@ -46,7 +46,7 @@ class SceneFrame:
     """What a scene plot at one time needs (position sets, geometries)."""
 
     time: float
-    footprints: dict[str, shapely.Polygon]  # vehicle role -> footprint
+    footprints: dict[str, shapely.Polygon]  # vehicle id -> footprint
     sectors: dict[str, tuple[str, shapely.Geometry, shapely.Geometry]]  # sensor -> node, vis, occ
     strips: list[tuple[str, np.ndarray, float, float]]  # (node, normal (2,), value, radius)
     local_sets: dict[str, Zonotope]  # node -> position set
@@ -77,7 +77,7 @@ class RunRecorder:
 
     def __call__(self, result: StepResult) -> None:
         snap = result.snapshot
-        bus = snap.role(BUS_NODE)
+        bus = snap.vehicles[result.screen.node]
         t = round(snap.time, 6)
         person = next(iter(sorted(snap.persons.items())), None)
         truth = np.asarray(person[1].position) if person else None
@@ -137,7 +137,7 @@ class RunRecorder:
         distance = _distance(bus.footprint.polygon(), truth)
         row["distance_bus_pedestrian"] = distance
         row["collision"] = bool(
-            distance is not None and distance <= self.scenario.pedestrian.radius_m
+            distance is not None and distance <= self.scenario.pedestrians[person_id].radius_m
         )
         self.rows.append(row)
         if self._wants_scene(t):
@@ -233,7 +233,7 @@ class RunRecorder:
                      if r["distance_bus_pedestrian"] is not None]
         return {
             "scenario": self.scenario.name,
-            "pedestrian": self.scenario.pedestrian.present,
+            "pedestrian": bool(present(self.scenario.pedestrians)),
             "nodes": self.scenario.node_ids(),
             "steps": len(self.rows),
             "average_speed_mps": float(speeds.mean()) if speeds.size else None,
@@ -286,7 +286,7 @@ class RunRecorder:
 def _fusion_inputs(result: StepResult, person_id: str) -> dict[str, Zonotope]:
     """The state sets the bus fused for ``person_id``: its own and the received ones that
     passed the consistency screen."""
-    own = result.tracks[BUS_NODE].get(person_id)
+    own = result.tracks[result.screen.node].get(person_id)
     return result.screen.inputs(person_id, None if own is None else own.estimate)
 
 
@@ -314,8 +314,7 @@ def _frame(t, result, local_sets, fused_position, truth) -> SceneFrame:
     ]
     return SceneFrame(
         time=t,
-        footprints={v.role if v.role != "other" else v.id: v.footprint.polygon()
-                    for v in snap.vehicles.values()},
+        footprints={v.id: v.footprint.polygon() for v in snap.vehicles.values()},
         sectors={name: (o.node, o.visible, o.occluded)
                  for name, o in result.observations.items() if o.pose is not None},
         strips=strips,

@@ -7,10 +7,10 @@ walks, where it starts behind the parked truck, where the truck is parked, how n
 shared sensors are, and the seed.
 
 The grid is not Cartesian over scenario fields: the pedestrian's start is given as an offset
-behind the truck's front (``pedestrian.start_pos_m = truck.end_pos_m - offset``), so it moves
-with the truck, and a parameter whose pattern selects nothing in a scenario (the shared
-sensors' noise in S1, which has none) is simply not varied there. So the campaign builds its
-list of runs here, with the sweep's run type and key scheme
+behind the truck's front (``pedestrians.pedestrian.start_pos_m = parked.truck.end_pos_m -
+offset``), so it moves with the truck, and a parameter whose pattern selects nothing in a
+scenario (the shared sensors' noise in S1, which has none) is simply not varied there. So the
+campaign builds its list of runs here, with the sweep's run type and key scheme
 (:class:`~sse_cosim.runner.sweep.PlannedRun`, :func:`~sse_cosim.runner.sweep.run_key`), and
 hands it to the sweep's execution path (:func:`~sse_cosim.runner.sweep.run_planned`).
 
@@ -55,10 +55,12 @@ from sse_cosim.scenario.paths import expand_pattern
 if TYPE_CHECKING:
     from sse_cosim.world.roadmap import RoadMap
 
-STEP_OUT_PATH = "pedestrian.steps_onto_crossing_s"
-WALKING_SPEED_PATH = "pedestrian.walking_speed_mps"
-START_PATH = "pedestrian.start_pos_m"
-TRUCK_FRONT_PATH = "truck.end_pos_m"
+# The campaign moves the pedestrian ``pedestrian`` and the parked truck ``truck`` of each
+# scenario (the paper's ids); any other actor of a scenario stays as the scenario sets it.
+STEP_OUT_PATH = "pedestrians.pedestrian.steps_onto_crossing_s"
+WALKING_SPEED_PATH = "pedestrians.pedestrian.walking_speed_mps"
+START_PATH = "pedestrians.pedestrian.start_pos_m"
+TRUCK_FRONT_PATH = "parked.truck.end_pos_m"
 BEHIND_TRUCK = f"{START_PATH} = {TRUCK_FRONT_PATH} - value"
 FILE_FIX = "see sweeps/safety.toml for a complete example"
 
@@ -342,7 +344,7 @@ def _scenario_runs(campaign: Campaign, path: Path, data: Mapping[str, Any],
         overrides = dict(fixed)
         for (_, paths), value in zip(active, combination, strict=True):
             overrides.update(dict.fromkeys(paths, value))
-        truck_front = overrides.get(TRUCK_FRONT_PATH, fields["truck"]["end_pos_m"])
+        truck_front = overrides.get(TRUCK_FRONT_PATH, fields["parked"]["truck"]["end_pos_m"])
         for offset, seed in itertools.product(behind.values, campaign.seeds):
             run_values = {**values, behind.column: offset}
             run_overrides = {**overrides, START_PATH: round(truck_front - offset, 9),

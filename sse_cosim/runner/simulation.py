@@ -44,7 +44,7 @@ from sse_cosim.pipeline.stages import (
     views_of,
 )
 from sse_cosim.runner.timing import NoTimer, StageTimer
-from sse_cosim.scenario.model import BUS_NODE, Scenario
+from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors import specs_from_scenario
 from sse_cosim.sensors.faults import FaultInjector
 from sse_cosim.world.roadmap import RoadMap
@@ -82,13 +82,14 @@ def simulate(
     specs = specs_from_scenario(scenario)
     faults = FaultInjector(scenario, specs, fault_rng)
     observers = LocalObservers(scenario.node_ids(), model, settings)
-    sharing = Sharing(V2XLink(scenario.v2x, v2x_rng), faults, model)
-    centre = FusionCentre(model, settings, config.fusion_method, specs, dt)
+    ego, vehicle = next(iter(present(scenario.automated).items()))
+    sharing = Sharing(V2XLink(scenario.v2x, v2x_rng), faults, model, ego)
+    centre = FusionCentre(model, settings, config.fusion_method, specs, dt, ego)
     n_steps = round(scenario.simulation.duration_s / dt)
     with SumoWorld(scenario, run_dir, scenario_name) as world:
         context = SceneContext.build(
-            world.roadmap, scenario.bus.route_edges, scenario.bus, scenario.controller,
-            model.max_speed, model.jitter, scenario.pedestrian.radius_m, dt,
+            world.roadmap, vehicle.route_edges, vehicle, scenario.controller,
+            model.max_speed, model.jitter, scenario.pedestrian_radius_m(), dt,
         )
         policy = make_policy(context)
         known = known_regions(config.filter, model, dt, context.walkable)
@@ -99,9 +100,9 @@ def simulate(
         for step in range(n_steps):
             timer.start()
             snapshot = world.step()
-            bus = snapshot.role(BUS_NODE)
+            bus = snapshot.vehicles.get(ego)
             if bus is None:  # arrived (world.step() refuses a bus missing at its departure)
-                return SimulationInfo(step, world.bus_arrived, world.roadmap)
+                return SimulationInfo(step, world.all_arrived, world.roadmap)
             timer.lap("sumo")
             observations = sense(snapshot, specs, faults, noise_rng)
             timer.lap("geometry")
@@ -110,9 +111,9 @@ def simulate(
             sharing.send(step, snapshot, observations, tracks)
             received = sharing.receive(step)
             shared = received.picture
-            bus_views = views_of(BUS_NODE, observations)
-            clear = clear_regions(bus_views, tracks[BUS_NODE], shared)
-            estimate = centre.step(tracks, shared, clear, detected_now(tracks[BUS_NODE], shared))
+            bus_views = views_of(ego, observations)
+            clear = clear_regions(bus_views, tracks[ego], shared)
+            estimate = centre.step(tracks, shared, clear, detected_now(tracks[ego], shared))
             timer.lap("sharing_fusion")
             possible = known.update(step, observations, estimate, clear)
             unknown = unobserved.update(
@@ -124,7 +125,7 @@ def simulate(
             )
             decision = policy.decide(
                 picture, fallback_floor(estimate.flags.inconsistent, scenario.controller))
-            world.set_bus_speed(decision.command_mps,
+            world.set_speed(ego, decision.command_mps,
                                 emergency=decision.level is SpeedLevel.EMERGENCY)
             timer.lap("control")
             on_step(StepResult(
@@ -133,4 +134,4 @@ def simulate(
                 estimate.screen, estimate.flags, faults.statuses(),
             ))
             timer.end_step("output")
-        return SimulationInfo(n_steps, world.bus_arrived, world.roadmap)
+        return SimulationInfo(n_steps, world.all_arrived, world.roadmap)

@@ -84,5 +84,6 @@ def _models_of(annotation) -> list[type[BaseModel]]:
 
 def _key_name(field_name: str) -> str:
     names = {"sensors": "sensor name", "rsus": "unit id", "sensor": "fault name",
-             "node": "fault name", "link": "fault name"}
+             "node": "fault name", "link": "fault name", "automated": "vehicle id",
+             "parked": "vehicle id", "vehicles": "vehicle id", "pedestrians": "pedestrian id"}
     return names.get(field_name, "key")

@@ -7,7 +7,7 @@ SUMO's navigational angle (clockwise from north); the world adapter converts.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, TypeVar
 
 from pydantic import Field, field_validator, model_validator
 
@@ -18,8 +18,6 @@ from sse_cosim.sets.reduction import REDUCTION_METHODS
 
 __all__ = ["NonNegativeFloat", "PositiveFloat", "Sensor", "SensorMount", "StrictModel"]
 
-BUS_NODE = "bus"
-CAR_NODE = "car"
 Assumption = Literal["pedestrian_speed", "sensor_bounds", "shared_estimates"]
 
 
@@ -39,15 +37,20 @@ class Network(StrictModel):
     )
 
 
-class Bus(StrictModel):
+class AutomatedVehicle(StrictModel):
+    present: bool = Field(True, description="Whether the vehicle is in the scene (false removes "
+                          "an inherited one).")
+    vehicle_class: Literal["bus", "passenger", "delivery", "truck"] = Field(
+        "bus", description="SUMO vehicle class (and drawn shape).")
     route_edges: list[str] = Field(["WC", "CE"], min_length=1, description="Edge ids, in order.")
+    depart_s: NonNegativeFloat = Field(0.0, description="Departure time (s).")
     depart_pos_m: NonNegativeFloat = Field(0.0, description="Front position on the first edge (m).")
     nominal_speed_mps: PositiveFloat = Field(
         20.0, description="Nominal speed (m/s), Table I: 20; at most the speed limit of every lane "
         "on its route."
     )
-    length_m: PositiveFloat = Field(12.0, description="Bus length (m).")
-    width_m: PositiveFloat = Field(2.55, description="Bus width (m).")
+    length_m: PositiveFloat = Field(12.0, description="Length (m).")
+    width_m: PositiveFloat = Field(2.55, description="Width (m).")
     accel_mps2: PositiveFloat = Field(1.5, description="Maximum acceleration (m/s^2).")
     comfortable_decel_mps2: PositiveFloat = Field(
         3.0, description="Deceleration used between speed levels (m/s^2)."
@@ -57,21 +60,25 @@ class Bus(StrictModel):
     )
 
 
-class Truck(StrictModel):
-    present: bool = Field(True, description="Whether the parked truck is in the scene.")
-    edge: str = Field("WC", description="Edge it is parked on (the bus's side).")
+class ParkedVehicle(StrictModel):
+    present: bool = Field(True, description="Whether the vehicle is in the scene (false removes "
+                          "an inherited one).")
+    edge: str = Field("WC", description="Edge it is parked on.")
     lane_index: int = Field(1, ge=0, description="Lane index on that edge (1 = parking strip).")
     end_pos_m: NonNegativeFloat = Field(
         186.0,
         description="Position of its front along the edge (m): a few metres before the crossing "
         "(the crossing starts at 198 m; Swedish rules forbid parking within 10 m before it).",
     )
-    length_m: PositiveFloat = Field(10.0, description="Truck length (m).")
-    width_m: PositiveFloat = Field(2.5, description="Truck width (m).")
+    length_m: PositiveFloat = Field(10.0, description="Length (m).")
+    width_m: PositiveFloat = Field(2.5, description="Width (m).")
 
 
-class ConnectedCar(StrictModel):
-    present: bool = Field(False, description="Whether the oncoming connected car drives by.")
+class Vehicle(StrictModel):
+    present: bool = Field(True, description="Whether the vehicle is in the scene (false removes "
+                          "an inherited one).")
+    connected: bool = Field(True, description="Whether it shares over V2X (only a connected "
+                            "vehicle may carry sensors).")
     route_edges: list[str] = Field(["EC", "CW"], min_length=1, description="Edge ids, in order.")
     lane_index: int = Field(2, ge=0, description="Driving lane index on its edges.")
     depart_s: NonNegativeFloat = Field(0.0, description="Departure time (s).")
@@ -80,12 +87,13 @@ class ConnectedCar(StrictModel):
         10.0,
         description="Constant speed (m/s); at most the speed limit of every lane on its route.",
     )
-    length_m: PositiveFloat = Field(4.5, description="Car length (m).")
-    width_m: PositiveFloat = Field(1.8, description="Car width (m).")
+    length_m: PositiveFloat = Field(4.5, description="Length (m).")
+    width_m: PositiveFloat = Field(1.8, description="Width (m).")
 
 
 class Pedestrian(StrictModel):
-    present: bool = Field(True, description="Whether the pedestrian is in the scene.")
+    present: bool = Field(True, description="Whether the pedestrian is in the scene (false "
+                          "removes an inherited one).")
     start_edge: str = Field("WC", description="Edge whose sidewalk it starts on.")
     start_pos_m: NonNegativeFloat = Field(
         184.0, description="Start position along that edge (m), behind the truck."
@@ -110,7 +118,8 @@ class RoadSideUnit(StrictModel):
 
 
 class V2X(StrictModel):
-    range_m: PositiveFloat = Field(300.0, description="Communication range to the bus (m).")
+    range_m: PositiveFloat = Field(
+        300.0, description="Communication range between a sender and an automated vehicle (m).")
     latency_steps: int = Field(1, ge=0, le=100, description="Delivery delay (simulation steps).")
     drop_probability: float = Field(0.0, ge=0, lt=1, description="Probability a message is lost.")
 
@@ -278,7 +287,8 @@ class SensorFault(FaultWindow):
 
 
 class NodeFault(FaultWindow):
-    node: str = Field(description="The misbehaving connected node (the car or a unit id).")
+    node: str = Field(description="The misbehaving node (a connected vehicle, a unit or an "
+                      "automated vehicle that sends to another).")
     kind: Literal["shift", "shrink"] = Field(
         description="shift: the estimates it sends are moved; shrink: they are scaled down "
         "about their centres (a spoofed, over-confident sender)."
@@ -301,7 +311,8 @@ class NodeFault(FaultWindow):
 
 
 class LinkFault(FaultWindow):
-    node: str = Field(description="Sender whose V2X link to the bus fails (the car or a unit).")
+    node: str = Field(description="Sender whose V2X links to the automated vehicles fail (a "
+                      "connected vehicle, a unit or an automated vehicle that sends to another).")
     kind: Literal["loss", "latency"] = Field(
         description="loss: every message sent in the window is lost (a burst); latency: they "
         "arrive later."
@@ -335,10 +346,19 @@ class Scenario(StrictModel):
     description: str = Field("", description="One sentence for reports.")
     simulation: Simulation = Field(default_factory=Simulation)
     network: Network = Field(default_factory=Network)
-    bus: Bus = Field(default_factory=Bus)
-    truck: Truck = Field(default_factory=Truck)
-    car: ConnectedCar = Field(default_factory=ConnectedCar)
-    pedestrian: Pedestrian = Field(default_factory=Pedestrian)
+    automated: dict[str, AutomatedVehicle] = Field(
+        default_factory=dict, description="Automated vehicles by id (their SUMO and node id): "
+        "each estimates, fuses and controls its speed; at least one."
+    )
+    parked: dict[str, ParkedVehicle] = Field(
+        default_factory=dict, description="Parked vehicles by id."
+    )
+    vehicles: dict[str, Vehicle] = Field(
+        default_factory=dict, description="Other moving vehicles by id, connected or not."
+    )
+    pedestrians: dict[str, Pedestrian] = Field(
+        default_factory=dict, description="Pedestrians by id, each walking its own plan."
+    )
     rsus: dict[str, RoadSideUnit] = Field(
         default_factory=dict, description="Road-side units by id."
     )
@@ -358,19 +378,42 @@ class Scenario(StrictModel):
     )
 
     @model_validator(mode="after")
-    def _sensors_on_existing_nodes(self) -> Scenario:
+    def _actors_and_nodes(self) -> Scenario:
+        if not present(self.automated):
+            raise ValueError("automated: no automated vehicle in the scene; add one, e.g. "
+                             "[automated.bus]")
+        if len(present(self.automated)) > 1:
+            raise ValueError("automated: this version runs one automated vehicle; keep one "
+                             "(set present = false on the others)")
+        self._unique_ids()
+        self._sensors_on_existing_nodes()
+        self._faults_on_existing_targets()
+        self._broken_assumptions_declared()
+        return self
+
+    def _unique_ids(self) -> None:
+        """An id names one actor or unit: it is its SUMO id and its node id."""
+        seen: dict[str, str] = {}
+        for table in ("automated", "vehicles", "parked", "pedestrians", "rsus"):
+            for key in getattr(self, table):
+                if key in seen:
+                    raise ValueError(f"{table}.{key}: the id {key!r} is taken by "
+                                     f"{seen[key]}.{key}; give each actor and unit its own id")
+                seen[key] = table
+
+    def _sensors_on_existing_nodes(self) -> None:
         nodes = self.node_ids()
         for name, sensor in self.sensors.items():
+            vehicle = self.vehicles.get(sensor.node)
+            if vehicle is not None and vehicle.present and not vehicle.connected:
+                raise ValueError(f"sensors.{name}.node: vehicle {sensor.node!r} is not "
+                                 "connected, so it cannot share what it sees; set "
+                                 f"vehicles.{sensor.node}.connected = true")
             if sensor.node not in nodes:
                 raise ValueError(
                     f"sensors.{name}.node: no node {sensor.node!r}; "
                     f"use one of {', '.join(nodes)}"
                 )
-        if BUS_NODE in self.rsus or CAR_NODE in self.rsus:
-            raise ValueError("rsus: the ids 'bus' and 'car' are reserved for the vehicles")
-        self._faults_on_existing_targets()
-        self._broken_assumptions_declared()
-        return self
 
     def _broken_assumptions_declared(self) -> None:
         """What breaks an assumption of the estimator is listed in ``breaks_assumptions``.
@@ -381,9 +424,11 @@ class Scenario(StrictModel):
         """
         declared = set(self.breaks_assumptions)
         bound = self.estimator.max_pedestrian_speed_mps
-        speed = self.pedestrian.walking_speed_mps
-        if self.pedestrian.present and speed > bound:
-            _require(declared, "pedestrian_speed", "pedestrian.walking_speed_mps",
+        for pid, pedestrian in present(self.pedestrians).items():
+            speed = pedestrian.walking_speed_mps
+            if speed <= bound:
+                continue
+            _require(declared, "pedestrian_speed", f"pedestrians.{pid}.walking_speed_mps",
                      f"{speed:g} m/s is above estimator.max_pedestrian_speed_mps ({bound:g} m/s), "
                      f"the bound the estimator relies on; walk at most {bound:g} m/s or raise "
                      "the bound")
@@ -396,27 +441,50 @@ class Scenario(StrictModel):
                      f"a {node_fault.kind} fault sends estimates that do not hold their bounds")
 
     def _faults_on_existing_targets(self) -> None:
-        """Every fault names a sensor of the scenario, or a node that sends to the bus."""
+        """Every fault names a sensor of the scenario, or a node that sends to an automated
+        vehicle."""
         for name, fault in self.faults.sensor.items():
             if fault.sensor not in self.sensors:
                 raise ValueError(f"faults.sensor.{name}.sensor: no sensor {fault.sensor!r}; "
                                  f"use one of {', '.join(self.sensors) or '(none)'}")
-        senders = [n for n in self.node_ids() if n != BUS_NODE]
+        senders = self.sender_ids()
         use = f"use one of {', '.join(senders)}" if senders else \
-            "this scenario has none: add the car or a road-side unit"
+            "this scenario has none: add a connected vehicle or a road-side unit"
         for table, faults in (("node", self.faults.node), ("link", self.faults.link)):
             for name, fault in faults.items():
                 if fault.node not in senders:
                     raise ValueError(f"faults.{table}.{name}.node: {fault.node!r} is no node "
-                                     f"that sends to the bus; {use}")
+                                     f"that sends to an automated vehicle; {use}")
 
     def node_ids(self) -> list[str]:
-        """Nodes that can carry sensors: the bus, the car (if present) and the units."""
-        return [BUS_NODE, *([CAR_NODE] if self.car.present else []), *self.rsus]
+        """Nodes that can carry sensors: the automated vehicles, the connected vehicles and
+        the units (present ones, in that order)."""
+        connected = [vid for vid, v in present(self.vehicles).items() if v.connected]
+        return [*present(self.automated), *connected, *self.rsus]
+
+    def sender_ids(self) -> list[str]:
+        """Nodes that send to some automated vehicle: every node but an automated vehicle
+        that is the only one (it has nobody to send to)."""
+        receivers = present(self.automated)
+        return [n for n in self.node_ids() if len(receivers) > 1 or n not in receivers]
+
+    def pedestrian_radius_m(self) -> float:
+        """The largest body radius among the present pedestrians (m), the default radius
+        without any: the body the controller keeps clear of."""
+        radii = [p.radius_m for p in present(self.pedestrians).values()]
+        return max(radii, default=Pedestrian.model_fields["radius_m"].default)
 
     def sensors_of(self, node: str) -> dict[str, Sensor]:
         """The sensors carried by ``node``, by name."""
         return {name: s for name, s in self.sensors.items() if s.node == node}
+
+
+Actor = TypeVar("Actor", AutomatedVehicle, ParkedVehicle, Vehicle, Pedestrian)
+
+
+def present(actors: dict[str, Actor]) -> dict[str, Actor]:
+    """The actors of a table that are in the scene (``present = true``), by id, in order."""
+    return {key: actor for key, actor in actors.items() if actor.present}
 
 
 _SENSOR_FAULT_BREAKS = {

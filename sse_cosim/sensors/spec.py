@@ -22,7 +22,7 @@ if TYPE_CHECKING:  # the schema is only needed for type checking
 class SensorSpec:
     """One sensor: its carrier, mounting and kind (what it sees and how it measures).
 
-    ``node`` is the carrier: a vehicle role ('bus', 'car', ...) or vehicle id, or, when
+    ``node`` is the carrier: a vehicle's id ('bus', 'car', ...), or, when
     ``static_pose`` is set, a road-side unit standing at that pose. The mount offsets are in
     the carrier's frame from its reference point (a vehicle's front bumper centre, a unit's
     position); ``yaw_rad`` turns the boresight CCW. ``resolution`` is the number of arc
@@ -103,8 +103,8 @@ def specs_from_scenario(scenario: Scenario) -> dict[str, SensorSpec]:
 
 
 def find_carrier(snapshot: Snapshot, node: str) -> VehicleState | None:
-    """The vehicle carrying ``node``'s sensors: first by role, then by id; None if absent."""
-    return snapshot.role(node) or snapshot.vehicles.get(node)
+    """The vehicle carrying ``node``'s sensors (its id is the node's); None if absent."""
+    return snapshot.vehicles.get(node)
 
 
 def locate(spec: SensorSpec, snapshot: Snapshot) -> tuple[Pose, str | None] | None:

@@ -1,22 +1,24 @@
 """The scenario's actors as SUMO demand: checks against the network, the pedestrian's plan, the
 route file. Pure Python (sumolib); no SUMO process is needed.
 
-Ids: the bus is ``bus``, the parked truck ``truck``, the connected car ``car``, the pedestrian
-``pedestrian``. Every type has ``speedDev="0"`` and ``sigma="0"`` (no random speed factors, no
-dawdling), so one seed gives one run.
+Ids: every actor's SUMO id is its id in the scenario (``[automated.bus]`` is vehicle ``bus``,
+``[pedestrians.p3]`` person ``p3``), and each has a type of the same id. Every type has
+``speedDev="0"`` and ``sigma="0"`` (no random speed factors, no dawdling), so one seed gives one
+run. The checks run per actor; an error names the field with the actor's id
+(``pedestrians.p3.start_pos_m``).
 
-The pedestrian walks an explicit path: its start sidewalk, the walking area, a zebra, the
+Each pedestrian walks an explicit path: its start sidewalk, the walking area, a zebra, the
 walking area on the far side, its end sidewalk; of the network's crossings, the one that makes
 the walk shortest. (Left to SUMO's router, a pedestrian whose end lies far down the opposite
 sidewalk would rather cross at the dead end of the road.)
 
-The pedestrian exists from t=0: the estimator assumes that an undetected pedestrian has been
+Every pedestrian exists from t=0: the estimator assumes that an undetected pedestrian has been
 somewhere on walkable ground since the start, so it may not appear later where sensors already
 saw nobody. Its plan is a stop at its start position until its walk starts, then the walk,
-timed so that it steps onto the zebra at ``pedestrian.steps_onto_crossing_s`` (the walking
-distance to the zebra is the rest of its start sidewalk plus the walking area's length, both
-from the network); a time the walk cannot make is an error. SUMO draws a waiting person beside
-the sidewalk, so :class:`PedestrianPlan` says where it stands: where its walk will begin.
+timed so that it steps onto the zebra at its ``steps_onto_crossing_s`` (the walking distance
+to the zebra is the rest of its start sidewalk plus the walking area's length, both from the
+network); a time the walk cannot make is an error. SUMO draws a waiting person beside the
+sidewalk, so :class:`PedestrianPlan` says where it stands: where its walk will begin.
 
 Every vehicle keeps its speed: a speed above the limit of a lane on its route is an error, as
 SUMO would silently hold the vehicle to the limit.
@@ -36,15 +38,18 @@ import sumolib
 
 from sse_cosim.errors import UserError
 from sse_cosim.files import write_text_atomic
-from sse_cosim.scenario.model import Scenario
+from sse_cosim.scenario.model import (
+    AutomatedVehicle,
+    ParkedVehicle,
+    Pedestrian,
+    Scenario,
+    Vehicle,
+    present,
+)
 from sse_cosim.world.roadmap import PARKED_VCLASS, RoadMap
 
-BUS_ID = "bus"
-TRUCK_ID = "truck"
-CAR_ID = "car"
-PEDESTRIAN_ID = "pedestrian"
-ROLES = {BUS_ID: "bus", TRUCK_ID: "truck", CAR_ID: "car"}
-PARKED_DURATION_S = 1.0e7  # "for ever": the truck's stop outlasts any run
+VEHICLE_VCLASS = "passenger"  # the class of the scenario's other moving vehicles
+PARKED_DURATION_S = 1.0e7  # "for ever": a parked vehicle's stop outlasts any run
 ROUTE_FILE_NAME = "scenario.rou.xml"
 # SUMO's striping model splits a sidewalk into stripes this wide (its default; the run's
 # configuration sets it, so that standing_point knows where a walk begins)
@@ -72,100 +77,111 @@ class PedestrianPlan:
 
 @dataclass(frozen=True)
 class ActorPlan:
-    """Everything the route file needs beyond the scenario."""
+    """Everything the route file needs beyond the scenario: each automated vehicle's
+    departure lane and each present pedestrian's plan, by id."""
 
-    bus_lane_index: int
-    pedestrian: PedestrianPlan | None
+    automated_lanes: dict[str, int]
+    pedestrians: dict[str, PedestrianPlan]
 
 
 def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: str) -> ActorPlan:
     """Check the actors against the network (UserError naming ``source`` and the field) and plan
-    the bus's lane and the pedestrian's walk."""
+    the automated vehicles' lanes and the pedestrians' walks."""
     net = _read_net(net_path)
+    lanes = {vid: _check_automated(net, vid, av, source)
+             for vid, av in present(scenario.automated).items()}
+    for vid, parked in present(scenario.parked).items():
+        _check_parked(net, vid, parked, source)
+    for vid, vehicle in present(scenario.vehicles).items():
+        _check_vehicle(net, vid, vehicle, source)
     dt = scenario.simulation.step_length_s
-    bus = scenario.bus
-    _check_route(net, bus.route_edges, "bus", "bus.route_edges", source)
-    _check_speed(net, bus.route_edges, "bus", bus.nominal_speed_mps, "bus.nominal_speed_mps",
-                 source)
-    _check_pos(net, bus.route_edges[0], bus.depart_pos_m, "bus.depart_pos_m", source)
-    bus_lane = _vehicle_lane(net, bus.route_edges[0], "bus", "bus.route_edges", source)
-    if scenario.truck.present:
-        _check_truck(net, scenario, source)
-    if scenario.car.present:
-        car = scenario.car
-        _check_route(net, car.route_edges, "passenger", "car.route_edges", source)
-        _check_speed(net, car.route_edges, "passenger", car.speed_mps, "car.speed_mps", source)
-        _check_pos(net, car.route_edges[0], car.depart_pos_m, "car.depart_pos_m", source)
-        _check_lane(net, car.route_edges[0], car.lane_index, "passenger", "car.lane_index", source)
-    plan = None
-    if scenario.pedestrian.present:
-        plan = _plan_pedestrian(net, scenario, roadmap, dt, source)
-    return ActorPlan(bus_lane_index=bus_lane, pedestrian=plan)
+    plans = {pid: _plan_pedestrian(net, pid, ped, roadmap, dt, source)
+             for pid, ped in present(scenario.pedestrians).items()}
+    return ActorPlan(automated_lanes=lanes, pedestrians=plans)
 
 
 def write_route_file(scenario: Scenario, plan: ActorPlan, path: Path) -> Path:
-    """The SUMO route file with the scenario's types, vehicles and pedestrian."""
-    bus, truck, car, ped = scenario.bus, scenario.truck, scenario.car, scenario.pedestrian
-    types = [
-        _element("vType", id="bus", vClass="bus", guiShape="bus", length=bus.length_m,
-                 width=bus.width_m, accel=bus.accel_mps2, decel=bus.comfortable_decel_mps2,
-                 emergencyDecel=bus.emergency_decel_mps2,
-                 apparentDecel=bus.comfortable_decel_mps2, maxSpeed=bus.nominal_speed_mps,
-                 speedFactor=1, speedDev=0, sigma=0),
+    """The SUMO route file with the scenario's types, vehicles and pedestrians."""
+    actors = [
+        *(_automated(vid, av, plan.automated_lanes[vid])
+          for vid, av in present(scenario.automated).items()),
+        *(_parked(vid, parked) for vid, parked in present(scenario.parked).items()),
+        *(_vehicle(vid, vehicle) for vid, vehicle in present(scenario.vehicles).items()),
+        *(_pedestrian(pid, ped, plan.pedestrians[pid])
+          for pid, ped in present(scenario.pedestrians).items()),
     ]
-    entries: list[tuple[float, int, str]] = [(0.0, 0, (
-        f'    <vehicle id="{BUS_ID}" type="bus" depart="0" departLane="{plan.bus_lane_index}" '
-        f'departPos="{_num(bus.depart_pos_m)}" departSpeed="{_num(bus.nominal_speed_mps)}">\n'
-        f'        <route edges={quoteattr(" ".join(bus.route_edges))}/>\n'
-        f"    </vehicle>"))]
-    if truck.present:
-        types.append(_element("vType", id="truck", vClass=PARKED_VCLASS, guiShape="truck",
-                              length=truck.length_m, width=truck.width_m, speedFactor=1,
-                              speedDev=0, sigma=0))
-        entries.append((0.0, 1, (
-            f'    <vehicle id="{TRUCK_ID}" type="truck" depart="0" '
-            f'departLane="{truck.lane_index}" departPos="{_num(truck.end_pos_m)}" '
-            f'departSpeed="0">\n'
-            f"        <route edges={quoteattr(truck.edge)}/>\n"
-            f'        <stop lane={quoteattr(f"{truck.edge}_{truck.lane_index}")} '
-            f'endPos="{_num(truck.end_pos_m)}" duration="{_num(PARKED_DURATION_S)}"/>\n'
-            f"    </vehicle>")))
-    if car.present:
-        types.append(_element("vType", id="car", vClass="passenger", guiShape="passenger",
-                              length=car.length_m, width=car.width_m, maxSpeed=car.speed_mps,
-                              speedFactor=1, speedDev=0, sigma=0))
-        entries.append((car.depart_s, 2, (
-            f'    <vehicle id="{CAR_ID}" type="car" depart="{_num(car.depart_s)}" '
-            f'departLane="{car.lane_index}" departPos="{_num(car.depart_pos_m)}" '
-            f'departSpeed="{_num(car.speed_mps)}">\n'
-            f'        <route edges={quoteattr(" ".join(car.route_edges))}/>\n'
-            f"    </vehicle>")))
-    if ped.present and plan.pedestrian is not None:
-        size = 2.0 * ped.radius_m
-        types.append(_element("vType", id="pedestrian", vClass="pedestrian",
-                              length=size, width=size, desiredMaxSpeed=ped.walking_speed_mps,
-                              maxSpeed=ped.walking_speed_mps, speedFactor=1, speedDev=0))
-        p = plan.pedestrian
-        entries.append((0.0, 3, (
-            f'    <person id="{PEDESTRIAN_ID}" type="pedestrian" depart="0" '
-            f'departPos="{_num(ped.start_pos_m)}">\n'
-            f"        <stop edge={quoteattr(ped.start_edge)} endPos=\"{_num(ped.start_pos_m)}\" "
-            f'until="{_num(p.walk_start_s)}"/>\n'
-            f'        <walk edges={quoteattr(" ".join(p.path))} '
-            f'arrivalPos="{_num(ped.end_pos_m)}"/>\n'
-            f"    </person>")))
-    entries.sort(key=lambda e: (e[0], e[1]))
+    # departures in time order (SUMO requires it); at one time in the order of the tables
+    entries = sorted(enumerate(actors), key=lambda e: (e[1][1], e[0]))
     text = "\n".join([
         '<?xml version="1.0" encoding="UTF-8"?>',
         f"<!-- Generated by sse_cosim.world from scenario {scenario.name!r}; do not edit. -->",
         '<routes xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" '
         'xsi:noNamespaceSchemaLocation="http://sumo.dlr.de/xsd/routes_file.xsd">',
-        *types,
-        *(e[2] for e in entries),
+        *(actor[0] for actor in actors),
+        *(entry[1][2] for entry in entries),
         "</routes>",
         "",
     ])
     return write_text_atomic(path, text)
+
+
+Entry = tuple[str, float, str]  # (its vType element, departure time (s), its element)
+
+
+def _automated(vid: str, av: AutomatedVehicle, lane: int) -> Entry:
+    vtype = _element("vType", id=vid, vClass=av.vehicle_class, guiShape=av.vehicle_class,
+                     length=av.length_m, width=av.width_m, accel=av.accel_mps2,
+                     decel=av.comfortable_decel_mps2, emergencyDecel=av.emergency_decel_mps2,
+                     apparentDecel=av.comfortable_decel_mps2, maxSpeed=av.nominal_speed_mps,
+                     speedFactor=1, speedDev=0, sigma=0)
+    return vtype, av.depart_s, (
+        f'    <vehicle id={quoteattr(vid)} type={quoteattr(vid)} depart="{_num(av.depart_s)}" '
+        f'departLane="{lane}" '
+        f'departPos="{_num(av.depart_pos_m)}" departSpeed="{_num(av.nominal_speed_mps)}">\n'
+        f'        <route edges={quoteattr(" ".join(av.route_edges))}/>\n'
+        f"    </vehicle>")
+
+
+def _parked(vid: str, parked: ParkedVehicle) -> Entry:
+    vtype = _element("vType", id=vid, vClass=PARKED_VCLASS, guiShape="truck",
+                     length=parked.length_m, width=parked.width_m, speedFactor=1, speedDev=0,
+                     sigma=0)
+    return vtype, 0.0, (
+        f'    <vehicle id={quoteattr(vid)} type={quoteattr(vid)} depart="0" '
+        f'departLane="{parked.lane_index}" departPos="{_num(parked.end_pos_m)}" '
+        f'departSpeed="0">\n'
+        f"        <route edges={quoteattr(parked.edge)}/>\n"
+        f'        <stop lane={quoteattr(f"{parked.edge}_{parked.lane_index}")} '
+        f'endPos="{_num(parked.end_pos_m)}" duration="{_num(PARKED_DURATION_S)}"/>\n'
+        f"    </vehicle>")
+
+
+def _vehicle(vid: str, vehicle: Vehicle) -> Entry:
+    vtype = _element("vType", id=vid, vClass=VEHICLE_VCLASS, guiShape=VEHICLE_VCLASS,
+                     length=vehicle.length_m, width=vehicle.width_m, maxSpeed=vehicle.speed_mps,
+                     speedFactor=1, speedDev=0, sigma=0)
+    return vtype, vehicle.depart_s, (
+        f'    <vehicle id={quoteattr(vid)} type={quoteattr(vid)} '
+        f'depart="{_num(vehicle.depart_s)}" '
+        f'departLane="{vehicle.lane_index}" departPos="{_num(vehicle.depart_pos_m)}" '
+        f'departSpeed="{_num(vehicle.speed_mps)}">\n'
+        f'        <route edges={quoteattr(" ".join(vehicle.route_edges))}/>\n'
+        f"    </vehicle>")
+
+
+def _pedestrian(pid: str, ped: Pedestrian, plan: PedestrianPlan) -> Entry:
+    size = 2.0 * ped.radius_m
+    vtype = _element("vType", id=pid, vClass="pedestrian", length=size, width=size,
+                     desiredMaxSpeed=ped.walking_speed_mps, maxSpeed=ped.walking_speed_mps,
+                     speedFactor=1, speedDev=0)
+    return vtype, 0.0, (
+        f'    <person id={quoteattr(pid)} type={quoteattr(pid)} depart="0" '
+        f'departPos="{_num(ped.start_pos_m)}">\n'
+        f"        <stop edge={quoteattr(ped.start_edge)} endPos=\"{_num(ped.start_pos_m)}\" "
+        f'until="{_num(plan.walk_start_s)}"/>\n'
+        f'        <walk edges={quoteattr(" ".join(plan.path))} '
+        f'arrivalPos="{_num(ped.end_pos_m)}"/>\n'
+        f"    </person>")
 
 
 # --- checks -------------------------------------------------------------------------------
@@ -247,24 +263,44 @@ def _check_lane(net: sumolib.net.Net, edge_id: str, index: int, vclass: str, fie
                         f"vClass {vclass}", f"use lane {', '.join(map(str, allowed)) or '-'}")
 
 
-def _check_truck(net: sumolib.net.Net, scenario: Scenario, source: str) -> None:
-    truck = scenario.truck
-    edge = _edge(net, truck.edge, "truck.edge", source)
+def _check_automated(net: sumolib.net.Net, vid: str, av: AutomatedVehicle, source: str) -> int:
+    """Check an automated vehicle's route, speed and departure; its departure lane."""
+    field, vclass = f"automated.{vid}", av.vehicle_class
+    _check_route(net, av.route_edges, vclass, f"{field}.route_edges", source)
+    _check_speed(net, av.route_edges, vclass, av.nominal_speed_mps,
+                 f"{field}.nominal_speed_mps", source)
+    _check_pos(net, av.route_edges[0], av.depart_pos_m, f"{field}.depart_pos_m", source)
+    return _vehicle_lane(net, av.route_edges[0], vclass, f"{field}.route_edges", source)
+
+
+def _check_vehicle(net: sumolib.net.Net, vid: str, vehicle: Vehicle, source: str) -> None:
+    field, edges = f"vehicles.{vid}", vehicle.route_edges
+    _check_route(net, edges, VEHICLE_VCLASS, f"{field}.route_edges", source)
+    _check_speed(net, edges, VEHICLE_VCLASS, vehicle.speed_mps, f"{field}.speed_mps", source)
+    _check_pos(net, edges[0], vehicle.depart_pos_m, f"{field}.depart_pos_m", source)
+    _check_lane(net, edges[0], vehicle.lane_index, VEHICLE_VCLASS, f"{field}.lane_index",
+                source)
+
+
+def _check_parked(net: sumolib.net.Net, vid: str, parked: ParkedVehicle, source: str) -> None:
+    field = f"parked.{vid}"
+    edge = _edge(net, parked.edge, f"{field}.edge", source)
     lanes = edge.getLanes()
-    if truck.lane_index >= len(lanes):
-        raise UserError(source, "truck.lane_index", f"edge {truck.edge!r} has no lane "
-                        f"{truck.lane_index} (lanes 0..{len(lanes) - 1})",
+    if parked.lane_index >= len(lanes):
+        raise UserError(source, f"{field}.lane_index", f"edge {parked.edge!r} has no lane "
+                        f"{parked.lane_index} (lanes 0..{len(lanes) - 1})",
                         "use the parking strip's index (1)")
-    if not lanes[truck.lane_index].allows(PARKED_VCLASS):
+    if not lanes[parked.lane_index].allows(PARKED_VCLASS):
         strips = [ln.getIndex() for ln in lanes if ln.allows(PARKED_VCLASS)]
-        raise UserError(source, "truck.lane_index", f"lane {truck.lane_index} of edge "
-                        f"{truck.edge!r} is not a parking strip",
-                        f"park the truck on lane {', '.join(map(str, strips)) or '-'}")
-    length = lanes[truck.lane_index].getLength()
-    if not truck.length_m <= truck.end_pos_m <= length:
-        raise UserError(source, "truck.end_pos_m", f"{truck.end_pos_m:g} m does not fit a "
-                        f"{truck.length_m:g} m truck on edge {truck.edge!r} ({length:g} m long)",
-                        f"use a front position between {truck.length_m:g} and {length:g}")
+        raise UserError(source, f"{field}.lane_index", f"lane {parked.lane_index} of edge "
+                        f"{parked.edge!r} is not a parking strip",
+                        f"park it on lane {', '.join(map(str, strips)) or '-'}")
+    length = lanes[parked.lane_index].getLength()
+    if not parked.length_m <= parked.end_pos_m <= length:
+        raise UserError(source, f"{field}.end_pos_m", f"{parked.end_pos_m:g} m does not fit a "
+                        f"{parked.length_m:g} m vehicle on edge {parked.edge!r} "
+                        f"({length:g} m long)",
+                        f"use a front position between {parked.length_m:g} and {length:g}")
 
 
 # --- the pedestrian -----------------------------------------------------------------------
@@ -277,17 +313,17 @@ def _sidewalk(net: sumolib.net.Net, edge_id: str, field: str, source: str) -> No
                         "start and end the pedestrian on an edge with a sidewalk")
 
 
-def _plan_pedestrian(net: sumolib.net.Net, scenario: Scenario, roadmap: RoadMap, dt: float,
-                     source: str) -> PedestrianPlan:
-    ped = scenario.pedestrian
-    _sidewalk(net, ped.start_edge, "pedestrian.start_edge", source)
-    _sidewalk(net, ped.end_edge, "pedestrian.end_edge", source)
-    _check_pos(net, ped.start_edge, ped.start_pos_m, "pedestrian.start_pos_m", source)
-    _check_pos(net, ped.end_edge, ped.end_pos_m, "pedestrian.end_pos_m", source)
+def _plan_pedestrian(net: sumolib.net.Net, pid: str, ped: Pedestrian, roadmap: RoadMap,
+                     dt: float, source: str) -> PedestrianPlan:
+    field = f"pedestrians.{pid}"
+    _sidewalk(net, ped.start_edge, f"{field}.start_edge", source)
+    _sidewalk(net, ped.end_edge, f"{field}.end_edge", source)
+    _check_pos(net, ped.start_edge, ped.start_pos_m, f"{field}.start_pos_m", source)
+    _check_pos(net, ped.end_edge, ped.end_pos_m, f"{field}.end_pos_m", source)
     path = pedestrian_path(net, (ped.start_edge, ped.start_pos_m), (ped.end_edge, ped.end_pos_m),
                            [c.id for c in roadmap.crossings])
     if path is None:
-        raise UserError(source, "pedestrian.end_edge", f"no walk from {ped.start_edge!r} over "
+        raise UserError(source, f"{field}.end_edge", f"no walk from {ped.start_edge!r} over "
                         f"a zebra to {ped.end_edge!r}",
                         "end the pedestrian on a sidewalk across the road from its start")
     distance = distance_to_crossing(net, path, ped.start_pos_m)
@@ -297,12 +333,12 @@ def _plan_pedestrian(net: sumolib.net.Net, scenario: Scenario, roadmap: RoadMap,
     start_step = math.floor((wanted - walk_s) / dt + _EPS)
     if start_step < 0:
         earliest = math.ceil(walk_s / dt - _EPS) * dt
-        raise UserError(source, "pedestrian.steps_onto_crossing_s",
+        raise UserError(source, f"{field}.steps_onto_crossing_s",
                         f"{wanted:g} s cannot be reached: the walk of {distance:.1f} m from "
-                        f"pedestrian.start_pos_m to the crossing takes {walk_s:.2f} s at "
+                        f"{field}.start_pos_m to the crossing takes {walk_s:.2f} s at "
                         f"{ped.walking_speed_mps:g} m/s, so it steps onto the crossing at "
                         f"{earliest:.6g} s at the earliest",
-                        f"use {earliest:.6g} s or later, or a pedestrian.start_pos_m nearer the "
+                        f"use {earliest:.6g} s or later, or a {field}.start_pos_m nearer the "
                         "crossing")
     return PedestrianPlan(
         path=tuple(path),

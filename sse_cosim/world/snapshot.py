@@ -72,7 +72,7 @@ class VehicleState:
     """One vehicle at one step."""
 
     id: str
-    role: str  # "bus", "truck", "car" or "other"
+    kind: str  # "automated", "vehicle" (moving), "parked" or "other" (not in the scenario)
     footprint: Footprint
     speed: float  # m/s
 
@@ -94,13 +94,3 @@ class Snapshot:
     time: float
     vehicles: dict[str, VehicleState] = field(default_factory=dict)
     persons: dict[str, PersonState] = field(default_factory=dict)
-
-    def role(self, role: str) -> VehicleState | None:
-        """The first vehicle with this role, or None when it is not (or no longer) in the scene."""
-        return next((v for v in self.vehicles.values() if v.role == role), None)
-
-    @property
-    def bus_actual_speed(self) -> float | None:
-        """The bus's speed (m/s) as SUMO moved it, or None when the bus is not in the scene."""
-        bus = self.role("bus")
-        return None if bus is None else bus.speed

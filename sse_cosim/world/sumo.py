@@ -14,25 +14,27 @@ than ``libsumo.simulation.getTime()`` after the step.
 Insertion. SUMO inserts a vehicle only where it has room and where the vehicle behind it can
 still brake for it; otherwise it keeps the vehicle waiting and inserts it later, at the same
 position (a car placed ahead of the fast bus on the bus's lane would then appear behind the
-bus). So ``step()`` raises :class:`UserError` naming ``bus.depart_pos_m``
-(``car.depart_pos_m``) as soon as the bus (the car) is not on the road at its departure: a
-scenario's actors start where and when it says, or the run is refused.
+bus). So ``step()`` raises :class:`UserError` naming the vehicle's ``depart_pos_m``
+(``automated.bus.depart_pos_m``, ``vehicles.car.depart_pos_m``) as soon as an automated or a
+moving vehicle is not on the road at its departure: a scenario's actors start where and when it
+says, or the run is refused.
 
-The pedestrian exists from t=0 and stands at its start until its walk starts (see
-:mod:`sse_cosim.world.demand`); meanwhile the snapshot places it at the plan's standing point
+Every pedestrian exists from t=0 and stands at its start until its walk starts (see
+:mod:`sse_cosim.world.demand`); meanwhile the snapshot places it at its plan's standing point
 on the sidewalk, where its walk then begins, not where SUMO draws a waiting person.
 
-Speed mode. The bus drives under speed mode 31 (SUMO's default, set explicitly): SUMO keeps the
-safe speed towards leaders, the bus's maximum acceleration and deceleration, and the right of
-way at junctions -- so SUMO still yields to pedestrians on the priority crossing -- while
-:meth:`SumoWorld.set_bus_speed` sets the speed the bus follows (``vehicle.setSpeed``, held
-until the next command) as closely as its acceleration and deceleration allow. The actual speed
-is in the snapshot (``Snapshot.bus_actual_speed``), the command in ``last_commanded_speed``.
-Before the first command the bus drives at its nominal speed (its maximum speed).
+Speed mode. Every automated vehicle drives under speed mode 31 (SUMO's default, set
+explicitly): SUMO keeps the safe speed towards leaders, the vehicle's maximum acceleration and
+deceleration, and the right of way at junctions -- so SUMO still yields to pedestrians on the
+priority crossing -- while :meth:`SumoWorld.set_speed` sets the speed it follows
+(``vehicle.setSpeed``, held until the next command) as closely as its acceleration and
+deceleration allow. The actual speed is in the snapshot, the command in
+``last_commanded_speed(vehicle_id)``. Before the first command it drives at its nominal speed
+(its maximum speed).
 
-Emergency brake. ``set_bus_speed(v, emergency=True)`` sets the bus's deceleration to the
-scenario's emergency deceleration (``vehicle.setDecel``) before commanding ``v``; the next
-normal command restores the comfortable deceleration. So an emergency brake uses the same
+Emergency brake. ``set_speed(vid, v, emergency=True)`` sets the vehicle's deceleration to its
+emergency deceleration (``vehicle.setDecel``) before commanding ``v``; the next normal command
+restores the comfortable deceleration. So an emergency brake uses the same
 control path as any command (speed mode, right of way and safe speed stay on) and brakes at
 exactly ``emergency_decel_mps2`` per second; ``slowDown`` would instead spread the change over
 a chosen duration, which is not what a brake is.
@@ -64,16 +66,9 @@ from xml.sax.saxutils import quoteattr
 
 from sse_cosim.errors import SimulationError, UserError
 from sse_cosim.files import write_text_atomic
-from sse_cosim.scenario.model import Scenario
+from sse_cosim.scenario.model import AutomatedVehicle, Scenario, present
 from sse_cosim.world import demand
-from sse_cosim.world.demand import (
-    BUS_ID,
-    CAR_ID,
-    PEDESTRIAN_ID,
-    ROLES,
-    ActorPlan,
-    PedestrianPlan,
-)
+from sse_cosim.world.demand import ActorPlan, PedestrianPlan
 from sse_cosim.world.network import NetworkBuildError, build_network
 from sse_cosim.world.roadmap import RoadMap, load_roadmap
 from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
@@ -84,11 +79,11 @@ with contextlib.redirect_stdout(io.StringIO()):
 
 log = logging.getLogger(__name__)
 
-BUS_SPEED_MODE = 31
+AUTOMATED_SPEED_MODE = 31
 CONFIG_FILE_NAME = "sumo.sumocfg"
 LOG_FILE_NAME = "sumo.log"
 _VEHICLE_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED)
-_BUS_VARS = (*_VEHICLE_VARS, libsumo.VAR_DISTANCE)
+_AUTOMATED_VARS = (*_VEHICLE_VARS, libsumo.VAR_DISTANCE)
 _PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libsumo.VAR_ROAD_ID,
                 libsumo.VAR_LANE_ID)
 _LIBSUMO_ERRORS: tuple[type[BaseException], ...] = (
@@ -103,6 +98,19 @@ def sumo_version() -> str:
     if version:
         return version
     return str(libsumo.getVersion()[1]).removeprefix("SUMO ").strip()
+
+
+@dataclass
+class _Automated:
+    """What the world keeps of one automated vehicle: its latest command, its deceleration
+    now in SUMO, the distance it drove and whether it arrived."""
+
+    config: AutomatedVehicle
+    decel: float
+    commanded: float | None = None
+    emergency: bool = False
+    distance: float = 0.0
+    arrived: bool = False
 
 
 @dataclass(frozen=True)
@@ -130,11 +138,13 @@ class SumoWorld:
         self._entered = False
         self._time = -self._dt
         self._departed: set[str] = set()  # vehicles SUMO has inserted
-        self._bus_arrived = False
-        self._bus_distance = 0.0
-        self._bus_decel = scenario.bus.comfortable_decel_mps2
-        self._last_commanded: float | None = None
-        self._last_emergency = False
+        self._automated = {vid: _Automated(av, av.comfortable_decel_mps2)
+                           for vid, av in present(scenario.automated).items()}
+        self._kinds = {
+            **dict.fromkeys(present(scenario.parked), "parked"),
+            **dict.fromkeys(present(scenario.vehicles), "vehicle"),
+            **dict.fromkeys(self._automated, "automated"),
+        }
         self._teleports = 0
         self._collisions: list[Collision] = []
         self._sizes: dict[str, tuple[float, float]] = {}
@@ -212,36 +222,39 @@ class SumoWorld:
         self._check_insertions()
         return snapshot
 
-    def set_bus_speed(self, commanded_mps: float, emergency: bool = False) -> None:
-        """Command the bus's speed (m/s); ``emergency`` brakes at the emergency deceleration.
+    def set_speed(self, vehicle_id: str, commanded_mps: float, emergency: bool = False) -> None:
+        """Command automated vehicle ``vehicle_id``'s speed (m/s); ``emergency`` brakes at its
+        emergency deceleration.
 
-        The bus follows the command from the next step on, as its acceleration and
-        deceleration allow, and never faster than its nominal speed; SUMO's own right of way
-        stays on. A command given before the bus departs applies from its departure on;
-        after the bus arrived it is only recorded.
+        It follows the command from the next step on, as its acceleration and deceleration
+        allow, and never faster than its nominal speed; SUMO's own right of way stays on. A
+        command given before it departs applies from its departure on; after it arrived it is
+        only recorded.
         """
         if not math.isfinite(commanded_mps) or commanded_mps < 0:
-            raise ValueError(f"commanded bus speed must be finite and >= 0, got {commanded_mps}")
+            raise ValueError(f"commanded speed must be finite and >= 0, got {commanded_mps}")
         self._require_open()
-        self._last_commanded = float(commanded_mps)
-        self._last_emergency = bool(emergency)
-        if not self.bus_departed or self._bus_arrived:
+        state = self._automated[vehicle_id]
+        state.commanded = float(commanded_mps)
+        state.emergency = bool(emergency)
+        if vehicle_id not in self._departed or state.arrived:
             return
         try:
-            self._apply_command()
+            self._apply_command(vehicle_id)
         except _LIBSUMO_ERRORS as exc:
-            raise SimulationError(self.scenario_name,
-                                  f"setting the bus's speed failed: {_message(exc)}") from exc
+            raise SimulationError(self.scenario_name, f"setting the speed of {vehicle_id!r} "
+                                  f"failed: {_message(exc)}") from exc
 
-    def _apply_command(self) -> None:
-        if self._last_commanded is None:
+    def _apply_command(self, vehicle_id: str) -> None:
+        state = self._automated[vehicle_id]
+        if state.commanded is None:
             return
-        bus = self.scenario.bus
-        decel = bus.emergency_decel_mps2 if self._last_emergency else bus.comfortable_decel_mps2
-        if decel != self._bus_decel:
-            libsumo.vehicle.setDecel(BUS_ID, decel)
-            self._bus_decel = decel
-        libsumo.vehicle.setSpeed(BUS_ID, self._last_commanded)
+        decel = state.config.emergency_decel_mps2 if state.emergency \
+            else state.config.comfortable_decel_mps2
+        if decel != state.decel:
+            libsumo.vehicle.setDecel(vehicle_id, decel)
+            state.decel = decel
+        libsumo.vehicle.setSpeed(vehicle_id, state.commanded)
 
     # --- state ----------------------------------------------------------------------------
 
@@ -259,10 +272,10 @@ class SumoWorld:
         return self._net_path
 
     @property
-    def pedestrian_plan(self) -> PedestrianPlan | None:
-        """Where the pedestrian waits, when it walks and steps onto the crossing (None without
-        one)."""
-        return None if self._plan is None else self._plan.pedestrian
+    def pedestrian_plans(self) -> dict[str, PedestrianPlan]:
+        """Where each present pedestrian waits, when it walks and steps onto the crossing, by
+        id."""
+        return {} if self._plan is None else self._plan.pedestrians
 
     @property
     def time(self) -> float:
@@ -273,31 +286,35 @@ class SumoWorld:
     def step_length(self) -> float:
         return self._dt
 
-    @property
-    def bus_route_length(self) -> float:
-        """Length (m) of the bus's route from the start of its first edge to the end of its last,
-        junction passages included; the frame of ``bus.depart_pos_m``."""
-        return self.roadmap.route_length(self.scenario.bus.route_edges)
+    def route_length(self, vehicle_id: str) -> float:
+        """Length (m) of automated vehicle ``vehicle_id``'s route from the start of its first
+        edge to the end of its last, junction passages included; the frame of its
+        ``depart_pos_m``."""
+        return self.roadmap.route_length(self._automated[vehicle_id].config.route_edges)
+
+    def route_position(self, vehicle_id: str) -> float:
+        """Automated vehicle ``vehicle_id``'s front position (m) along its route, same frame
+        as ``route_length``."""
+        state = self._automated[vehicle_id]
+        return state.config.depart_pos_m + state.distance
+
+    def departed(self, vehicle_id: str) -> bool:
+        """Whether SUMO has inserted vehicle ``vehicle_id``."""
+        return vehicle_id in self._departed
+
+    def arrived(self, vehicle_id: str) -> bool:
+        """Whether automated vehicle ``vehicle_id`` reached the end of its route (and left
+        the simulation)."""
+        return self._automated[vehicle_id].arrived
 
     @property
-    def bus_route_position(self) -> float:
-        """The bus front's position (m) along its route, same frame as ``bus_route_length``."""
-        return self.scenario.bus.depart_pos_m + self._bus_distance
+    def all_arrived(self) -> bool:
+        """Whether every automated vehicle reached the end of its route."""
+        return all(state.arrived for state in self._automated.values())
 
-    @property
-    def bus_departed(self) -> bool:
-        """Whether SUMO has inserted the bus (it may wait for room at its departure)."""
-        return BUS_ID in self._departed
-
-    @property
-    def bus_arrived(self) -> bool:
-        """Whether the bus reached the end of its route (and left the simulation)."""
-        return self._bus_arrived
-
-    @property
-    def last_commanded_speed(self) -> float | None:
-        """The latest ``set_bus_speed`` command (m/s), None before the first."""
-        return self._last_commanded
+    def last_commanded_speed(self, vehicle_id: str) -> float | None:
+        """The latest ``set_speed`` command of ``vehicle_id`` (m/s), None before the first."""
+        return self._automated[vehicle_id].commanded
 
     @property
     def teleports(self) -> int:
@@ -316,28 +333,30 @@ class SumoWorld:
                                   "(use it inside 'with SumoWorld(...) as world:')")
 
     def _check_insertions(self) -> None:
-        """Every vehicle is on the road from its departure on; SUMO would keep one it has no
-        room for waiting and insert it later (see module docstring)."""
-        bus, car = self.scenario.bus, self.scenario.car
-        self._check_inserted(BUS_ID, 0.0, "bus.depart_pos_m",
-                             f"at {bus.depart_pos_m:g} m on edge {bus.route_edges[0]!r}",
-                             "move bus.depart_pos_m to where there is room")
-        if car.present:
-            self._check_inserted(CAR_ID, car.depart_s, "car.depart_pos_m",
-                                 f"at {car.depart_pos_m:g} m on edge {car.route_edges[0]!r} "
-                                 f"(car.depart_s = {car.depart_s:g} s)",
-                                 "place the car where nothing stands and, on the bus's lane, "
-                                 "far enough ahead of the bus for it to brake (or behind it), "
-                                 "or change car.depart_s")
+        """Every automated and moving vehicle is on the road from its departure on; SUMO
+        would keep one it has no room for waiting and insert it later (see module
+        docstring)."""
+        for vid, av in present(self.scenario.automated).items():
+            self._check_inserted(vid, av.depart_s, f"automated.{vid}", av.route_edges[0],
+                                 av.depart_pos_m,
+                                 f"move automated.{vid}.depart_pos_m to where there is room, or "
+                                 f"change automated.{vid}.depart_s")
+        for vid, car in present(self.scenario.vehicles).items():
+            self._check_inserted(vid, car.depart_s, f"vehicles.{vid}", car.route_edges[0],
+                                 car.depart_pos_m,
+                                 "place it where nothing stands and, on an automated "
+                                 "vehicle's lane, far enough ahead of it to brake (or behind "
+                                 f"it), or change vehicles.{vid}.depart_s")
 
-    def _check_inserted(self, vid: str, depart_s: float, field: str, where: str,
+    def _check_inserted(self, vid: str, depart_s: float, table: str, edge: str, pos: float,
                         fix: str) -> None:
         if vid in self._departed or self._time < depart_s - 1e-9:
             return
-        raise UserError(self.scenario_name, field, f"SUMO cannot insert the {ROLES[vid]} "
-                        f"{where} at its departure: no room there, or the vehicle behind it "
-                        "could not brake for it; SUMO would insert it later, behind that vehicle "
-                        f"(see {self.run_dir / LOG_FILE_NAME})", fix)
+        raise UserError(self.scenario_name, f"{table}.depart_pos_m", f"SUMO cannot insert "
+                        f"{vid!r} at {pos:g} m on edge {edge!r} ({table}.depart_s = "
+                        f"{depart_s:g} s) at its departure: no room there, or the vehicle "
+                        "behind it could not brake for it; SUMO would insert it later, behind "
+                        f"that vehicle (see {self.run_dir / LOG_FILE_NAME})", fix)
 
     def _write_files(self) -> Path:
         assert self._plan is not None and self._net_path is not None
@@ -383,14 +402,16 @@ class SumoWorld:
         self._time = round(sim.getTime() - self._dt, 6)
         for vid in sim.getDepartedIDList():
             self._departed.add(vid)
-            libsumo.vehicle.subscribe(vid, _BUS_VARS if vid == BUS_ID else _VEHICLE_VARS)
-            if vid == BUS_ID:
-                libsumo.vehicle.setSpeedMode(BUS_ID, BUS_SPEED_MODE)
-                self._apply_command()
+            automated = vid in self._automated
+            libsumo.vehicle.subscribe(vid, _AUTOMATED_VARS if automated else _VEHICLE_VARS)
+            if automated:
+                libsumo.vehicle.setSpeedMode(vid, AUTOMATED_SPEED_MODE)
+                self._apply_command(vid)
         for pid in sim.getDepartedPersonIDList():
             libsumo.person.subscribe(pid, _PERSON_VARS)
-        if BUS_ID in sim.getArrivedIDList():
-            self._bus_arrived = True
+        for vid in sim.getArrivedIDList():
+            if vid in self._automated:
+                self._automated[vid].arrived = True
         self._teleports += sim.getStartingTeleportNumber()
         for c in sim.getCollisions():
             self._collisions.append(Collision(self._time, c.collider, c.victim, c.type))
@@ -400,11 +421,11 @@ class SumoWorld:
             length, width = self._size(vid)
             heading = _heading(values[libsumo.VAR_ANGLE])
             vehicles[vid] = VehicleState(
-                id=vid, role=ROLES.get(vid, "other"),
+                id=vid, kind=self._kinds.get(vid, "other"),
                 footprint=Footprint(Pose(float(x), float(y), heading), length, width),
                 speed=float(values[libsumo.VAR_SPEED]))
-            if vid == BUS_ID:
-                self._bus_distance = float(values[libsumo.VAR_DISTANCE])
+            if vid in self._automated:
+                self._automated[vid].distance = float(values[libsumo.VAR_DISTANCE])
         persons: dict[str, PersonState] = {}
         for pid, values in libsumo.person.getAllSubscriptionResults().items():
             persons[pid] = PersonState(
@@ -416,10 +437,10 @@ class SumoWorld:
 
     def _person_position(self, pid: str, values: dict[int, Any]) -> tuple[float, float]:
         """A person's centre. A walking person SUMO places by its front; a waiting one (on no
-        lane: the pedestrian before its walk) it draws beside the sidewalk, so the plan's
+        lane: a pedestrian before its walk) it draws beside the sidewalk, so its plan's
         standing point is used, where its walk then begins."""
-        plan = self.pedestrian_plan
-        if not values[libsumo.VAR_LANE_ID] and pid == PEDESTRIAN_ID and plan is not None:
+        plan = self.pedestrian_plans.get(pid)
+        if not values[libsumo.VAR_LANE_ID] and plan is not None:
             return plan.standing_xy
         x, y = values[libsumo.VAR_POSITION]
         heading = _heading(values[libsumo.VAR_ANGLE])
@@ -436,7 +457,8 @@ class SumoWorld:
     def _person_size(self, pid: str) -> float:
         length = self._person_length.get(pid)
         if length is None:
-            length = (2.0 * self.scenario.pedestrian.radius_m if pid == PEDESTRIAN_ID
+            ped = self.scenario.pedestrians.get(pid)
+            length = (2.0 * ped.radius_m if ped is not None
                       else float(libsumo.person.getLength(pid)))
             self._person_length[pid] = length
         return length

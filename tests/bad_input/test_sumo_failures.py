@@ -108,22 +108,25 @@ def test_a_bus_that_is_never_inserted_is_bad_input(tmp_path, capsys, monkeypatch
     path = scenario_file(tmp_path, "blocked", "", duration_s=5.0)
     code, line = run_cli(["run", str(path), "--out", str(tmp_path / "out")], capsys)
     assert code == EXIT_BAD_INPUT
-    assert line.startswith(f"sse-cosim: {path}: bus.depart_pos_m: SUMO cannot insert the bus at "
-                           "0 m on edge 'WC' at its departure")
-    assert "-- move bus.depart_pos_m" in line
+    assert line.startswith(f"sse-cosim: {path}: automated.bus.depart_pos_m: SUMO cannot insert "
+                           "'bus' at 0 m on edge 'WC' (automated.bus.depart_s = 0 s) at its "
+                           "departure")
+    assert "-- move automated.bus.depart_pos_m" in line
     assert not sumo.libsumo.isLoaded()
 
 
 def test_a_car_without_room_at_its_departure_is_bad_input(tmp_path, capsys):
     """The connected car departs where a slow bus still stands: SUMO cannot insert it."""
-    path = scenario_file(tmp_path, "car_blocked", '[bus]\nnominal_speed_mps = 0.5\n'
-                         '[car]\nroute_edges = ["WC", "CE"]\n[pedestrian]\npresent = false\n',
+    path = scenario_file(tmp_path, "car_blocked", '[automated.bus]\nnominal_speed_mps = 0.5\n'
+                         '[vehicles.car]\nroute_edges = ["WC", "CE"]\n'
+                         '[pedestrians.pedestrian]\npresent = false\n',
                          duration_s=5.0, base=S2)
     code, line = run_cli(["run", str(path), "--out", str(tmp_path / "out")], capsys)
     assert code == EXIT_BAD_INPUT
-    assert line.startswith(f"sse-cosim: {path}: car.depart_pos_m: SUMO cannot insert the car at "
-                           "0 m on edge 'WC' (car.depart_s = 0 s) at its departure")
-    assert "car.depart_s" in line.partition(" -- ")[2]
+    assert line.startswith(f"sse-cosim: {path}: vehicles.car.depart_pos_m: SUMO cannot insert "
+                           "'car' at 0 m on edge 'WC' (vehicles.car.depart_s = 0 s) at its "
+                           "departure")
+    assert "vehicles.car.depart_s" in line.partition(" -- ")[2]
     assert not sumo.libsumo.isLoaded()
 
 
@@ -133,14 +136,15 @@ def test_a_car_ahead_of_the_bus_that_the_bus_could_not_brake_for_is_bad_input(
     """A car placed ahead of the bus on the bus's lane, slower than the bus and too close for
     it to brake: SUMO would insert it only once the bus has passed, i.e. behind the bus (at
     15 m within two seconds). The run is refused at the car's departure instead."""
-    path = scenario_file(tmp_path, "car_ahead", '[car]\nroute_edges = ["WC", "CE"]\n'
+    path = scenario_file(tmp_path, "car_ahead", '[vehicles.car]\nroute_edges = ["WC", "CE"]\n'
                          f"depart_pos_m = {depart_pos_m}\n", duration_s=5.0, base=S2)
     code, line = run_cli(["run", str(path), "--out", str(tmp_path / "out")], capsys)
     assert code == EXIT_BAD_INPUT
-    assert line.startswith(f"sse-cosim: {path}: car.depart_pos_m: SUMO cannot insert the car at "
-                           f"{depart_pos_m:g} m on edge 'WC' (car.depart_s = 0 s) at its "
-                           "departure: no room there, or the vehicle behind it could not brake")
-    assert "far enough ahead of the bus" in line.partition(" -- ")[2]
+    assert line.startswith(f"sse-cosim: {path}: vehicles.car.depart_pos_m: SUMO cannot insert "
+                           f"'car' at {depart_pos_m:g} m on edge 'WC' (vehicles.car.depart_s = "
+                           "0 s) at its departure: no room there, or the vehicle behind it could "
+                           "not brake")
+    assert "far enough ahead of it to brake" in line.partition(" -- ")[2]
     assert not sumo.libsumo.isLoaded()
 
 
@@ -148,13 +152,14 @@ def test_a_batch_records_each_failure_and_finishes_the_other_runs(tmp_path):
     good = scenario_file(tmp_path, "good", "")
     sumo_error = scenario_file(tmp_path, "sumo_error", "[network]\nsources_dir = "
                                f'"{broken_network(tmp_path).as_posix()}"\n')
-    bad_input = scenario_file(tmp_path, "bad_input", "[pedestrian]\nstart_pos_m = 450.0\n")
+    bad_input = scenario_file(tmp_path, "bad_input",
+                              "[pedestrians.pedestrian]\nstart_pos_m = 450.0\n")
     out = tmp_path / "out"
     outcomes = {o.key: o for o in run_batch([good, sumo_error, bad_input], out,
                                             Execution(workers=3, progress=False))}
     assert outcomes["good"].ok and outcomes["good"].summary["steps"] == 10
     assert "simulation failed" in outcomes["sumo_error"].error
-    assert "pedestrian.start_pos_m" in outcomes["bad_input"].error
+    assert "pedestrians.pedestrian.start_pos_m" in outcomes["bad_input"].error
     for key in ("sumo_error", "bad_input"):
         error = json.loads((out / RUNS_FOLDER / key / "error.json").read_text())
         assert error["key"] == key and "\n" not in error["error"]

@@ -22,9 +22,10 @@ SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "s1_pedestrian.to
 def context() -> SceneContext:
     scenario = load_scenario(SCENARIO)
     roadmap = load_roadmap(build_network(scenario.network.sources_dir))
-    return SceneContext.build(roadmap, scenario.bus.route_edges, scenario.bus,
+    bus = scenario.automated["bus"]
+    return SceneContext.build(roadmap, bus.route_edges, bus,
                               scenario.controller, scenario.estimator.max_pedestrian_speed_mps,
-                              scenario.estimator.position_jitter_m, scenario.pedestrian.radius_m,
+                              scenario.estimator.position_jitter_m, scenario.pedestrian_radius_m(),
                               scenario.simulation.step_length_s)
 
 

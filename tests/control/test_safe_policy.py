@@ -17,10 +17,10 @@ from hypothesis import strategies as st
 from sse_cosim.control.kinematics import BusDynamics
 from sse_cosim.control.picture import Picture, ZoneOutlook
 from sse_cosim.control.speed import SafePolicy, SpeedLevel, level_speed
-from sse_cosim.scenario.model import Bus, Controller
+from sse_cosim.scenario.model import AutomatedVehicle, Controller
 
 DT = 0.1
-BUS = Bus()
+BUS = AutomatedVehicle()
 CONFIG = Controller()
 DYN = BusDynamics.of(BUS, CONFIG, DT)
 ZONE_LENGTH = 4.0

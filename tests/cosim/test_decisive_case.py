@@ -17,7 +17,8 @@ from sse_cosim.runner.run import run_scenario_file
 
 pytestmark = pytest.mark.sumo
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
-AT_THE_BOUND = {"pedestrian.walking_speed_mps": 2.5, "pedestrian.steps_onto_crossing_s": 9.0}
+AT_THE_BOUND = {"pedestrians.pedestrian.walking_speed_mps": 2.5,
+                "pedestrians.pedestrian.steps_onto_crossing_s": 9.0}
 CASES = [(f"s{i}", label, overrides) for i in (1, 2, 3)
          for label, overrides in (("default", {}), ("speed bound", AT_THE_BOUND))]
 LANE_Y = (-3.5, 0.0)  # the bus's driving lane (sumo_net/README.md)

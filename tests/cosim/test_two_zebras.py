@@ -30,11 +30,12 @@ LANE_Y = (-3.5, 0.0)  # the bus's driving lane
 # S1 moved to the second zebra: the truck 6 m before it, the pedestrian behind the truck
 # stepping onto it at the speed bound when the bus, at nominal speed, would be 0.9 s from it
 SECOND_ZEBRA_CASE = {
-    "network.sources_dir": str(SOURCES), "bus.route_edges": ROUTE,
-    "truck.edge": "CD", "truck.end_pos_m": 44.0,
-    "pedestrian.start_edge": "CD", "pedestrian.start_pos_m": 42.0,
-    "pedestrian.end_edge": "DC", "pedestrian.end_pos_m": 4.0,
-    "pedestrian.walking_speed_mps": 2.5, "pedestrian.steps_onto_crossing_s": 12.0,
+    "network.sources_dir": str(SOURCES), "automated.bus.route_edges": ROUTE,
+    "parked.truck.edge": "CD", "parked.truck.end_pos_m": 44.0,
+    "pedestrians.pedestrian.start_edge": "CD", "pedestrians.pedestrian.start_pos_m": 42.0,
+    "pedestrians.pedestrian.end_edge": "DC", "pedestrians.pedestrian.end_pos_m": 4.0,
+    "pedestrians.pedestrian.walking_speed_mps": 2.5,
+    "pedestrians.pedestrian.steps_onto_crossing_s": 12.0,
     "simulation.duration_s": 22.0,
 }
 
@@ -46,11 +47,11 @@ def roadmap() -> RoadMap:
 
 def scene(roadmap: RoadMap, route: list[str]) -> SceneContext:
     """The static picture of S1's bus driving ``route`` on the two-zebra road."""
-    sc = load_scenario(SCENARIO, {"bus.route_edges": route})
+    sc = load_scenario(SCENARIO, {"automated.bus.route_edges": route})
     est = sc.estimator
-    return SceneContext.build(roadmap, route, sc.bus, sc.controller, est.max_pedestrian_speed_mps,
-                              est.position_jitter_m, sc.pedestrian.radius_m,
-                              sc.simulation.step_length_s)
+    return SceneContext.build(roadmap, route, sc.automated["bus"], sc.controller,
+                              est.max_pedestrian_speed_mps, est.position_jitter_m,
+                              sc.pedestrian_radius_m(), sc.simulation.step_length_s)
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +69,7 @@ def test_the_road_map_lists_both_crossings(roadmap: RoadMap) -> None:
 def test_the_pedestrian_walks_over_the_zebra_that_makes_its_walk_shortest(
         roadmap: RoadMap) -> None:
     sc = load_scenario(SCENARIO, SECOND_ZEBRA_CASE)
-    plan = plan_actors(sc, roadmap.net_path, roadmap, "two_zebras").pedestrian
+    plan = plan_actors(sc, roadmap.net_path, roadmap, "two_zebras").pedestrians["pedestrian"]
     assert plan is not None
     assert plan.path[0] == "CD" and plan.path[-1] == "DC"
     assert ":D_c0" in plan.path and ":C_c0" not in plan.path
@@ -130,4 +131,5 @@ def test_a_pedestrian_on_the_second_zebra_at_the_speed_bound_is_given_way(tmp_pa
     assert summary["containment_violations"] == 0, summary["violations"]
     assert summary["level_share"]["emergency"] == 0.0
     # the bus's rear has cleared the second zebra
-    assert trace["bus_x"].iloc[-1] - load_scenario(SCENARIO).bus.length_m > SECOND_ZEBRA_X[1]
+    bus_length = load_scenario(SCENARIO).automated["bus"].length_m
+    assert trace["bus_x"].iloc[-1] - bus_length > SECOND_ZEBRA_X[1]

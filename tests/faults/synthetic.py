@@ -25,8 +25,10 @@ from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, LocalObservers, Track
 from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.v2x import Message, V2XLink
-from sse_cosim.scenario.model import BUS_NODE, V2X, Estimator
+from sse_cosim.scenario.model import V2X, Estimator
 from sse_cosim.sets import Strips, Zonotope
+
+BUS = "bus"  # the automated vehicle's id (its node)
 
 DT = 0.1
 PED = "ped"
@@ -97,16 +99,16 @@ class Harness:
         rng = np.random.default_rng(self.seed)
         truth, _ = trajectory(rng, steps, self.speed, self.jitter)
         settings = EstimatorSettings(self.gain, "girard", 8)
-        nodes = sorted({s.node for s in self.sensors.values()} | {BUS_NODE})
+        nodes = sorted({s.node for s in self.sensors.values()} | {BUS})
         observers = LocalObservers(nodes, self.model, settings)
         link = V2XLink(V2X(latency_steps=self.latency), np.random.default_rng(0))
-        centre = FusionCentre(self.model, settings, "strips", self.sensors, DT)
+        centre = FusionCentre(self.model, settings, "strips", self.sensors, DT, BUS)
         records = []
         for k, p in enumerate(truth):
             detections = self._detections(rng, k, p)
             tracks = observers.step(k, detections)
             for node in nodes:
-                if node != BUS_NODE and PED in tracks[node]:
+                if node != BUS and PED in tracks[node]:
                     link.send(self._message(k, node, tracks[node], detections.get(node, {})), 0.0)
             link.deliver(k)
             shared = link.picture(k, self.model)

@@ -11,8 +11,10 @@ from sse_cosim.estimation.bus_screen import BusScreener
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.vote import READMIT_STEPS
-from sse_cosim.scenario.model import BUS_NODE, Estimator
+from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips, Zonotope
+
+BUS = "bus"  # the automated vehicle's id (its node)
 
 ONSET = 20
 STEPS = 50
@@ -62,10 +64,10 @@ def test_a_single_sensor_cannot_be_blamed_its_node_keeps_both_hypotheses():
     for seed in range(3):
         harness = Harness(sensors, seed=seed, strip_hook=biased("bus_front", 6.0))
         records = harness.run(STEPS)
-        assert first_flag(records, BUS_NODE, "node") - ONSET <= 3, seed
+        assert first_flag(records, BUS, "node") - ONSET <= 3, seed
         for r in records[ONSET + 3:]:
-            track = r.tracks[BUS_NODE][PED]
-            assert track.conflict and r.flags.nodes[BUS_NODE] == "conflict" and r.flags.inconsistent
+            track = r.tracks[BUS][PED]
+            assert track.conflict and r.flags.nodes[BUS] == "conflict" and r.flags.inconsistent
             assert contains(harness.model, track.estimate, r.truth), (seed, r.step)
 
 
@@ -140,7 +142,7 @@ def test_a_claim_inside_a_clear_view_is_dropped_or_kept_in_conflict():
     """A phantom: beside a real claim it is left out; alone it is kept, flagged (it could be
     a real pedestrian placed wrong)."""
     model = MotionModel.from_config(Estimator(), DT)
-    screener = BusScreener(model, 2.5 * DT)
+    screener = BusScreener(model, 2.5 * DT, BUS)
     ghost = Zonotope(np.array([0.0, 0.0]), np.eye(2))
     real = Zonotope(np.array([30.0, 0.0]), np.eye(2))
     view = [ClearRegion(shapely.box(-10, -10, 10, 10), 1)]
@@ -154,7 +156,7 @@ def test_a_claim_inside_a_clear_view_is_dropped_or_kept_in_conflict():
 def test_a_pedestrian_nobody_detects_whose_every_set_lies_in_a_clear_view_has_left():
     """SUMO removed it at its destination: no flag, no fused set, no refined region."""
     model = MotionModel.from_config(Estimator(), DT)
-    screener = BusScreener(model, 2.5 * DT)
+    screener = BusScreener(model, 2.5 * DT, BUS)
     ghost = Zonotope(np.array([0.0, 0.0]), np.eye(2))
     view = [ClearRegion(shapely.box(-10, -10, 10, 10), 0)]
     screen = screener.screen({"p": ghost}, {"p": {"rsu1": ghost}}, {"p": view})

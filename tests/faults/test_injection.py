@@ -174,7 +174,7 @@ def test_fallback_floor_applies_only_while_inconsistent():
     ({"faults.sensor.f.sensor": "rsu1_cam", "faults.sensor.f.kind": "stuck",
       "faults.sensor.f.bias_m": [1.0, 0.0]}, "faults.sensor.f.bias_m", "only used with"),
     ({"faults.node.n.node": "bus", "faults.node.n.kind": "shrink"}, "faults.node.n.node",
-     "sends to the bus"),
+     "sends to an automated vehicle"),
     ({"faults.link.l.node": "rsu1", "faults.link.l.kind": "loss", "faults.link.l.start_s": 5.0,
       "faults.link.l.end_s": 4.0}, "faults.link.l.end_s", "later than start_s"),
 ])

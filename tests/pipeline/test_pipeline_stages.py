@@ -20,9 +20,11 @@ from sse_cosim.pipeline.stages import (
     union_or_empty,
     views_of,
 )
-from sse_cosim.scenario.model import BUS_NODE, Estimator
+from sse_cosim.scenario.model import Estimator
 from sse_cosim.sensors import Detection, SensorObservation
 from sse_cosim.sets import Strips, Zonotope
+
+BUS = "bus"  # the automated vehicle's id (its node)
 
 DT = 0.1
 STRIPS = Strips(np.eye(2), np.zeros(2), np.ones(2))
@@ -39,18 +41,18 @@ def test_union_or_empty_skips_missing_and_empty_parts():
 
 
 def test_detections_are_grouped_by_node_pedestrian_and_sensor():
-    observations = {"front": observation("front", BUS_NODE, ("a",), (0, 0, 1, 1)),
-                    "near": observation("near", BUS_NODE, ("a", "b"), (0, 0, 1, 1)),
+    observations = {"front": observation("front", BUS, ("a",), (0, 0, 1, 1)),
+                    "near": observation("near", BUS, ("a", "b"), (0, 0, 1, 1)),
                     "cam": observation("cam", "rsu1", ("b",), (0, 0, 1, 1))}
     grouped = detections_by_node(observations)
     assert {n: {p: list(s) for p, s in d.items()} for n, d in grouped.items()} == {
-        BUS_NODE: {"a": ["front", "near"], "b": ["near"]}, "rsu1": {"b": ["cam"]}}
-    assert [o.sensor for o in views_of(BUS_NODE, observations)] == ["front", "near"]
+        BUS: {"a": ["front", "near"], "b": ["near"]}, "rsu1": {"b": ["cam"]}}
+    assert [o.sensor for o in views_of(BUS, observations)] == ["front", "near"]
 
 
 def test_clear_regions_and_detections_join_the_bus_and_the_senders():
-    views = [observation("front", BUS_NODE, ("a",), (0, 0, 1, 1)),
-             observation("near", BUS_NODE, (), (5, 5, 6, 6))]
+    views = [observation("front", BUS, ("a",), (0, 0, 1, 1)),
+             observation("near", BUS, (), (5, 5, 6, 6))]
     z = Zonotope(np.zeros(2), np.eye(2))
     own = {"a": Track("a", z, 3, True)}
     shared = SharedPicture({"b": {"rsu1": z}}, {"rsu1": shapely.box(9, 9, 10, 10)}, {"rsu1": 1},

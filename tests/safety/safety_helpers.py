@@ -11,17 +11,17 @@ NOISE = "sensors.*[node!=bus].noise_bound_m"
 
 PARAMS = f"""
 [[params]]
-path = "pedestrian.steps_onto_crossing_s"
+path = "pedestrians.pedestrian.steps_onto_crossing_s"
 name = "step_s"
 values = [8.0, 12.0]
 
 [[params]]
-path = "pedestrian.walking_speed_mps"
+path = "pedestrians.pedestrian.walking_speed_mps"
 name = "walk_mps"
 values = [1.0, 2.5]
 
 [[params]]
-path = "truck.end_pos_m"
+path = "parked.truck.end_pos_m"
 name = "truck_m"
 values = [186.0, 192.0]
 
@@ -49,8 +49,9 @@ def campaign_file(tmp_path: Path, params: str = PARAMS, behind: str = BEHIND,
 
 def slow_walkers_cannot(scenario: Scenario, source: str) -> str | None:
     """A fake planner: a pedestrian slower than 2 m/s is refused."""
-    if scenario.pedestrian.walking_speed_mps < 2.0:
-        return f"too slow ({scenario.pedestrian.walking_speed_mps:g} m/s)"
+    speed = scenario.pedestrians["pedestrian"].walking_speed_mps
+    if speed < 2.0:
+        return f"too slow ({speed:g} m/s)"
     return None
 
 

@@ -82,7 +82,7 @@ def test_the_real_planner_refuses_a_pedestrian_that_cannot_reach_the_zebra(tmp_p
 
 def test_other_refusals_of_the_planner_stop_the_campaign(tmp_path):
     params = PARAMS.replace("values = [186.0, 192.0]", "values = [186.0, 400.0]")
-    with pytest.raises(UserError, match=r"truck.end_pos_m: 400 m does not fit"):
+    with pytest.raises(UserError, match=r"parked.truck.end_pos_m: 400 m does not fit"):
         plan_campaign(load_campaign(campaign_file(tmp_path, params=params)), ActorPlanner())
 
 
@@ -115,14 +115,15 @@ def test_quick_must_pick_values_of_the_grid(tmp_path):
 
 
 @pytest.mark.parametrize(("params", "extra", "message"), [
-    (PARAMS.replace('"pedestrian.walking_speed_mps"', '"pedestrian.radius_m"'), "",
-     r"params: add a parameter with path = 'pedestrian.walking_speed_mps'"),
+    (PARAMS.replace('"pedestrians.pedestrian.walking_speed_mps"',
+                    '"pedestrians.pedestrian.radius_m"'), "",
+     r"params: add a parameter with path = 'pedestrians.pedestrian.walking_speed_mps'"),
     (PARAMS.replace(NOISE, "sensors.*[node=rsu*].noise_bound_m"), "",
      r"matches nothing"),
-    (PARAMS, '[set]\n"pedestrian.start_pos_m" = 180.0\n',
-     r"sets pedestrian.start_pos_m, which start_behind_truck sets too"),
+    (PARAMS, '[set]\n"pedestrians.pedestrian.start_pos_m" = 180.0\n',
+     r"sets pedestrians.pedestrian.start_pos_m, which start_behind_truck sets too"),
     (PARAMS.replace("values = [1.0, 2.5]", "values = [-1.0, 2.5]"), "",
-     r"pedestrian.walking_speed_mps"),
+     r"pedestrians.pedestrian.walking_speed_mps"),
 ])
 def test_a_bad_grid_stops_before_any_run(tmp_path, params, extra, message):
     with pytest.raises(UserError, match=message):
@@ -133,7 +134,8 @@ def test_a_bad_grid_stops_before_any_run(tmp_path, params, extra, message):
 def test_the_default_campaign_covers_the_grid_of_the_brief():
     campaign = load_campaign(DEFAULT)
     axes = {p.pattern: p.values for p in campaign.axes}
-    assert axes["pedestrian.walking_speed_mps"] == (1.0, 1.5, 2.0, 2.5)
-    assert {7.0, 8.0, 9.0, 10.0, 11.0, 12.0} <= set(axes["pedestrian.steps_onto_crossing_s"])
+    assert axes["pedestrians.pedestrian.walking_speed_mps"] == (1.0, 1.5, 2.0, 2.5)
+    step_out = axes["pedestrians.pedestrian.steps_onto_crossing_s"]
+    assert {7.0, 8.0, 9.0, 10.0, 11.0, 12.0} <= set(step_out)
     assert axes[NOISE] == ([0.5, 0.5], [1.5, 1.5])
     assert campaign.behind_truck.values == (1.0, 5.0)

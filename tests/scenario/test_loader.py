@@ -8,6 +8,7 @@ import pytest
 
 from sse_cosim.errors import UserError
 from sse_cosim.scenario.loader import apply_overrides, deep_merge, load_scenario, load_scenario_data
+from sse_cosim.scenario.model import present
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 PAPER_FILES = sorted(p for p in SCENARIOS.glob("s[123]_*.toml"))
@@ -21,7 +22,7 @@ def test_six_paper_scenarios_exist_and_validate():
     for path in PAPER_FILES:
         scenario = load_scenario(path)
         assert scenario.name == path.stem[:2].upper()
-        assert scenario.pedestrian.present == ("no_pedestrian" not in path.stem)
+        assert bool(present(scenario.pedestrians)) == ("no_pedestrian" not in path.stem)
 
 
 def test_scenarios_differ_only_in_what_their_files_say():
@@ -29,7 +30,7 @@ def test_scenarios_differ_only_in_what_their_files_say():
     assert s1.node_ids() == ["bus"]
     assert s2.node_ids() == ["bus", "car"]
     assert s3.node_ids() == ["bus", "rsu1", "rsu2"]
-    assert s1.bus == s2.bus == s3.bus
+    assert s1.automated["bus"] == s2.automated["bus"] == s3.automated["bus"]
     assert s1.sensors["bus_front"] == s3.sensors["bus_front"]
 
 
@@ -54,7 +55,8 @@ def test_overrides_set_dotted_fields():
 
 
 def _write(tmp_path: Path, text: str, name: str = "bad.toml") -> Path:
-    (tmp_path / "base.toml").write_text('name = "B"\n[sensors.front]\nnode = "bus"\n')
+    (tmp_path / "base.toml").write_text(
+        'name = "B"\n[automated.bus]\n[sensors.front]\nnode = "bus"\n')
     path = tmp_path / name
     path.write_text(text)
     return path
@@ -64,9 +66,10 @@ def _write(tmp_path: Path, text: str, name: str = "bad.toml") -> Path:
     ("text", "field", "words"),
     [
         ('name = "x"\n[bus\n', "syntax", "TOML"),
-        ('extends = "base.toml"\n[bus]\nnominal_speed = 3\n', "bus.nominal_speed", "spelling"),
-        ('extends = "base.toml"\n[bus]\nnominal_speed_mps = "fast"\n', "bus.nominal_speed_mps",
-         "number"),
+        ('extends = "base.toml"\n[automated.bus]\nnominal_speed = 3\n',
+         "automated.bus.nominal_speed", "spelling"),
+        ('extends = "base.toml"\n[automated.bus]\nnominal_speed_mps = "fast"\n',
+         "automated.bus.nominal_speed_mps", "number"),
         ('extends = "base.toml"\n[sensors.front]\nnoise_bound_m = [0.0, 1.0]\n',
          "sensors.front.noise_bound_m.0", "greater than 0"),
         ('extends = "base.toml"\n[sensors.front]\nfov_deg = 400\n', "sensors.front.fov_deg",
@@ -99,7 +102,7 @@ def test_override_of_an_unknown_table_is_an_error():
 
 def test_override_of_an_unknown_field_is_an_error():
     with pytest.raises(UserError, match=r"bus\.top_speed"):
-        load_scenario(SCENARIOS / "s1_pedestrian.toml", {"bus.top_speed": 3})
+        load_scenario(SCENARIOS / "s1_pedestrian.toml", {"automated.bus.top_speed": 3})
 
 
 # --- breaks_assumptions: a study that breaks an assumption of the estimator says so -------------
@@ -117,7 +120,8 @@ NODE_SHRINK = {"faults.node.n.node": "rsu2", "faults.node.n.kind": "shrink"}
 NODE_SHIFT = {"faults.node.n.node": "rsu2", "faults.node.n.kind": "shift",
               "faults.node.n.shift_m": [4.0, 0.0]}
 BREAKING = [  # overrides, the field refused, the assumption it breaks
-    pytest.param({"pedestrian.walking_speed_mps": 2.6}, "pedestrian.walking_speed_mps",
+    pytest.param({"pedestrians.pedestrian.walking_speed_mps": 2.6},
+                 "pedestrians.pedestrian.walking_speed_mps",
                  "pedestrian_speed", id="fast pedestrian"),
     pytest.param(_sensor_fault("bias", bias_m=[3.0, 0.0]), "faults.sensor.f.kind",
                  "sensor_bounds", id="bias"),
@@ -154,8 +158,9 @@ def test_the_wrong_declaration_does_not_cover_a_break():
     _sensor_fault("bias", bias_m=[0.8, 0.8], within_bound=True),
     {"faults.link.l.node": "rsu1", "faults.link.l.kind": "loss"},
     {"faults.link.l.node": "rsu1", "faults.link.l.kind": "latency"},
-    {"pedestrian.walking_speed_mps": 2.5},  # at the bound
-    {"pedestrian.walking_speed_mps": 2.8, "pedestrian.present": False},  # nobody walks
+    {"pedestrians.pedestrian.walking_speed_mps": 2.5},  # at the bound
+    {"pedestrians.pedestrian.walking_speed_mps": 2.8,
+     "pedestrians.pedestrian.present": False},  # nobody walks
 ], ids=["dropout", "bias within bound", "loss", "latency", "speed at the bound", "no pedestrian"])
 def test_what_breaks_nothing_needs_no_declaration(overrides):
     assert load_scenario(S3_FILE, overrides).breaks_assumptions == []

@@ -29,24 +29,24 @@ RSU1 = Pose(212.0, -9.5, math.radians(165.0))
 RSU2 = Pose(184.0, 9.5, math.radians(-30.0))
 
 
-def vehicle(vid: str, role: str, front: Pose, length: float, width: float) -> VehicleState:
+def vehicle(vid: str, kind: str, front: Pose, length: float, width: float) -> VehicleState:
     """A vehicle with its front bumper centre at ``front``."""
-    return VehicleState(vid, role, Footprint(front, length, width), 0.0)
+    return VehicleState(vid, kind, Footprint(front, length, width), 0.0)
 
 
 def bus(x: float) -> VehicleState:
     """The 12 m x 2.55 m bus driving east with its front at (x, -1.75)."""
-    return vehicle("bus", "bus", Pose(x, BUS_Y, 0.0), 12.0, 2.55)
+    return vehicle("bus", "automated", Pose(x, BUS_Y, 0.0), 12.0, 2.55)
 
 
 def truck() -> VehicleState:
     """The parked truck."""
-    return vehicle("truck", "truck", TRUCK_FRONT, 10.0, 2.5)
+    return vehicle("truck", "parked", TRUCK_FRONT, 10.0, 2.5)
 
 
 def car(front: Pose = CAR_FRONT) -> VehicleState:
     """The oncoming 4.5 m x 1.8 m car driving west."""
-    return vehicle("car", "car", front, 4.5, 1.8)
+    return vehicle("car", "vehicle", front, 4.5, 1.8)
 
 
 def snapshot(

@@ -116,7 +116,7 @@ def test_a_range_sensor_sees_all_around_but_not_behind_the_truck():
 
 
 def scenario_with(sensor: dict) -> Scenario:
-    data = {"name": "t", "sensors": {"s": sensor}}
+    data = {"name": "t", "automated": {"bus": {}}, "sensors": {"s": sensor}}
     return validate_scenario(data, "t.toml")
 
 

@@ -19,7 +19,7 @@ from sensors_scene import (
     truck,
 )
 
-from sse_cosim.scenario.model import RoadSideUnit, Scenario, SensorMount
+from sse_cosim.scenario.model import AutomatedVehicle, RoadSideUnit, Scenario, SensorMount
 from sse_cosim.sensors import (
     Boxes,
     Camera,
@@ -198,6 +198,7 @@ def test_static_sectors_are_cached_and_moving_ones_are_not():
 def test_specs_from_the_scenario_schema_and_mounting():
     scenario = Scenario(
         name="t",
+        automated={"bus": AutomatedVehicle()},
         rsus={"rsu1": RoadSideUnit(x_m=212.0, y_m=-9.5, heading_deg=165.0)},
         sensors={
             "bus_side": CameraConfig(

@@ -48,7 +48,7 @@ def test_a_run_gives_the_same_summary_after_other_runs_in_the_same_worker(tmp_pa
 def test_a_failed_run_is_recorded_and_the_next_one_runs(tmp_path):
     worker = WorkerProcess()
     try:
-        bad = worker.run(task(tmp_path, "bad", seed=1, **{"bus.nominal_speed_mps": -3.0}))
+        bad = worker.run(task(tmp_path, "bad", seed=1, **{"automated.bus.nominal_speed_mps": -3.0}))
         good = worker.run(task(tmp_path, "good", seed=1))
     finally:
         worker.close()

@@ -27,7 +27,7 @@ def trajectories(tmp_path_factory) -> dict[str, tuple[np.ndarray, float]]:
     that waits 6 s at its start before it walks, with the step length."""
     result = {}
     runs = {name: (name, {}) for name in ("s1_pedestrian", "s2_pedestrian", "s3_pedestrian")}
-    runs["s3_waiting"] = ("s3_pedestrian", {"pedestrian.steps_onto_crossing_s": 20.0})
+    runs["s3_waiting"] = ("s3_pedestrian", {"pedestrians.pedestrian.steps_onto_crossing_s": 20.0})
     for name, (file, overrides) in runs.items():
         scenario = load_scenario(SCENARIOS / f"{file}.toml",
                                  {"simulation.duration_s": 30.0, **overrides})

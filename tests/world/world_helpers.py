@@ -30,10 +30,10 @@ class Run:
     """The snapshots of one SUMO run and what the world reported."""
 
     snapshots: list
-    pedestrian_plan: object
+    pedestrian_plans: dict
     teleports: int
     bus_arrived: bool
-    bus_route_length: float
+    route_length: float  # the bus's
     roadmap: object
 
 
@@ -45,5 +45,5 @@ def run_world(sc: Scenario, run_dir: Path, name: str = "test", steps: int | None
     n = steps if steps is not None else round(sim.duration_s / sim.step_length_s)
     with SumoWorld(sc, run_dir, name) as world:
         snapshots = [world.step() for _ in range(n)]
-        return Run(snapshots, world.pedestrian_plan, world.teleports, world.bus_arrived,
-                   world.bus_route_length, world.roadmap)
+        return Run(snapshots, world.pedestrian_plans, world.teleports, world.arrived("bus"),
+                   world.route_length("bus"), world.roadmap)
