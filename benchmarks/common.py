@@ -141,9 +141,10 @@ def record_step(result, recording: Recording) -> None:
     for obs in result.observations.values():
         for person_id, detection in obs.detections.items():
             strips.setdefault(obs.node, {}).setdefault(person_id, []).append(detection.strips)
+    shared = next(iter(result.vehicles.values())).shared  # the (one) automated vehicle's
     received = {
-        pid: {sender: result.step - result.shared.ages[sender] for sender in by_sender}
-        for pid, by_sender in result.shared.estimates.items()
+        pid: {sender: result.step - shared.ages[sender] for sender in by_sender}
+        for pid, by_sender in shared.estimates.items()
     }
     truth = {pid: np.asarray(p.position, dtype=float) for pid, p in result.snapshot.persons.items()}
     recording.steps.append(StepRecord(result.step, strips, received, truth))

@@ -58,7 +58,8 @@ class SharedPicture:
 
 
 class V2XLink:
-    """Every node's link to the bus, with the scenario's range, latency and losses."""
+    """Every node's link to one automated vehicle, with the scenario's range, latency and
+    losses."""
 
     def __init__(self, config: V2X, rng: np.random.Generator) -> None:
         self.config = config

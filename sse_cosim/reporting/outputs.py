@@ -1,5 +1,6 @@
-"""A run's folder: ``trace.csv``, ``sets.jsonl``, ``regions.jsonl``, ``summary.json``,
-``scenario.json`` and plots -- or ``error.json`` if the run failed.
+"""A run's folder: ``trace.csv``, ``truth.csv``, ``pedestrians.csv``, ``sets.jsonl``,
+``regions.jsonl``, ``summary.json``, ``scenario.json`` and plots -- or ``error.json`` if the run
+failed.
 
 Every file is written whole or not at all (:mod:`sse_cosim.files`); ``summary.json`` is
 written last, so a folder with a summary is a finished run. With ``summary_only`` (large
@@ -10,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -26,6 +28,8 @@ if TYPE_CHECKING:
     import pandas as pd
 
 TRACE = "trace.csv"
+TRUTH = "truth.csv"  # t, pedestrian, x, y: every pedestrian in the scene at every step
+PEDESTRIANS = "pedestrians.csv"  # per step, vehicle and pedestrian: its checks and distance
 SETS = "sets.jsonl"
 REGIONS = "regions.jsonl"
 SUMMARY = "summary.json"
@@ -33,7 +37,7 @@ SCENARIO = "scenario.json"
 ERROR = "error.json"  # instead of summary.json: {"key", "error"}, the one line that stopped it
 RUNS_FOLDER = "runs"  # a batch, sweep or campaign keeps run <key> in <its folder>/runs/<key>/
 DECIMALS = 6  # positions in trace.csv and regions.jsonl: 1e-6 m (a re-check allows 1e-5 m)
-POSITIONS = ("bus_x", "bus_y", "ped_x", "ped_y")
+POSITIONS = ("bus_x", "bus_y", "x", "y")
 
 
 @dataclass(frozen=True)
@@ -66,12 +70,12 @@ def read_outcome(key: str, folder: Path) -> TaskOutcome | None:
 
 def write_run(
     out_dir: Path, scenario: Scenario, recorder: RunRecorder, roadmap: RoadMap, source: str,
-    route_completed: bool, plots_wanted: bool = True, summary_only: bool = False,
+    route_completed: Mapping[str, bool], plots_wanted: bool = True, summary_only: bool = False,
 ) -> dict:
     """Write every output of one run into ``out_dir``; returns the summary.
 
-    ``route_completed``: whether the bus reached the end of its route (the simulation's
-    outcome, which the recorder cannot see).
+    ``route_completed``: per automated vehicle whether it reached the end of its route (the
+    simulation's outcome, which the recorder cannot see).
     """
     out_dir.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out_dir / SCENARIO, {"source": source, **_portable(scenario, out_dir)})
@@ -81,6 +85,11 @@ def write_run(
 
         trace = pd.DataFrame(recorder.rows)
         _write_trace(out_dir / TRACE, trace)
+        _write_trace(out_dir / TRUTH,
+                     pd.DataFrame(recorder.truth_rows, columns=["t", "pedestrian", "x", "y"]))
+        _write_trace(out_dir / PEDESTRIANS, pd.DataFrame(recorder.pedestrian_rows, columns=[
+            "t", "vehicle", "pedestrian", "contained_fused", "contained_refined",
+            "accounted_for", "distance"]))
         write_text_atomic(
             out_dir / SETS, "".join(json.dumps(line) + "\n" for line in recorder.set_lines)
         )
@@ -101,10 +110,10 @@ def _portable(scenario: Scenario, out_dir: Path) -> dict:
 
 
 def region_line(record: RegionRecord) -> str:
-    """One line of ``regions.jsonl``: ``{"t", "kind", "track", "polygons"}`` (compact JSON:
-    the regions are most of the file)."""
-    line = {"t": record.time, "kind": record.kind, "track": record.track,
-            "polygons": region_polygons(record.region)}
+    """One line of ``regions.jsonl``: ``{"t", "vehicle", "kind", "track", "polygons"}``
+    (compact JSON: the regions are most of the file)."""
+    line = {"t": record.time, "vehicle": record.vehicle, "kind": record.kind,
+            "track": record.track, "polygons": region_polygons(record.region)}
     return json.dumps(line, separators=(",", ":")) + "\n"
 
 
@@ -135,8 +144,9 @@ def _ring(ring: shapely.LinearRing) -> list[list[float]]:
 
 
 def _write_trace(path: Path, trace: pd.DataFrame) -> None:
-    """``trace.csv``: positions to 1e-6 m, so that the truth can be re-checked against
-    ``regions.jsonl`` near a boundary; every other figure to 6 significant digits."""
+    """A table (``trace.csv``, ``truth.csv``, ...): positions to 1e-6 m, so that the truth can
+    be re-checked against ``regions.jsonl`` near a boundary; every other figure to 6
+    significant digits."""
     text = trace.copy()
     for column in (c for c in POSITIONS if c in trace):
         text[column] = trace[column].map(
@@ -156,9 +166,11 @@ def _write_plots(out_dir, scenario, recorder, trace, roadmap) -> None:
 
     nodes = scenario.node_ids()
     title = label(scenario)
-    plots.save_figure(plots.speed_profile({title: trace}, f"Bus speed: {title}"),
-                      out_dir / "speed.png")
-    plots.save_figure(plots.set_areas(trace, nodes, f"Set areas: {title}"),
+    by_vehicle = {vid: rows for vid, rows in trace.groupby("vehicle", sort=False)}
+    plots.save_figure(plots.speed_profile(by_vehicle, f"Speed: {title}"), out_dir / "speed.png")
+    first = next(iter(by_vehicle))
+    plots.save_figure(plots.set_areas(by_vehicle[first], nodes,
+                                      f"Set areas ({first}'s fused sets): {title}"),
                       out_dir / "set_areas.png")
     for frame in recorder.scenes:
         plots.save_figure(plots.scene(frame, roadmap, nodes, title),

@@ -19,6 +19,7 @@ from sse_cosim.reporting.recorder import SceneFrame
 from sse_cosim.world.roadmap import RoadMap
 
 NODE_COLORS = {"bus": "tab:blue", "car": "tab:orange", "fused": "black"}
+KIND_COLORS = {"automated": "tab:blue", "parked": "tab:red", "vehicle": "gold"}
 RSU_COLORS = ["tab:green", "tab:cyan", "tab:olive", "tab:pink"]
 
 
@@ -85,18 +86,20 @@ def scene(frame: SceneFrame, roadmap: RoadMap, nodes: Sequence[str], title: str)
         _fill(ax, visible, color, None, alpha=0.12)
         _fill(ax, occluded, "tab:red", None, alpha=0.18)
     _fill(ax, frame.unobserved, "none", "unobserved walkable area", hatch="xxx")
-    for vid, polygon in frame.footprints.items():
-        _fill(ax, polygon, {"bus": "tab:blue", "truck": "tab:red"}.get(vid, "gold"), vid,
-              alpha=0.8)
+    for vid, (kind, polygon) in frame.footprints.items():
+        _fill(ax, polygon, KIND_COLORS.get(kind, "0.5"), f"{kind} vehicle", alpha=0.8)
+        x, y = polygon.centroid.coords[0]
+        ax.annotate(vid, (x, y), fontsize=6, ha="center", va="center")
     view = _view_box(frame)
     for node, normal, value, radius in frame.strips:
         _draw_strip(ax, normal, value, radius, view, node_color(node, nodes))
-    for node, zonotope in frame.local_sets.items():
+    for node, zonotope in frame.local_sets:
         _outline(ax, zonotope.vertices(), node_color(node, nodes), f"{node} set", "--")
-    if frame.fused_set is not None:
-        _outline(ax, frame.fused_set.vertices(), "black", "fused set", "-")
-    if frame.truth is not None:
-        ax.plot(*frame.truth, "s", color="tab:red", markersize=6, label="pedestrian (truth)")
+    for fused in frame.fused_sets.values():
+        _outline(ax, fused.vertices(), "black", "fused set", "-")
+    for pid, truth in frame.truths.items():
+        ax.plot(*truth, "s", color="tab:red", markersize=6, label="pedestrian (truth)")
+        ax.annotate(pid, truth, fontsize=6, xytext=(3, 3), textcoords="offset points")
     ax.set_xlim(view[0], view[2])
     ax.set_ylim(view[1], view[3])
     ax.set_aspect("equal")
@@ -110,9 +113,9 @@ def scene(frame: SceneFrame, roadmap: RoadMap, nodes: Sequence[str], title: str)
 
 
 def _view_box(frame: SceneFrame) -> tuple[float, float, float, float]:
-    """A window around the bus and the crossing area."""
-    bus = frame.footprints.get("bus")
-    x0 = (bus.bounds[0] - 5.0) if bus is not None else 120.0
+    """A window around the automated vehicles and the crossing area."""
+    automated = [p for kind, p in frame.footprints.values() if kind == "automated"]
+    x0 = min(p.bounds[0] for p in automated) - 5.0 if automated else 120.0
     x1 = max(x0 + 60.0, 225.0)
     return (x0, -14.0, x1, 14.0)
 

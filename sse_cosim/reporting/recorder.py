@@ -1,5 +1,10 @@
-"""Collects what a run produced, step by step: trace rows, sets, regions, summary figures,
-scene frames.
+"""Collects what a run produced, step by step: trace rows, the pedestrians' truth, per
+pedestrian checks, sets, regions, summary figures, scene frames.
+
+Soundness is checked per pedestrian (paper Section III): at every step every pedestrian in the
+scene lies in each set the automated vehicle holds of it (local, fused), in its refined region,
+and in a refined region or the unobserved area; each miss is a violation, counted per
+pedestrian.
 
 The recorder only reads :class:`~sse_cosim.pipeline.result.StepResult`; writing files is
 :mod:`sse_cosim.reporting.outputs`'s job.
@@ -8,6 +13,7 @@ The recorder only reads :class:`~sse_cosim.pipeline.result.StepResult`; writing 
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from itertools import pairwise
 from typing import TYPE_CHECKING, Any
@@ -21,6 +27,7 @@ from sse_cosim.sensors.faults import FaultLog
 from sse_cosim.sets import Zonotope
 
 if TYPE_CHECKING:  # only the type: a report that reads folders loads no estimation
+    from sse_cosim.pipeline.ego import EgoStep
     from sse_cosim.pipeline.result import StepResult
 
 FUSED = "fused"
@@ -32,13 +39,14 @@ UNACCOUNTED = "unaccounted"  # a pedestrian in no refined region and not in the 
 
 @dataclass(frozen=True)
 class RegionRecord:
-    """One region the controller used at one step: a known pedestrian's refined region
-    (``track`` its id) or the unobserved area (``track`` None)."""
+    """One region an automated vehicle's controller used at one step: a known pedestrian's
+    refined region (``track`` its id) or the unobserved area (``track`` None)."""
 
     time: float
     kind: str  # REFINED or UNOBSERVED
     track: str | None
     region: shapely.Geometry
+    vehicle: str  # the automated vehicle's id
 
 
 @dataclass(frozen=True)
@@ -46,12 +54,12 @@ class SceneFrame:
     """What a scene plot at one time needs (position sets, geometries)."""
 
     time: float
-    footprints: dict[str, shapely.Polygon]  # vehicle id -> footprint
+    footprints: dict[str, tuple[str, shapely.Polygon]]  # vehicle id -> (its kind, footprint)
     sectors: dict[str, tuple[str, shapely.Geometry, shapely.Geometry]]  # sensor -> node, vis, occ
     strips: list[tuple[str, np.ndarray, float, float]]  # (node, normal (2,), value, radius)
-    local_sets: dict[str, Zonotope]  # node -> position set
-    fused_set: Zonotope | None
-    truth: tuple[float, float] | None
+    local_sets: list[tuple[str, Zonotope]]  # (node, a pedestrian's position set)
+    fused_sets: dict[str, Zonotope]  # pedestrian id -> fused position set
+    truths: dict[str, tuple[float, float]]  # pedestrian id -> its true position
     unobserved: shapely.Geometry  # walkable area where an undetected pedestrian may be
 
 
@@ -62,6 +70,8 @@ class RunRecorder:
     scenario: Scenario
     scene_times: tuple[float, ...] = ()
     rows: list[dict[str, Any]] = field(default_factory=list)
+    truth_rows: list[dict[str, Any]] = field(default_factory=list)  # t, pedestrian, x, y
+    pedestrian_rows: list[dict[str, Any]] = field(default_factory=list)  # per vehicle and person
     set_lines: list[dict[str, Any]] = field(default_factory=list)
     regions: list[RegionRecord] = field(default_factory=list)  # serialised only when written
     scenes: list[SceneFrame] = field(default_factory=list)
@@ -76,76 +86,100 @@ class RunRecorder:
         self.faults = FaultLog(self.scenario)
 
     def __call__(self, result: StepResult) -> None:
-        snap = result.snapshot
-        bus = snap.vehicles[result.screen.node]
-        t = round(snap.time, 6)
-        person = next(iter(sorted(snap.persons.items())), None)
-        truth = np.asarray(person[1].position) if person else None
-        person_id = person[0] if person else None
+        t = round(result.snapshot.time, 6)
+        truths = {pid: np.asarray(p.position) for pid, p in sorted(result.snapshot.persons.items())}
+        self.truth_rows += [{"t": t, "pedestrian": pid, "x": xy[0], "y": xy[1]}
+                            for pid, xy in truths.items()]
+        for ego in result.vehicles.values():
+            self._vehicle_step(t, result, ego, truths)
+
+    def _vehicle_step(self, t: float, result: StepResult, ego: EgoStep,
+                      truths: dict[str, np.ndarray]) -> None:
+        """One automated vehicle's row, checks, sets and regions at one step."""
+        vehicle = ego.vehicle
+        bus = result.snapshot.vehicles[vehicle]
         row: dict[str, Any] = {
             "t": t,
+            "vehicle": vehicle,
             "bus_x": bus.footprint.front.x,
             "bus_y": bus.footprint.front.y,
             "bus_speed": bus.speed,
-            "commanded_speed": result.commanded_speed,
-            "level": result.level.label,
-            "emergency": result.level is SpeedLevel.EMERGENCY,
-            "ped_x": truth[0] if truth is not None else None,
-            "ped_y": truth[1] if truth is not None else None,
+            "commanded_speed": ego.decision.command_mps,
+            "level": ego.decision.level.label,
+            "emergency": ego.decision.level is SpeedLevel.EMERGENCY,
         }
-        local_sets: dict[str, Zonotope] = {}
-        for node, tracks in result.tracks.items():
-            track = tracks.get(person_id) if person_id else None
-            row[f"{node}_detected"] = bool(track and track.detected)
-            area = None
-            if track is not None:
-                position = result.model.position(track.estimate)
-                local_sets[node] = position
-                area = position.volume()
-                self._check(t, node, position, truth)
-                self._set_line(t, node, "local", position)
-                if track.detected and node not in self.first_detection:
-                    self.first_detection[node] = self._moment(t, result)
-            row[f"{node}_area"] = area
-        self._flags(row, result)
-        fused = result.fused.get(person_id) if person_id else None
-        fused_position = result.model.position(fused) if fused is not None else None
-        row["fused_area"] = fused_position.volume() if fused_position is not None else None
-        row["fused_contains_truth"] = (
-            self._check(t, FUSED, fused_position, truth) if fused_position is not None else None
-        )
-        if fused_position is not None:
-            inputs = _fusion_inputs(result, person_id)
-            smallest = min(result.model.position(z).volume() for z in inputs.values())
-            if fused_position.volume() > smallest * (1 + 1e-9) + 1e-12:
-                self.fusion_larger_than_input += 1
-            self._set_line(t, FUSED, "fused", fused_position)
-            if FUSED not in self.first_detection:
-                self.first_detection[FUSED] = self._moment(t, result)
-            self._note_shared_fusion(t, person_id, local_sets, fused_position, result)
-        region = result.possible.get(person_id) if person_id else None
-        row["possible_area"] = region.area if region is not None else None
-        row["possible_contains_truth"] = (
-            self._check_region(t, region, truth) if region is not None else None
-        )
-        self._note_regions(t, result)
-        row["accounted_for"] = self._check_accounted(t, result, truth)
-        row["path_clear"] = result.picture.path_clear
-        row["unresolved_occluded_m2"] = result.picture.unresolved_occluded_m2
-        row["own_occluded_m2"] = result.picture.own_occluded_m2
-        row["distance_to_crossing"] = result.picture.distance_to_crossing
-        distance = _distance(bus.footprint.polygon(), truth)
-        row["distance_bus_pedestrian"] = distance
-        row["collision"] = bool(
-            distance is not None and distance <= self.scenario.pedestrians[person_id].radius_m
-        )
+        local_sets = self._local_sets(t, row, result, vehicle, truths)
+        self._flags(row, result, ego)
+        fused = {pid: result.model.position(ego.estimate.fused[pid])
+                 for pid in truths if pid in ego.estimate.fused}
+        checks = {pid: _PedestrianCheck(pid) for pid in truths}
+        for pid, position in fused.items():
+            checks[pid].fused = self._check(t, FUSED, pid, position, truths[pid])
+            self._note_fusion(t, pid, position, result, ego)
+        row["fused_area"] = _total(z.volume() for z in fused.values())
+        row["fused_contains_truth"] = _all(c.fused for c in checks.values())
+        regions = {pid: ego.possible[pid] for pid in truths if pid in ego.possible}
+        for pid, region in regions.items():
+            checks[pid].refined = self._check_region(t, pid, region, truths[pid])
+        row["possible_area"] = _total(r.area for r in regions.values())
+        row["possible_contains_truth"] = _all(c.refined for c in checks.values())
+        self._note_regions(t, ego)
+        footprint = bus.footprint.polygon()
+        for pid, check in checks.items():
+            check.accounted_for = self._check_accounted(t, pid, ego, truths[pid])
+            check.distance = _distance(footprint, truths[pid])
+            self.pedestrian_rows.append({"t": t, "vehicle": vehicle, **check.row()})
+        row["accounted_for"] = _all(c.accounted_for for c in checks.values())
+        row["path_clear"] = ego.picture.path_clear
+        row["unresolved_occluded_m2"] = ego.picture.unresolved_occluded_m2
+        row["own_occluded_m2"] = ego.picture.own_occluded_m2
+        row["distance_to_crossing"] = ego.picture.distance_to_crossing
+        row["distance_bus_pedestrian"] = min((c.distance for c in checks.values()), default=None)
+        row["collision"] = any(c.distance <= self.scenario.pedestrians[pid].radius_m
+                               for pid, c in checks.items())
         self.rows.append(row)
-        if self._wants_scene(t):
-            self.scenes.append(_frame(t, result, local_sets, fused_position, truth))
+        shared_fusion_now = (self.first_shared_fusion or {}).get("t") == t
+        for _ in range(shared_fusion_now + self._wants_scene(t)):
+            self.scenes.append(_frame(t, result, ego, local_sets, fused, truths))
 
-    def _flags(self, row: dict[str, Any], result: StepResult) -> None:
-        """Flag columns (per sensor: left out; per node: excluded/conflict), fault bookkeeping."""
-        flags = result.flags
+    def _local_sets(self, t: float, row: dict[str, Any], result: StepResult, vehicle: str,
+                    truths: dict[str, np.ndarray]) -> list[tuple[str, Zonotope]]:
+        """Every node's sets of the pedestrians in the scene, checked and recorded; per node
+        whether it detects any of them and the total area of its sets (None without any)."""
+        local_sets: list[tuple[str, Zonotope]] = []
+        for node, tracks in result.tracks.items():
+            areas, detected = [], False
+            for pid in (pid for pid in truths if pid in tracks):
+                track = tracks[pid]
+                position = result.model.position(track.estimate)
+                local_sets.append((node, position))
+                areas.append(position.volume())
+                detected |= track.detected
+                self._check(t, node, pid, position, truths[pid])
+                self._set_line(t, vehicle, node, pid, "local", position)
+                if track.detected and node not in self.first_detection:
+                    self.first_detection[node] = self._moment(t, result.vehicles[vehicle])
+            row[f"{node}_detected"] = detected
+            row[f"{node}_area"] = _total(areas)
+        return local_sets
+
+    def _note_fusion(self, t: float, pid: str, position: Zonotope, result: StepResult,
+                     ego: EgoStep) -> None:
+        """Record a fused set: its line, whether it outgrew its smallest input, the first
+        fusion and the first fusion of shared sets."""
+        inputs = _fusion_inputs(result, ego, pid)
+        smallest = min(result.model.position(z).volume() for z in inputs.values())
+        if position.volume() > smallest * (1 + 1e-9) + 1e-12:
+            self.fusion_larger_than_input += 1
+        self._set_line(t, ego.vehicle, FUSED, pid, "fused", position)
+        if FUSED not in self.first_detection:
+            self.first_detection[FUSED] = self._moment(t, ego)
+        self._note_shared_fusion(t, pid, position, result, ego)
+
+    def _flags(self, row: dict[str, Any], result: StepResult, ego: EgoStep) -> None:
+        """Flag columns (per sensor: left out; per node: excluded/conflict); the fault
+        bookkeeping follows the first automated vehicle (the paper's bus)."""
+        flags = ego.estimate.flags
         for sensor, flagged in flags.sensors.items():
             row[f"{sensor}_flag"] = flagged
             self.flag_steps[f"{sensor}: left out"] += flagged
@@ -153,58 +187,61 @@ class RunRecorder:
             row[f"{node}_flag"] = flag
             self.flag_steps[f"{node}: {flag}"] += bool(flag)
         row["inconsistent"] = flags.inconsistent
-        self.faults.update(result.step, round(result.snapshot.time, 6), result.faults,
-                           flags.sensors, flags.nodes, result.shared.ages)
+        row["senders"] = len(ego.shared.ages)  # nodes whose messages reached the vehicle
+        if ego.vehicle == next(iter(result.vehicles)):
+            self.faults.update(result.step, round(result.snapshot.time, 6), result.faults,
+                               flags.sensors, flags.nodes, ego.shared.ages)
 
-    def _check(self, t: float, node: str, position: Zonotope, truth) -> bool | None:
-        if truth is None:
-            return None
-        inside = bool(position.contains(truth, tol=1e-7))
-        if not inside:
-            self.violations.append({"t": t, "node": node, "truth": truth.tolist()})
-        return inside
+    def _check(self, t: float, node: str, pid: str, position: Zonotope,
+               truth: np.ndarray) -> bool:
+        """Whether pedestrian ``pid``'s true position (shape (2,)) lies in ``position``."""
+        return self._violation_unless(bool(position.contains(truth, tol=1e-7)), t, node, pid,
+                                      truth)
 
-    def _check_region(self, t: float, region: shapely.Geometry, truth) -> bool | None:
-        if truth is None:
-            return None
+    def _check_region(self, t: float, pid: str, region: shapely.Geometry,
+                      truth: np.ndarray) -> bool:
         inside = bool(shapely.distance(region, shapely.Point(truth)) <= 1e-7)
-        if not inside:
-            self.violations.append({"t": t, "node": "possible", "truth": truth.tolist()})
-        return inside
+        return self._violation_unless(inside, t, "possible", pid, truth)
 
-    def _check_accounted(self, t: float, result: StepResult, truth) -> bool | None:
+    def _check_accounted(self, t: float, pid: str, ego: EgoStep, truth: np.ndarray) -> bool:
         """Whether the pedestrian is where the controller looks for pedestrians: inside a
         refined region (any track's) or the unobserved area, or outside the window where
         hidden ground is tracked (there every walkable place counts as occupied)."""
-        if truth is None:
-            return None
         point = shapely.Point(truth)
-        inside = not result.window.contains(point) or any(
+        inside = not ego.window.contains(point) or any(
             shapely.distance(region, point) <= 1e-7
-            for region in [result.unobserved, *result.possible.values()])
+            for region in [ego.unobserved, *ego.possible.values()])
+        return self._violation_unless(inside, t, UNACCOUNTED, pid, truth)
+
+    def _violation_unless(self, inside: bool, t: float, node: str, pid: str,
+                          truth: np.ndarray) -> bool:
         if not inside:
-            self.violations.append({"t": t, "node": UNACCOUNTED, "truth": truth.tolist()})
+            self.violations.append({"t": t, "node": node, "pedestrian": pid,
+                                    "truth": truth.tolist()})
         return inside
 
-    def _note_regions(self, t: float, result: StepResult) -> None:
+    def _note_regions(self, t: float, ego: EgoStep) -> None:
         """Keep the regions the controller used this step: every known pedestrian's refined
         region (by id) and the unobserved area, so that anyone can re-check them."""
-        self.regions.extend(RegionRecord(t, REFINED, pid, region)
-                            for pid, region in sorted(result.possible.items()))
-        self.regions.append(RegionRecord(t, UNOBSERVED, None, result.unobserved))
+        self.regions.extend(RegionRecord(t, REFINED, pid, region, ego.vehicle)
+                            for pid, region in sorted(ego.possible.items()))
+        self.regions.append(RegionRecord(t, UNOBSERVED, None, ego.unobserved, ego.vehicle))
 
-    def _set_line(self, t: float, node: str, kind: str, position: Zonotope) -> None:
-        self.set_lines.append({"t": t, "node": node, "kind": kind, **position.to_json()})
+    def _set_line(self, t: float, vehicle: str, node: str, track: str, kind: str,
+                  position: Zonotope) -> None:
+        self.set_lines.append({"t": t, "vehicle": vehicle, "node": node, "track": track,
+                               "kind": kind, **position.to_json()})
 
     @staticmethod
-    def _moment(t: float, result: StepResult) -> dict[str, float]:
-        return {"t": t, "bus_distance_to_crossing_m": result.picture.distance_to_crossing}
+    def _moment(t: float, ego: EgoStep) -> dict[str, float]:
+        return {"t": t, "bus_distance_to_crossing_m": ego.picture.distance_to_crossing}
 
-    def _note_shared_fusion(self, t, person_id, local_sets, fused_position, result) -> None:
+    def _note_shared_fusion(self, t: float, person_id: str, fused_position: Zonotope,
+                            result: StepResult, ego: EgoStep) -> None:
         """Record the first step at which the bus fuses two or more sets (paper Fig. 7)."""
         if self.first_shared_fusion is not None:
             return
-        inputs = _fusion_inputs(result, person_id)
+        inputs = _fusion_inputs(result, ego, person_id)
         if len(inputs) < 2:
             return
         self.first_shared_fusion = {
@@ -212,33 +249,36 @@ class RunRecorder:
             "input_areas_m2": {n: result.model.position(z).volume() for n, z in inputs.items()},
             "fused_area_m2": fused_position.volume(),
         }
-        self.scenes.append(_frame(t, result, local_sets, fused_position, None))
 
     def _wants_scene(self, t: float) -> bool:
         dt = self.scenario.simulation.step_length_s
         return any(abs(t - s) < 0.5 * dt for s in self.scene_times)
 
-    def summary(self, route_completed: bool | None = None) -> dict[str, Any]:
+    def summary(self, route_completed: Mapping[str, bool] | None = None) -> dict[str, Any]:
         """The run's figures (``summary.json``).
 
-        ``route_completed`` is whether the bus reached the end of its route, which only the
-        simulation knows (the recorder sees no step after the bus left); None: not known.
-        Rows start once the bus is in the network, so times count from its departure.
+        ``route_completed``: per automated vehicle whether it reached the end of its route,
+        which only the simulation knows (the recorder sees no step after it left); None: not
+        known. ``vehicles`` holds each automated vehicle's figures; the top level repeats the
+        first one's (the paper's bus) beside the run's totals (violations, collisions, contact
+        steps, least distance, and ``route_completed``: every automated vehicle reached the end
+        of its route). Rows start once a vehicle is in the network, so its times count from its
+        departure.
         """
-        dt = self.scenario.simulation.step_length_s
-        contact = [r["collision"] for r in self.rows]
-        speeds = np.array([r["bus_speed"] for r in self.rows]) if self.rows else np.zeros(0)
-        levels = Counter(r["level"] for r in self.rows)
+        pedestrians = self._pedestrian_summary()
+        completed = route_completed or {}
+        vehicles = {vid: self._vehicle_figures([r for r in self.rows if r["vehicle"] == vid],
+                                               completed.get(vid))
+                    for vid in present(self.scenario.automated)}
         distances = [r["distance_bus_pedestrian"] for r in self.rows
                      if r["distance_bus_pedestrian"] is not None]
         return {
             "scenario": self.scenario.name,
-            "pedestrian": bool(present(self.scenario.pedestrians)),
+            "pedestrian": bool(pedestrians),
             "nodes": self.scenario.node_ids(),
-            "steps": len(self.rows),
-            "average_speed_mps": float(speeds.mean()) if speeds.size else None,
-            "travel_time_s": len(self.rows) * dt,
-            "distance_travelled_m": float(speeds.sum() * dt),
+            **next(iter(vehicles.values())),
+            "vehicles": vehicles,
+            "pedestrians": pedestrians,
             "min_distance_bus_pedestrian_m": min(distances) if distances else None,
             "first_detection": self.first_detection,
             "set_area_m2": self._area_stats(),
@@ -250,17 +290,52 @@ class RunRecorder:
             "faults": self._fault_summary(),
             "flag_counts": {key: n for key, n in sorted(self.flag_steps.items()) if n},
             "inconsistent_steps": sum(r["inconsistent"] for r in self.rows),
-            "collisions": _entries(contact),
-            "contact_steps": sum(contact),
+            "collisions": sum(p["collisions"] for p in pedestrians.values()),
+            "contact_steps": sum(r["collision"] for r in self.rows),
+            "route_completed": _all_known([v["route_completed"] for v in vehicles.values()]),
+        }
+
+    def _vehicle_figures(self, rows: list[dict[str, Any]],
+                         route_completed: bool | None) -> dict[str, Any]:
+        """One automated vehicle's figures from its rows."""
+        dt = self.scenario.simulation.step_length_s
+        speeds = np.array([r["bus_speed"] for r in rows]) if rows else np.zeros(0)
+        levels = Counter(r["level"] for r in rows)
+        distances = [r["distance_bus_pedestrian"] for r in rows
+                     if r["distance_bus_pedestrian"] is not None]
+        return {
+            "steps": len(rows),
+            "average_speed_mps": float(speeds.mean()) if speeds.size else None,
+            "travel_time_s": len(rows) * dt,
+            "distance_travelled_m": float(speeds.sum() * dt),
+            "min_distance_pedestrian_m": min(distances) if distances else None,
+            "collisions": _entries([r["collision"] for r in rows]),
             "route_completed": route_completed,
             "time_stopped_s": round(dt * int(np.sum(speeds < STOPPED_SPEED_MPS)), 6),
             "longest_standstill_after_clear_s": round(dt * _longest_run(
-                [r["path_clear"] and r["bus_speed"] < STOPPED_SPEED_MPS for r in self.rows]), 6),
+                [r["path_clear"] and r["bus_speed"] < STOPPED_SPEED_MPS for r in rows]), 6),
             "level_share": {
-                level.label: levels.get(level.label, 0) / max(len(self.rows), 1)
+                level.label: levels.get(level.label, 0) / max(len(rows), 1)
                 for level in SpeedLevel
             },
         }
+
+    def _pedestrian_summary(self) -> dict[str, dict[str, Any]]:
+        """Per pedestrian: when a fused set first held it, its containment violations, its
+        least distance to the vehicle and its collisions (times contact began)."""
+        result = {}
+        for pid, ped in present(self.scenario.pedestrians).items():
+            rows = [r for r in self.pedestrian_rows if r["pedestrian"] == pid]
+            fused = [r["t"] for r in rows if r["contained_fused"] is not None]
+            result[pid] = {
+                "first_fused_t": fused[0] if fused else None,
+                "containment_violations": sum(v["pedestrian"] == pid for v in self.violations),
+                "min_distance_m": min((r["distance"] for r in rows), default=None),
+                "collisions": sum(
+                    _entries([r["distance"] <= ped.radius_m for r in rows if r["vehicle"] == v])
+                    for v in present(self.scenario.automated)),
+            }
+        return result
 
     def _fault_summary(self) -> list[dict[str, Any]]:
         """Per injected fault its detection, and the violations of the fused set, the refined
@@ -283,11 +358,46 @@ class RunRecorder:
         return stats
 
 
-def _fusion_inputs(result: StepResult, person_id: str) -> dict[str, Zonotope]:
+@dataclass
+class _PedestrianCheck:
+    """One pedestrian at one step, as one automated vehicle holds it: whether its fused set
+    and its refined region contain it (None: the vehicle holds none), whether it is accounted
+    for, and its distance to the vehicle (m)."""
+
+    pedestrian: str
+    fused: bool | None = None
+    refined: bool | None = None
+    accounted_for: bool = True
+    distance: float = 0.0
+
+    def row(self) -> dict[str, Any]:
+        return {"pedestrian": self.pedestrian, "contained_fused": self.fused,
+                "contained_refined": self.refined, "accounted_for": self.accounted_for,
+                "distance": self.distance}
+
+
+def _total(values) -> float | None:
+    """The sum of ``values``, None if there are none (no set, no area)."""
+    values = list(values)
+    return sum(values[1:], values[0]) if values else None
+
+
+def _all(flags) -> bool | None:
+    """Whether every known flag holds; None if none is known."""
+    known = [f for f in flags if f is not None]
+    return all(known) if known else None
+
+
+def _all_known(flags: list[bool | None]) -> bool | None:
+    """Whether every flag holds; None if any is unknown."""
+    return None if None in flags else all(flags)
+
+
+def _fusion_inputs(result: StepResult, ego: EgoStep, person_id: str) -> dict[str, Zonotope]:
     """The state sets the bus fused for ``person_id``: its own and the received ones that
     passed the consistency screen."""
-    own = result.tracks[result.screen.node].get(person_id)
-    return result.screen.inputs(person_id, None if own is None else own.estimate)
+    own = result.tracks[ego.vehicle].get(person_id)
+    return ego.estimate.screen.inputs(person_id, None if own is None else own.estimate)
 
 
 def _entries(flags: list[bool]) -> int:
@@ -296,14 +406,13 @@ def _entries(flags: list[bool]) -> int:
     return sum(now and not before for before, now in pairwise([False, *flags]))
 
 
-def _distance(footprint: shapely.Polygon, truth) -> float | None:
-    return None if truth is None else float(footprint.distance(shapely.Point(truth)))
+def _distance(footprint: shapely.Polygon, truth: np.ndarray) -> float:
+    return float(footprint.distance(shapely.Point(truth)))
 
 
-def _frame(t, result, local_sets, fused_position, truth) -> SceneFrame:
+def _frame(t: float, result: StepResult, ego: EgoStep, local_sets: list[tuple[str, Zonotope]],
+           fused: dict[str, Zonotope], truths: dict[str, np.ndarray]) -> SceneFrame:
     snap = result.snapshot
-    if truth is None and snap.persons:
-        truth = np.asarray(next(iter(sorted(snap.persons.items())))[1].position)
     strips = [
         (obs.node, normal, float(value), float(radius))
         for obs in result.observations.values()
@@ -314,14 +423,14 @@ def _frame(t, result, local_sets, fused_position, truth) -> SceneFrame:
     ]
     return SceneFrame(
         time=t,
-        footprints={v.id: v.footprint.polygon() for v in snap.vehicles.values()},
+        footprints={v.id: (v.kind, v.footprint.polygon()) for v in snap.vehicles.values()},
         sectors={name: (o.node, o.visible, o.occluded)
                  for name, o in result.observations.items() if o.pose is not None},
         strips=strips,
-        local_sets=dict(local_sets),
-        fused_set=fused_position,
-        truth=None if truth is None else (float(truth[0]), float(truth[1])),
-        unobserved=result.unobserved,
+        local_sets=list(local_sets),
+        fused_sets=dict(fused),
+        truths={pid: (float(xy[0]), float(xy[1])) for pid, xy in truths.items()},
+        unobserved=ego.unobserved,
     )
 
 

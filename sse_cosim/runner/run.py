@@ -42,5 +42,5 @@ def run_scenario(
     source = portable_path(source)
     recorder = RunRecorder(scenario, tuple(scene_times))
     info = simulate(scenario, out_dir / "sumo", source, recorder)
-    return write_run(out_dir, scenario, recorder, info.roadmap, source, info.bus_arrived, plots,
+    return write_run(out_dir, scenario, recorder, info.roadmap, source, info.arrived, plots,
                      summary_only)

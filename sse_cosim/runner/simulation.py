@@ -6,16 +6,19 @@ Data flows one way through a step (:mod:`sse_cosim.pipeline`):
 2. sensors: visibility, detections, strips -- as the scenario's injected faults distort them;
 3. every node's observer: predict, leave out strips inconsistent with the prediction and the
    other sensors, correct with the rest (Proposition 1), reduce;
-4. V2X: every other node sends the bus its estimates and visible region;
-5. the bus screens its own and the received estimates (a consistent majority, negative
-   information), fuses those it keeps (Proposition 2) and flags the rest
-   (:class:`~sse_cosim.estimation.fusion_centre.FusionCentre`);
-6. it refines where each known pedestrian can be and where an undetected one may be
-   (negative information);
-7. the situational picture; 8. the speed level (no faster than the fallback level while the
-   picture is inconsistent), set back into SUMO; 9. the step's record, to ``on_step``.
+4. V2X: every node sends every automated vehicle other than itself its estimates and visible
+   region, over that vehicle's own link;
+5. each automated vehicle (:class:`~sse_cosim.pipeline.ego.Ego`) screens its own and the
+   received estimates (a consistent majority, negative information), fuses those it keeps
+   (Proposition 2) and flags the rest; 6. it refines where each known pedestrian can be and
+   where an undetected one may be (negative information); 7. its situational picture; 8. its
+   speed level (no faster than the fallback level while its picture is inconsistent), set
+   back into SUMO; 9. the step's record, to ``on_step``.
 
-SUMO is touched through :class:`~sse_cosim.world.sumo.SumoWorld` only.
+Random draws: the sensor noise, the first automated vehicle's link and the faults draw from
+the seed's first three streams (so a run with one automated vehicle draws as it always did);
+the links of further automated vehicles from the next ones. SUMO is touched through
+:class:`~sse_cosim.world.sumo.SumoWorld` only.
 """
 
 from __future__ import annotations
@@ -25,24 +28,12 @@ from pathlib import Path
 
 import numpy as np
 
-from sse_cosim.control.picture import SceneContext, assess
-from sse_cosim.control.speed import SpeedLevel, fallback_floor, make_policy
-from sse_cosim.estimation.fusion_centre import FusionCentre
+from sse_cosim.control.speed import SpeedLevel
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, LocalObservers
-from sse_cosim.estimation.occupancy import UnobservedArea
-from sse_cosim.estimation.v2x import V2XLink
+from sse_cosim.pipeline.ego import Ego
 from sse_cosim.pipeline.result import StepCallback, StepResult
-from sse_cosim.pipeline.stages import (
-    Sharing,
-    clear_regions,
-    detected_now,
-    detections_by_node,
-    known_regions,
-    sense,
-    union_or_empty,
-    views_of,
-)
+from sse_cosim.pipeline.stages import detections_by_node, sense
 from sse_cosim.runner.timing import NoTimer, StageTimer
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors import specs_from_scenario
@@ -53,10 +44,11 @@ from sse_cosim.world.sumo import SumoWorld
 
 @dataclass(frozen=True)
 class SimulationInfo:
-    """How a run ended and the road map it ran on."""
+    """How a run ended (steps recorded; per automated vehicle whether it reached the end of
+    its route) and the road map it ran on."""
 
     steps: int
-    bus_arrived: bool
+    arrived: dict[str, bool]
     roadmap: RoadMap
 
 
@@ -66,15 +58,15 @@ def simulate(
 ) -> SimulationInfo:
     """Run ``scenario`` in SUMO, calling ``on_step`` after every step.
 
-    SUMO's own files (routes, logs) go to ``run_dir``. The bus leaving the network (end of
-    its route) or the scenario's duration ends the run. ``timer`` (optional) is charged the
-    time of each stage of each step (:mod:`sse_cosim.runner.timing`).
+    SUMO's own files (routes, logs) go to ``run_dir``. Every automated vehicle having left
+    the network (end of its route) or the scenario's duration ends the run. ``timer``
+    (optional) is charged the time of each stage of each step (:mod:`sse_cosim.runner.timing`).
     """
     timer = timer or NoTimer()
     dt = scenario.simulation.step_length_s
-    noise_rng, v2x_rng, fault_rng = (
-        np.random.default_rng(s) for s in np.random.SeedSequence(scenario.simulation.seed).spawn(3)
-    )
+    automated = list(present(scenario.automated))
+    streams = np.random.SeedSequence(scenario.simulation.seed).spawn(2 + len(automated))
+    noise_rng, first_link_rng, fault_rng, *link_rngs = map(np.random.default_rng, streams)
     config = scenario.estimator
     model = MotionModel.from_config(config, dt)
     settings = EstimatorSettings(config.gain_method, config.reduction_method,
@@ -82,56 +74,34 @@ def simulate(
     specs = specs_from_scenario(scenario)
     faults = FaultInjector(scenario, specs, fault_rng)
     observers = LocalObservers(scenario.node_ids(), model, settings)
-    ego, vehicle = next(iter(present(scenario.automated).items()))
-    sharing = Sharing(V2XLink(scenario.v2x, v2x_rng), faults, model, ego)
-    centre = FusionCentre(model, settings, config.fusion_method, specs, dt, ego)
     n_steps = round(scenario.simulation.duration_s / dt)
     with SumoWorld(scenario, run_dir, scenario_name) as world:
-        context = SceneContext.build(
-            world.roadmap, vehicle.route_edges, vehicle, scenario.controller,
-            model.max_speed, model.jitter, scenario.pedestrian_radius_m(), dt,
-        )
-        policy = make_policy(context)
-        known = known_regions(config.filter, model, dt, context.walkable)
-        # hidden ground is tracked near the crossings on the route; outside it counts as occupied
-        unobserved = UnobservedArea(
-            context.walkable, model, dt, scenario.v2x.latency_steps, window=context.window,
-        )
+        egos = [Ego(vid, scenario, world.roadmap, model, specs, faults, rng)
+                for vid, rng in zip(automated, [first_link_rng, *link_rngs], strict=True)]
         for step in range(n_steps):
             timer.start()
             snapshot = world.step()
-            bus = snapshot.vehicles.get(ego)
-            if bus is None:  # arrived (world.step() refuses a bus missing at its departure)
-                return SimulationInfo(step, world.all_arrived, world.roadmap)
+            if world.all_arrived:  # (world.step() refuses a vehicle missing at its departure)
+                return SimulationInfo(step, _arrivals(world, automated), world.roadmap)
+            active = [ego for ego in egos if ego.id in snapshot.vehicles]
             timer.lap("sumo")
             observations = sense(snapshot, specs, faults, noise_rng)
             timer.lap("geometry")
             tracks = observers.step(step, detections_by_node(observations))
             timer.lap("local_fusion")
-            sharing.send(step, snapshot, observations, tracks)
-            received = sharing.receive(step)
-            shared = received.picture
-            bus_views = views_of(ego, observations)
-            clear = clear_regions(bus_views, tracks[ego], shared)
-            estimate = centre.step(tracks, shared, clear, detected_now(tracks[ego], shared))
-            timer.lap("sharing_fusion")
-            possible = known.update(step, observations, estimate, clear)
-            unknown = unobserved.update(
-                step, union_or_empty(o.visible for o in bus_views), received.fresh_views)
-            timer.lap("occupancy")
-            picture = assess(
-                context, bus.footprint.front.position, bus.speed,
-                union_or_empty(o.occluded for o in bus_views), unknown, list(possible.values()),
-            )
-            decision = policy.decide(
-                picture, fallback_floor(estimate.flags.inconsistent, scenario.controller))
-            world.set_speed(ego, decision.command_mps,
-                                emergency=decision.level is SpeedLevel.EMERGENCY)
+            for ego in active:
+                ego.sharing.send(step, snapshot, observations, tracks)
+            results = {ego.id: ego.step(step, snapshot, observations, tracks, timer)
+                       for ego in active}
+            for vid, result in results.items():
+                world.set_speed(vid, result.decision.command_mps,
+                                emergency=result.decision.level is SpeedLevel.EMERGENCY)
             timer.lap("control")
-            on_step(StepResult(
-                step, snapshot, observations, tracks, shared, unknown, context.window,
-                estimate.fused, possible, picture, decision.level, decision.command_mps, model,
-                estimate.screen, estimate.flags, faults.statuses(),
-            ))
+            on_step(StepResult(step, snapshot, observations, tracks, model, faults.statuses(),
+                               results))
             timer.end_step("output")
-        return SimulationInfo(n_steps, world.all_arrived, world.roadmap)
+        return SimulationInfo(n_steps, _arrivals(world, automated), world.roadmap)
+
+
+def _arrivals(world: SumoWorld, automated: list[str]) -> dict[str, bool]:
+    return {vid: world.arrived(vid) for vid in automated}

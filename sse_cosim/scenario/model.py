@@ -382,9 +382,6 @@ class Scenario(StrictModel):
         if not present(self.automated):
             raise ValueError("automated: no automated vehicle in the scene; add one, e.g. "
                              "[automated.bus]")
-        if len(present(self.automated)) > 1:
-            raise ValueError("automated: this version runs one automated vehicle; keep one "
-                             "(set present = false on the others)")
         self._unique_ids()
         self._sensors_on_existing_nodes()
         self._faults_on_existing_targets()

@@ -33,7 +33,14 @@ def run(request, tmp_path_factory) -> tuple[dict, pd.DataFrame]:
                                 plots=False)
     assert json.loads((out / "summary.json").read_text()) == json.loads(json.dumps(summary))
     assert summary["source"] == f"scenarios/{scenario}_pedestrian.toml"  # no machine path
-    return summary, pd.read_csv(out / "trace.csv")
+    return summary, with_truth(out)
+
+
+def with_truth(folder: Path) -> pd.DataFrame:
+    """The run's trace with the pedestrian's position at each step (``ped_x``, ``ped_y``)."""
+    truth = pd.read_csv(folder / "truth.csv").query("pedestrian == 'pedestrian'")
+    truth = truth[["t", "x", "y"]].rename(columns={"x": "ped_x", "y": "ped_y"})
+    return pd.read_csv(folder / "trace.csv").merge(truth, on="t", how="left")
 
 
 def test_the_pedestrian_crosses_the_lane_before_the_bus_reaches_the_zebra(run):

@@ -70,11 +70,12 @@ def test_every_run_is_sound_and_safe(summaries):
 def test_sets_file_lets_anyone_recheck_containment(batch):
     """Re-check with an LP of our own: exists beta in [-1, 1]^e with G beta = truth - c."""
     folder = batch / RUNS_FOLDER / "s3_pedestrian"
-    trace = pd.read_csv(folder / "trace.csv").set_index("t")
+    truth_of = pd.read_csv(folder / "truth.csv").set_index(["t", "pedestrian"])
     lines = [json.loads(line) for line in (folder / "sets.jsonl").read_text().splitlines()]
     assert {line["kind"] for line in lines} == {"local", "fused"}
+    assert {(line["vehicle"], line["track"]) for line in lines} == {("bus", "pedestrian")}
     for line in lines[:: max(len(lines) // 150, 1)]:
-        truth = trace.loc[line["t"], ["ped_x", "ped_y"]].to_numpy(dtype=float)
+        truth = truth_of.loc[(line["t"], line["track"]), ["x", "y"]].to_numpy(dtype=float)
         generators = np.array(line["generators"], dtype=float).reshape(2, -1)
         e = generators.shape[1]
         result = linprog(np.zeros(e), A_eq=generators, b_eq=truth - np.array(line["center"]),

@@ -122,6 +122,9 @@ def test_a_route_without_crossings_has_no_crossing_ahead(roadmap: RoadMap) -> No
 def test_a_pedestrian_on_the_second_zebra_at_the_speed_bound_is_given_way(tmp_path: Path) -> None:
     summary = run_scenario_file(SCENARIO, tmp_path, SECOND_ZEBRA_CASE, plots=False)
     trace = pd.read_csv(tmp_path / "trace.csv")
+    truth = pd.read_csv(tmp_path / "truth.csv").query("pedestrian == 'pedestrian'")
+    trace = trace.merge(truth[["t", "x", "y"]].rename(columns={"x": "ped_x", "y": "ped_y"}),
+                        on="t", how="left")
     # the hard case: the pedestrian is in the bus's lane on the second zebra before the bus
     # reaches that zebra
     on_zebra = trace["ped_x"].between(*SECOND_ZEBRA_X) & trace["ped_y"].between(*LANE_Y)

@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 import shapely
 
-from sse_cosim.reporting.outputs import REGIONS, TRACE, region_polygons
+from sse_cosim.reporting.outputs import REGIONS, TRACE, TRUTH, region_polygons
 from sse_cosim.runner.run import run_scenario_file
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
@@ -99,10 +99,10 @@ def test_pedestrian_is_in_its_refined_region_or_the_unobserved_area(tmp_path, na
             refined.setdefault(t, {})[line["track"]] = polygons_of(line["polygons"])
     assert sorted(unobserved) == sorted(round(t, 6) for t in trace["t"])  # one per step
     tracked = 0
-    for row in trace.dropna(subset=["ped_x", "ped_y"]).itertuples():
+    for row in pd.read_csv(tmp_path / TRUTH).itertuples():
         t = round(row.t, 6)
-        truth = shapely.Point(row.ped_x, row.ped_y)
-        own = refined.get(t, {}).get("pedestrian")
+        truth = shapely.Point(row.x, row.y)
+        own = refined.get(t, {}).get(row.pedestrian)
         if own is not None:
             tracked += 1
             assert distance(own, truth) <= TOLERANCE_M, (name, t, "refined")

@@ -10,25 +10,34 @@ import pytest
 import shapely
 
 from sse_cosim.files import portable_path
-from sse_cosim.reporting.outputs import REGIONS, SETS, SUMMARY, TRACE, write_run
+from sse_cosim.reporting.outputs import REGIONS, SETS, SUMMARY, TRACE, TRUTH, write_run
 from sse_cosim.reporting.recorder import REFINED, UNOBSERVED, RegionRecord, RunRecorder
 from sse_cosim.scenario.loader import load_scenario
 
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "s3_pedestrian.toml"
+DONE, NOT_DONE = {"bus": True}, {"bus": False}  # whether the bus reached its route's end
 
 
 def recorder_with(speeds: list[float], contact: list[bool],
                   clear: list[bool] | None = None) -> RunRecorder:
-    """A recorder whose rows hold the bus's speed, contact flag and whether its path was clear
-    (default: always), every 0.1 s."""
+    """A recorder whose rows hold the bus's speed, contact with the pedestrian and whether its
+    path was clear (default: always), every 0.1 s; the pedestrian is in the scene from the
+    second step on."""
     recorder = RunRecorder(load_scenario(SCENARIO))
+    steps = list(enumerate(zip(speeds, contact, clear or [True] * len(speeds), strict=True)))
     recorder.rows = [
-        {"t": round(0.1 * i, 6), "bus_x": 2.0 * i, "bus_y": -1.75, "bus_speed": v,
-         "level": "nominal", "ped_x": 183.123456789 if i else None, "ped_y": -7.6,
-         "distance_bus_pedestrian": None, "inconsistent": False, "collision": c,
-         "path_clear": p}
-        for i, (v, c, p) in enumerate(zip(speeds, contact, clear or [True] * len(speeds),
-                                          strict=True))
+        {"t": round(0.1 * i, 6), "vehicle": "bus", "bus_x": 2.0 * i, "bus_y": -1.75,
+         "bus_speed": v, "level": "nominal", "distance_bus_pedestrian": None,
+         "inconsistent": False, "collision": c, "path_clear": p}
+        for i, (v, c, p) in steps
+    ]
+    recorder.truth_rows = [{"t": round(0.1 * i, 6), "pedestrian": "pedestrian",
+                            "x": 183.123456789, "y": -7.6} for i, _ in steps if i]
+    recorder.pedestrian_rows = [
+        {"t": round(0.1 * i, 6), "vehicle": "bus", "pedestrian": "pedestrian",
+         "contained_fused": None, "contained_refined": None, "accounted_for": True,
+         "distance": 0.0 if c else 5.0}
+        for i, (_, c, _) in steps
     ]
     return recorder
 
@@ -61,19 +70,19 @@ def test_time_stopped_sums_the_steps_below_a_tenth_of_a_metre_per_second():
 
 def test_route_completed_comes_from_the_caller():
     recorder = recorder_with([20.0], [False])
-    assert recorder.summary(True)["route_completed"] is True
-    assert recorder.summary(False)["route_completed"] is False
+    assert recorder.summary(DONE)["route_completed"] is True
+    assert recorder.summary(NOT_DONE)["route_completed"] is False
     assert recorder.summary()["route_completed"] is None
 
 
 def test_run_folder_holds_regions_and_the_summary_figures(tmp_path):
     recorder = recorder_with([20.0, 0.0], [False, True])
     recorder.regions = [
-        RegionRecord(0.0, UNOBSERVED, None, shapely.box(0, 0, 2, 1)),
-        RegionRecord(0.1, REFINED, "pedestrian", shapely.Polygon()),
-        RegionRecord(0.1, UNOBSERVED, None, shapely.box(0, 0, 1, 1)),
+        RegionRecord(0.0, UNOBSERVED, None, shapely.box(0, 0, 2, 1), "bus"),
+        RegionRecord(0.1, REFINED, "pedestrian", shapely.Polygon(), "bus"),
+        RegionRecord(0.1, UNOBSERVED, None, shapely.box(0, 0, 1, 1), "bus"),
     ]
-    summary = write_run(tmp_path, recorder.scenario, recorder, None, "test", True,
+    summary = write_run(tmp_path, recorder.scenario, recorder, None, "test", DONE,
                         plots_wanted=False)
     lines = [json.loads(line) for line in (tmp_path / REGIONS).read_text().splitlines()]
     assert [(line["t"], line["kind"], line["track"]) for line in lines] == [
@@ -89,17 +98,18 @@ def test_run_folder_holds_regions_and_the_summary_figures(tmp_path):
 
 def test_trace_positions_keep_a_micrometre(tmp_path):
     recorder = recorder_with([20.0, 20.0], [False, False])
-    write_run(tmp_path, recorder.scenario, recorder, None, "test", True, plots_wanted=False)
+    write_run(tmp_path, recorder.scenario, recorder, None, "test", DONE, plots_wanted=False)
     trace = pd.read_csv(tmp_path / TRACE)
-    assert pd.isna(trace["ped_x"][0])
-    assert trace["ped_x"][1] == 183.123457
+    truth = pd.read_csv(tmp_path / TRUTH)
+    assert list(truth.columns) == ["t", "pedestrian", "x", "y"]
+    assert (truth["t"][0], truth["x"][0]) == (0.1, 183.123457)
     assert trace["bus_x"][1] == 2.0
 
 
 def test_summary_only_writes_no_trace_sets_or_regions(tmp_path):
     recorder = recorder_with([20.0], [False])
-    recorder.regions = [RegionRecord(0.0, UNOBSERVED, None, shapely.box(0, 0, 1, 1))]
-    write_run(tmp_path, recorder.scenario, recorder, None, "test", False, plots_wanted=False,
+    recorder.regions = [RegionRecord(0.0, UNOBSERVED, None, shapely.box(0, 0, 1, 1), "bus")]
+    write_run(tmp_path, recorder.scenario, recorder, None, "test", NOT_DONE, plots_wanted=False,
               summary_only=True)
     assert not any((tmp_path / name).exists() for name in (TRACE, SETS, REGIONS))
     assert json.loads((tmp_path / SUMMARY).read_text())["route_completed"] is False
@@ -114,7 +124,7 @@ def test_run_folder_records_no_machine_path(tmp_path, monkeypatch):
     assert portable_path(tmp_path) == str(tmp_path)  # outside the folder: kept as given
     out = tmp_path / "run"
     recorder = recorder_with([20.0], [False])
-    write_run(out, recorder.scenario, recorder, None, portable_path(SCENARIO), True,
+    write_run(out, recorder.scenario, recorder, None, portable_path(SCENARIO), DONE,
               plots_wanted=False)
     scenario = json.loads((out / "scenario.json").read_text())
     assert not Path(scenario["network"]["sources_dir"]).is_absolute()

@@ -17,7 +17,8 @@ from sse_cosim.scenario.model import Scenario
 REPO = Path(__file__).resolve().parents[2]
 SCENARIOS_DIR = REPO / "scenarios"
 SOURCES_DIR = REPO / "sumo_net"
-PAPER_SCENARIOS = sorted(p.stem for p in SCENARIOS_DIR.glob("*.toml") if not p.name.startswith("_"))
+# the paper's six (s1_... to s3_...), not crowd.toml
+PAPER_SCENARIOS = sorted(p.stem for p in SCENARIOS_DIR.glob("s[0-9]_*.toml"))
 
 
 def scenario(name: str, **overrides: object) -> Scenario:

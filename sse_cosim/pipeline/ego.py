@@ -1,0 +1,118 @@
+"""One automated vehicle's estimation and control: from what every node sees to its speed.
+
+Each automated vehicle is a fusing node (paper Fig. 3): it receives over its own V2X link what
+every other node sends it, screens and fuses its own and the received estimates
+(:class:`~sse_cosim.estimation.fusion_centre.FusionCentre`), refines where each known
+pedestrian can be and where an undetected one may be (negative information), builds its
+situational picture and decides its speed level. :class:`Ego` owns all of that state; the
+co-simulation holds one per automated vehicle.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+import shapely
+
+from sse_cosim.control.picture import Picture, SceneContext, assess
+from sse_cosim.control.speed import Decision, fallback_floor, make_policy
+from sse_cosim.estimation.fusion_centre import BusEstimate, FusionCentre
+from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.observer import EstimatorSettings
+from sse_cosim.estimation.occupancy import UnobservedArea
+from sse_cosim.estimation.v2x import SharedPicture, V2XLink
+from sse_cosim.pipeline.stages import (
+    Observations,
+    Sharing,
+    Tracks,
+    clear_regions,
+    detected_now,
+    known_regions,
+    union_or_empty,
+    views_of,
+)
+from sse_cosim.scenario.model import Scenario
+from sse_cosim.sensors import SensorSpec
+from sse_cosim.sensors.faults import FaultInjector
+from sse_cosim.world.roadmap import RoadMap
+from sse_cosim.world.snapshot import Snapshot
+
+
+class Laps(Protocol):
+    """Charges the time since the previous lap to a stage (:mod:`sse_cosim.runner.timing`)."""
+
+    def lap(self, stage: str) -> None: ...
+
+
+@dataclass(frozen=True)
+class EgoStep:
+    """What one automated vehicle made of one step.
+
+    ``shared``: the senders' newest messages brought to this step; ``estimate``: its screen,
+    fused sets and flags; ``possible``: pedestrian id -> where that pedestrian can be (the
+    fused set refined with negative information); ``unobserved``: walkable ground where an
+    undetected pedestrian may be; ``window``: where hidden ground is tracked.
+    """
+
+    vehicle: str
+    shared: SharedPicture
+    estimate: BusEstimate
+    possible: dict[str, shapely.Geometry]
+    unobserved: shapely.Geometry
+    window: shapely.Geometry
+    picture: Picture
+    decision: Decision
+
+
+class Ego:
+    """Automated vehicle ``vehicle_id``'s link, fusion centre, regions, picture and policy."""
+
+    def __init__(self, vehicle_id: str, scenario: Scenario, roadmap: RoadMap, model: MotionModel,
+                 specs: Mapping[str, SensorSpec], faults: FaultInjector,
+                 link_rng: np.random.Generator) -> None:
+        config, dt = scenario.estimator, scenario.simulation.step_length_s
+        vehicle = scenario.automated[vehicle_id]
+        settings = EstimatorSettings(config.gain_method, config.reduction_method,
+                                     config.max_generators)
+        self.id = vehicle_id
+        self.controller = scenario.controller
+        self.sharing = Sharing(V2XLink(scenario.v2x, link_rng), faults, model, vehicle_id)
+        self.centre = FusionCentre(model, settings, config.fusion_method, specs, dt, vehicle_id)
+        self.context = SceneContext.build(
+            roadmap, vehicle.route_edges, vehicle, scenario.controller, model.max_speed,
+            model.jitter, scenario.pedestrian_radius_m(), dt,
+        )
+        self.policy = make_policy(self.context)
+        self.known = known_regions(config.filter, model, dt, self.context.walkable)
+        # hidden ground is tracked near the crossings on its route; outside it counts as occupied
+        self.unobserved = UnobservedArea(
+            self.context.walkable, model, dt, scenario.v2x.latency_steps,
+            window=self.context.window,
+        )
+
+    def step(self, step: int, snapshot: Snapshot, observations: Observations, tracks: Tracks,
+             timer: Laps) -> EgoStep:
+        """Receive, screen and fuse, refine, picture and decide (the vehicle is in
+        ``snapshot``; every node's messages of ``step`` are already sent)."""
+        me = snapshot.vehicles[self.id]
+        received = self.sharing.receive(step)
+        shared = received.picture
+        views = views_of(self.id, observations)
+        clear = clear_regions(views, tracks[self.id], shared)
+        estimate = self.centre.step(tracks, shared, clear, detected_now(tracks[self.id], shared))
+        timer.lap("sharing_fusion")
+        possible = self.known.update(step, observations, estimate, clear)
+        unknown = self.unobserved.update(
+            step, union_or_empty(o.visible for o in views), received.fresh_views)
+        timer.lap("occupancy")
+        picture = assess(
+            self.context, me.footprint.front.position, me.speed,
+            union_or_empty(o.occluded for o in views), unknown, list(possible.values()),
+        )
+        decision = self.policy.decide(
+            picture, fallback_floor(estimate.flags.inconsistent, self.controller))
+        return EgoStep(self.id, shared, estimate, possible, unknown, self.context.window,
+                       picture, decision)
