@@ -20,6 +20,8 @@ from sse_cosim.world.roadmap import RoadMap
 
 NODE_COLORS = {"bus": "tab:blue", "car": "tab:orange", "fused": "black"}
 KIND_COLORS = {"automated": "tab:blue", "parked": "tab:red", "vehicle": "gold"}
+KIND_LABELS = {"automated": "automated vehicle", "parked": "parked vehicle",
+               "vehicle": "moving vehicle"}
 RSU_COLORS = ["tab:green", "tab:cyan", "tab:olive", "tab:pink"]
 
 
@@ -87,7 +89,8 @@ def scene(frame: SceneFrame, roadmap: RoadMap, nodes: Sequence[str], title: str)
         _fill(ax, occluded, "tab:red", None, alpha=0.18)
     _fill(ax, frame.unobserved, "none", "unobserved walkable area", hatch="xxx")
     for vid, (kind, polygon) in frame.footprints.items():
-        _fill(ax, polygon, KIND_COLORS.get(kind, "0.5"), f"{kind} vehicle", alpha=0.8)
+        _fill(ax, polygon, KIND_COLORS.get(kind, "0.5"), KIND_LABELS.get(kind, "vehicle"),
+              alpha=0.8)
         x, y = polygon.centroid.coords[0]
         ax.annotate(vid, (x, y), fontsize=6, ha="center", va="center")
     view = _view_box(frame)
