@@ -79,10 +79,11 @@ def _summary(r: dict, t: dict) -> list[str]:
                              f"≤ {t['loop_b_ratio_to_a']:.0f}×",
                              c["ratio_to_a"] <= t["loop_b_ratio_to_a"]))
     for op, ratio in r.get("kernels", {}).get("ratios", {}).items():
-        value = ratio["compiled / zonoopt"]
+        value = ratio["compiled / peer"]
         if value is not None:
-            limit = t["kernels_ratio_to_zonoopt"]
-            rows.append((f"kernel {op}: compiled / ZonoOpt", f"{value:.2f}×", f"≤ {limit:.0f}×",
+            peer = {"zonoopt": "ZonoOpt", "shapely": "shapely"}[ratio["peer"]]
+            limit = t[f"kernels_ratio_to_{ratio['peer']}"]
+            rows.append((f"kernel {op}: compiled / {peer}", f"{value:.2f}×", f"≤ {limit:g}×",
                          value <= limit))
     if "scaling" in r:
         k = r["scaling"]["exponent_in_pedestrians_x_sensors"]
@@ -175,15 +176,18 @@ def _gains(g: dict) -> list[str]:
 def _kernels(k: dict) -> list[str]:
     lines = ["## Compiled kernels", "",
              "µs per call, same process: the compiled kernel (numba) through the public "
-             "function, its NumPy reference, and ZonoOpt"
+             "function, its NumPy reference, and a peer: ZonoOpt"
              + ("" if k["zonoopt"] else " (not installed: `pip install -e \".[bench]\"`)")
-             + ". Problems: " + "; ".join(f"{op} {p}" for op, p in k["problems"].items()) + ".",
-             "", "| operation | compiled | reference | ZonoOpt | compiled / ZonoOpt "
+             + " for the first three, shapely clipping the same polygons for the `enclose` "
+             "ones. Problems: " + "; ".join(f"{op} {p}" for op, p in k["problems"].items())
+             + ".", "", "| operation | compiled | reference | peer | compiled / peer "
              "| reference / compiled |", "|---|---|---|---|---|---|"]
     for op, us in k["us_per_call"].items():
         ratio = k["ratios"][op]
+        peer = ratio["peer"]
         lines.append(f"| {op} | {us['compiled']:,.1f} | {us['reference']:,.1f} | "
-                     f"{_f(us.get('zonoopt'))} | {_f(ratio['compiled / zonoopt'], 2)} | "
+                     f"{_f(us.get(peer))}{f' ({peer})' if peer else ''} | "
+                     f"{_f(ratio['compiled / peer'], 2)} | "
                      f"{ratio['reference / compiled']:.1f}× |")
     return [*lines, ""]
 

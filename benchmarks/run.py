@@ -30,6 +30,7 @@ TARGETS = {
     "loop_a_ratio_to_bare": 20.0,
     "loop_b_ratio_to_a": 20.0,
     "kernels_ratio_to_zonoopt": 2.0,
+    "kernels_ratio_to_shapely": 1.5,
     "scaling_exponent": 1.0,
     "throughput_speedup_2_workers": 1.8,
     "tightness_best_mean": 1.3,
