@@ -7,7 +7,7 @@ SUMO's navigational angle (clockwise from north); the world adapter converts.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -32,11 +32,38 @@ class Simulation(StrictModel):
     seed: int = Field(1, ge=0, description="Seed of SUMO and of every random draw (noise, V2X).")
 
 
+DEFAULT_SOURCES_DIR = "../sumo_net"
+
+
 class Network(StrictModel):
-    sources_dir: str = Field(
-        "../sumo_net",
-        description="Folder of the plain-XML network sources, relative to the file that sets it.",
+    sources_dir: str | None = Field(
+        None,
+        description="Folder of the plain-XML network sources, relative to the file that sets it "
+        f"(built by netconvert; unset and without net_file: {DEFAULT_SOURCES_DIR!r}).",
     )
+    net_file: str | None = Field(
+        None,
+        description="An existing SUMO network (.net.xml), relative to the file that sets it; "
+        "instead of sources_dir (docs/own_network.md).",
+    )
+    route_files: list[str] = Field(
+        default_factory=list,
+        description="SUMO route files (.rou.xml) loaded next to the scenario's own, relative to "
+        "the file that sets them: their vehicles occlude, their persons are pedestrians; every "
+        "type must set speedDev=\"0\" and sigma=\"0\".",
+    )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _one_network(cls, data: Any) -> Any:
+        """Exactly one of sources_dir and net_file; neither: the default sources."""
+        if not isinstance(data, dict):
+            return data
+        given = [k for k in ("sources_dir", "net_file") if data.get(k) is not None]
+        if len(given) == 2:
+            raise ValueError("net_file: network.sources_dir and network.net_file are both set; "
+                             "keep one of them (a plain-XML folder or an existing .net.xml)")
+        return data if given else {**data, "sources_dir": DEFAULT_SOURCES_DIR}
 
 
 class Bus(StrictModel):

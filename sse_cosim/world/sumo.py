@@ -74,8 +74,9 @@ from sse_cosim.world.demand import (
     ActorPlan,
     PedestrianPlan,
 )
-from sse_cosim.world.network import NetworkBuildError, build_network
-from sse_cosim.world.roadmap import RoadMap, load_roadmap
+from sse_cosim.world.network import NetworkBuildError, scenario_net_path
+from sse_cosim.world.roadmap import RoadMap, load_roadmap, require_pedestrian_ground
+from sse_cosim.world.route_files import RouteFiles, read_route_files
 from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
 
 with contextlib.redirect_stdout(io.StringIO()):
@@ -126,6 +127,7 @@ class SumoWorld:
         self._roadmap: RoadMap | None = None
         self._plan: ActorPlan | None = None
         self._net_path: Path | None = None
+        self._route_files = RouteFiles((), frozenset())
         self._open = False
         self._entered = False
         self._time = -self._dt
@@ -137,7 +139,7 @@ class SumoWorld:
         self._last_emergency = False
         self._teleports = 0
         self._collisions: list[Collision] = []
-        self._sizes: dict[str, tuple[float, float]] = {}
+        self._statics: dict[str, tuple[float, float, str]] = {}
         self._person_length: dict[str, float] = {}
 
     # --- context manager ------------------------------------------------------------------
@@ -151,18 +153,19 @@ class SumoWorld:
                                   "this process; libsumo runs one at a time -- close it first, "
                                   "or run each simulation in its own process")
         self._entered = True
-        sources = self.scenario.network.sources_dir
+        network = self.scenario.network
         try:
-            self._net_path = build_network(sources)
+            self._net_path = scenario_net_path(network, self.scenario_name)
         except NetworkBuildError as exc:
             raise SimulationError(self.scenario_name, "the road network does not build: "
                                   f"{exc.one_line()}") from exc
-        except UserError as exc:
-            if exc.source != str(sources):
-                raise
-            raise UserError(self.scenario_name, "network.sources_dir",
-                            f"{sources}: {exc.problem}", exc.fix) from None
         self._roadmap = load_roadmap(self._net_path)
+        if self.scenario.pedestrian.present:
+            require_pedestrian_ground(
+                self._roadmap, self.scenario_name,
+                "network.net_file" if network.net_file else "network.sources_dir")
+        self._route_files = read_route_files(network.route_files, (*ROLES, PEDESTRIAN_ID),
+                                             self.scenario_name)
         self._plan = demand.plan_actors(self.scenario, self._net_path, self._roadmap,
                                         source=self.scenario_name)
         config = self._write_files()
@@ -349,11 +352,11 @@ class SumoWorld:
         routes = demand.write_route_file(self.scenario, self._plan,
                                          self.run_dir / demand.ROUTE_FILE_NAME)
         sim = self.scenario.simulation
+        # relative to this file, where SUMO resolves them: no machine path in a results folder
+        route_files = [routes.name, *(self._relative(p) for p in self._route_files.paths)]
         options = {
-            # relative to this file, where SUMO resolves it: no machine path in a results folder
-            "input": {"net-file": os.path.relpath(self._net_path.resolve(),
-                                                  self.run_dir.resolve()),
-                      "route-files": routes.name},
+            "input": {"net-file": self._relative(self._net_path),
+                      "route-files": ",".join(route_files)},
             "time": {"begin": "0", "step-length": f"{sim.step_length_s:.10g}"},
             "processing": {
                 "time-to-teleport": "-1",
@@ -378,6 +381,10 @@ class SumoWorld:
         lines += ["</configuration>", ""]
         return write_text_atomic(self.run_dir / CONFIG_FILE_NAME, "\n".join(lines))
 
+    def _relative(self, path: Path) -> str:
+        """``path`` relative to the run folder (where SUMO resolves the configuration's)."""
+        return os.path.relpath(path.resolve(), self.run_dir.resolve())
+
     def _snapshot(self) -> Snapshot:
         sim = libsumo.simulation
         self._time = round(sim.getTime() - self._dt, 6)
@@ -397,12 +404,12 @@ class SumoWorld:
         vehicles: dict[str, VehicleState] = {}
         for vid, values in libsumo.vehicle.getAllSubscriptionResults().items():
             x, y = values[libsumo.VAR_POSITION]
-            length, width = self._size(vid)
+            length, width, type_id = self._static(vid)
             heading = _heading(values[libsumo.VAR_ANGLE])
             vehicles[vid] = VehicleState(
                 id=vid, role=ROLES.get(vid, "other"),
                 footprint=Footprint(Pose(float(x), float(y), heading), length, width),
-                speed=float(values[libsumo.VAR_SPEED]))
+                speed=float(values[libsumo.VAR_SPEED]), type_id=type_id)
             if vid == BUS_ID:
                 self._bus_distance = float(values[libsumo.VAR_DISTANCE])
         persons: dict[str, PersonState] = {}
@@ -426,12 +433,14 @@ class SumoWorld:
         half = 0.5 * self._person_size(pid)
         return float(x) - half * math.cos(heading), float(y) - half * math.sin(heading)
 
-    def _size(self, vid: str) -> tuple[float, float]:
-        size = self._sizes.get(vid)
-        if size is None:
-            size = (float(libsumo.vehicle.getLength(vid)), float(libsumo.vehicle.getWidth(vid)))
-            self._sizes[vid] = size
-        return size
+    def _static(self, vid: str) -> tuple[float, float, str]:
+        """A vehicle's length, width (m) and type id, which do not change during a run."""
+        static = self._statics.get(vid)
+        if static is None:
+            static = (float(libsumo.vehicle.getLength(vid)), float(libsumo.vehicle.getWidth(vid)),
+                      str(libsumo.vehicle.getTypeID(vid)))
+            self._statics[vid] = static
+        return static
 
     def _person_size(self, pid: str) -> float:
         length = self._person_length.get(pid)
