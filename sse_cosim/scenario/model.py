@@ -388,7 +388,7 @@ class Scenario(StrictModel):
     def _sensors_on_existing_nodes(self) -> Scenario:
         nodes = self.node_ids()
         for name, sensor in self.sensors.items():
-            if sensor.node not in nodes:
+            if sensor.node is not None and sensor.node not in nodes:
                 raise ValueError(
                     f"sensors.{name}.node: no node {sensor.node!r}; "
                     f"use one of {', '.join(nodes)}"
@@ -428,6 +428,10 @@ class Scenario(StrictModel):
             if fault.sensor not in self.sensors:
                 raise ValueError(f"faults.sensor.{name}.sensor: no sensor {fault.sensor!r}; "
                                  f"use one of {', '.join(self.sensors) or '(none)'}")
+            if self.sensors[fault.sensor].carrier_type is not None:
+                raise ValueError(f"faults.sensor.{name}.sensor: {fault.sensor!r} is carried by "
+                                 "every vehicle of a type, faults act on one sensor of one "
+                                 "node; give the fault a sensor with a node")
         senders = [n for n in self.node_ids() if n != BUS_NODE]
         use = f"use one of {', '.join(senders)}" if senders else \
             "this scenario has none: add the car or a road-side unit"

@@ -11,6 +11,12 @@ declared type or type distribution (SUMO's default types are not deterministic).
 is refused, naming the file, the type and the fix. Random departures (``probability`` flows)
 are drawn from SUMO's seed, which is the scenario's: they are deterministic too.
 
+Persons exist from t = 0. The estimator assumes that a pedestrian nobody has detected has been
+somewhere on walkable ground since the start (:mod:`sse_cosim.world.demand`); one appearing
+later could appear where the sensors already saw nobody. So every person departs at 0 (it may
+wait first: a ``<stop>`` as its first stage), and person flows, which depart persons over
+time, are refused.
+
 Ids. The project's own actors and types (``bus``, ``truck``, ``car``, ``pedestrian``) are
 reserved: a route file may not reuse them.
 """
@@ -26,7 +32,7 @@ from sse_cosim.errors import UserError
 
 FIELD = "network.route_files"
 TYPE_TAGS = ("vType", "vTypeDistribution")
-DEMAND_TAGS = ("vehicle", "trip", "flow", "person", "personFlow")
+DEMAND_TAGS = ("vehicle", "trip", "flow", "person")
 DETERMINISTIC_ATTRIBUTES = ("speedDev", "sigma")
 
 
@@ -53,6 +59,11 @@ def read_route_files(paths: Sequence[str], reserved_ids: Iterable[str],
                 declared.add(element.attrib["id"])
     for path, root in roots:
         for element in root.iter():
+            if element.tag == "personFlow":
+                raise UserError(source, FIELD, f"{path}: personFlow "
+                                f"{element.attrib.get('id', '')!r} departs persons after t = 0, "
+                                "where sensors may have seen nobody",
+                                "write its persons out, each departing at 0")
             if element.tag in DEMAND_TAGS:
                 _check_demand(path, element, declared, reserved, source)
     return RouteFiles(tuple(path for path, _ in roots), frozenset(declared))
@@ -104,6 +115,11 @@ def _check_demand(path: Path, element: ET.Element, declared: set[str],
             if type_id is None else f"has type {type_id!r}, which no route file declares"
         raise UserError(source, FIELD, f"{path}: {element.tag} {demand_id!r} {problem}",
                         'declare a vType with speedDev="0" and sigma="0" and name it in type=')
+    if element.tag == "person" and _number(element.attrib.get("depart", "")) != 0.0:
+        raise UserError(source, FIELD, f"{path}: person {demand_id!r} departs at "
+                        f"{element.attrib.get('depart')!r}, not at 0: it would appear where "
+                        "sensors may have seen nobody",
+                        'set depart="0" (a <stop> first lets it wait)')
 
 
 def _number(text: str) -> float | None:

@@ -1,10 +1,16 @@
 """The SUMO world: the only module of the project that imports ``libsumo``.
 
-``SumoWorld(scenario, run_dir, scenario_name)`` is a context manager. Entering it builds (or
-reuses) the network, checks the scenario's actors against it, writes the run's SUMO files into
-``run_dir`` (``scenario.rou.xml``, ``sumo.sumocfg`` -- ``sumo-gui -c run_dir/sumo.sumocfg``
-replays the run's scene -- and ``sumo.log`` with SUMO's warnings) and starts SUMO in-process.
-Leaving it always closes SUMO, also when a step raised.
+``SumoWorld(scenario, run_dir, scenario_name)`` is a context manager. Entering it takes the
+scenario's network (``network.net_file`` as it is, or built from ``network.sources_dir``:
+:mod:`sse_cosim.world.network`), checks the scenario's actors and its route files
+(``network.route_files``, :mod:`sse_cosim.world.route_files`) against it, writes the run's SUMO
+files into ``run_dir`` (``scenario.rou.xml``, ``sumo.sumocfg`` -- ``sumo-gui -c
+run_dir/sumo.sumocfg`` replays the run's scene -- and ``sumo.log`` with SUMO's warnings) and
+starts SUMO in-process. Leaving it always closes SUMO, also when a step raised.
+
+Route-file actors. SUMO loads the scenario's route files after its own route file: their
+vehicles are in every snapshot (role ``other``, with their type id, which sensors carried by
+type follow), their persons are in ``Snapshot.persons`` like the scenario's pedestrian.
 
 Time. ``step()`` advances SUMO by one step and returns the :class:`Snapshot` of the new state.
 Its ``time`` is the time SUMO's own outputs (FCD etc.) give that state: the first step returns
@@ -42,11 +48,11 @@ a time: a second ``SumoWorld`` entered while one is open raises :class:`Simulati
 ``close()`` a new simulation can be started in the same process (the tests do so), but sweeps
 run each simulation in its own process so that they can run in parallel.
 
-Determinism. Every vehicle and person type has ``speedDev=0`` and ``sigma=0``, pedestrians do
-not dawdle (``pedestrian.striping.dawdling 0``) and SUMO's seed is the scenario's seed: one
-scenario gives one sequence of snapshots. Nobody is teleported (``time-to-teleport -1``);
-collisions are reported (``collision.action warn``, junctions included) and kept in
-``collisions``.
+Determinism. Every vehicle and person type has ``speedDev=0`` and ``sigma=0`` (the route
+files' too, or they are refused), pedestrians do not dawdle (``pedestrian.striping.dawdling
+0``) and SUMO's seed is the scenario's seed: one scenario gives one sequence of snapshots.
+Nobody is teleported (``time-to-teleport -1``); collisions are reported (``collision.action
+warn``, junctions included) and kept in ``collisions``.
 """
 
 from __future__ import annotations
@@ -166,6 +172,7 @@ class SumoWorld:
                 "network.net_file" if network.net_file else "network.sources_dir")
         self._route_files = read_route_files(network.route_files, (*ROLES, PEDESTRIAN_ID),
                                              self.scenario_name)
+        self._check_carrier_types()
         self._plan = demand.plan_actors(self.scenario, self._net_path, self._roadmap,
                                         source=self.scenario_name)
         config = self._write_files()
@@ -317,6 +324,16 @@ class SumoWorld:
         if not self._open:
             raise SimulationError(self.scenario_name, "the SUMO world is not open "
                                   "(use it inside 'with SumoWorld(...) as world:')")
+
+    def _check_carrier_types(self) -> None:
+        """A sensor carried by type names a vehicle type of the route files."""
+        for name, sensor in self.scenario.sensors.items():
+            carrier = sensor.carrier_type
+            if carrier is not None and carrier not in self._route_files.type_ids:
+                raise UserError(self.scenario_name, f"sensors.{name}.carrier_type",
+                                f"no file in network.route_files declares the type {carrier!r}",
+                                "name a vType of the route files, or carry the sensor on a "
+                                "node (sensors.<name>.node)")
 
     def _check_insertions(self) -> None:
         """Every vehicle is on the road from its departure on; SUMO would keep one it has no

@@ -140,6 +140,10 @@ def test_deterministic_route_files_pass_with_their_types(tmp_path: Path) -> None
     (f'{DETERMINISTIC_CAR}<vehicle id="bus" type="cav" depart="0"><route edges="WC"/>'
      '</vehicle>', ("vehicle id 'bus' is reserved", "rename it")),
     ('<vType id="truck" speedDev="0" sigma="0"/>', ("type id 'truck' is reserved",)),
+    ('<vType id="w" vClass="pedestrian" speedDev="0" sigma="0"/><person id="p" type="w" '
+     'depart="5"><walk edges="WC"/></person>', ("person 'p' departs at '5', not at 0",
+                                                 'set depart="0"')),
+    ('<personFlow id="pf" begin="0" end="60" period="10"/>', ("personFlow 'pf' departs",)),
 ])
 def test_a_route_file_that_is_not_deterministic_is_refused_naming_file_and_type(
         tmp_path: Path, body: str, words: tuple[str, ...]) -> None:
