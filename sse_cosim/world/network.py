@@ -17,6 +17,7 @@ never leave a half-written net behind. The ``.net.xml`` is never edited by hand.
 from __future__ import annotations
 
 import functools
+import gzip
 import hashlib
 import os
 import shutil
@@ -73,14 +74,16 @@ def scenario_net_path(network: Network, source: str) -> Path:
 
 
 def check_net_file(path: Path, source: str) -> Path:
-    """``path`` if it is a readable SUMO network (its root element is ``<net>``)."""
+    """``path`` if it is a readable SUMO network (its root element is ``<net>``; gzipped when
+    its name ends with ``.gz``, as osmWebWizard writes it)."""
     fix = ("point network.net_file at a SUMO .net.xml (relative to the scenario file that sets "
            "it), or use network.sources_dir for plain-XML sources")
     if not path.is_file():
         raise UserError(source, "network.net_file", f"{str(path)!r} not found", fix)
     try:
-        _, root = next(ET.iterparse(path, events=("start",)))
-    except (ET.ParseError, OSError, StopIteration) as exc:
+        with gzip.open(path) if path.name.endswith(".gz") else path.open("rb") as stream:
+            _, root = next(ET.iterparse(stream, events=("start",)))
+    except (ET.ParseError, OSError, EOFError, StopIteration) as exc:
         raise UserError(source, "network.net_file", f"{str(path)!r} cannot be read ({exc})",
                         fix) from None
     if root.tag != "net":

@@ -4,6 +4,7 @@ would not run or not be deterministic -- one line naming the field and the fix."
 
 from __future__ import annotations
 
+import gzip
 import shutil
 from pathlib import Path
 
@@ -72,8 +73,12 @@ def test_an_override_replaces_the_alternative() -> None:
 # --- the network file --------------------------------------------------------------------
 
 
-def test_the_given_net_is_used_as_it_is() -> None:
+def test_the_given_net_is_used_as_it_is_also_gzipped(tmp_path: Path) -> None:
     assert scenario_net_path(Network(net_file=str(GIVEN_NET)), "s") == GIVEN_NET
+    packed = tmp_path / "road.net.xml.gz"
+    packed.write_bytes(gzip.compress(GIVEN_NET.read_bytes()))
+    assert scenario_net_path(Network(net_file=str(packed)), "s") == packed
+    assert len(load_roadmap(packed).crossings) == 1
 
 
 def test_the_given_net_is_the_road_built_from_the_sources() -> None:
