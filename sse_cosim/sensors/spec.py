@@ -139,8 +139,9 @@ def sensor_instances(specs: Mapping[str, SensorSpec],
 
 
 def find_carrier(snapshot: Snapshot, node: str) -> VehicleState | None:
-    """The vehicle carrying ``node``'s sensors: first by role, then by id; None if absent."""
-    return snapshot.role(node) or snapshot.vehicles.get(node)
+    """The vehicle carrying ``node``'s sensors: first by id (a vehicle carrying sensors by
+    type is its own node), then by role; None if absent."""
+    return snapshot.vehicles.get(node) or snapshot.role(node)
 
 
 def locate(spec: SensorSpec, snapshot: Snapshot) -> tuple[Pose, str | None] | None:
