@@ -442,7 +442,8 @@ class Scenario(StrictModel):
                                      f"that sends to the bus; {use}")
 
     def node_ids(self) -> list[str]:
-        """Nodes that can carry sensors: the bus, the car (if present) and the units."""
+        """Nodes that can carry sensors: the bus, the car (if present) and the units (the
+        vehicles that carry sensors by type, ``carrier_type``, are nodes only at run time)."""
         return [BUS_NODE, *([CAR_NODE] if self.car.present else []), *self.rsus]
 
     def sensors_of(self, node: str) -> dict[str, Sensor]:
