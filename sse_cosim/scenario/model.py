@@ -7,7 +7,7 @@ SUMO's navigational angle (clockwise from north); the world adapter converts.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -32,11 +32,38 @@ class Simulation(StrictModel):
     seed: int = Field(1, ge=0, description="Seed of SUMO and of every random draw (noise, V2X).")
 
 
+DEFAULT_SOURCES_DIR = "../sumo_net"
+
+
 class Network(StrictModel):
-    sources_dir: str = Field(
-        "../sumo_net",
-        description="Folder of the plain-XML network sources, relative to the file that sets it.",
+    sources_dir: str | None = Field(
+        None,
+        description="Folder of the plain-XML network sources, relative to the file that sets it "
+        f"(built by netconvert; unset and without net_file: {DEFAULT_SOURCES_DIR!r}).",
     )
+    net_file: str | None = Field(
+        None,
+        description="An existing SUMO network (.net.xml), relative to the file that sets it; "
+        "instead of sources_dir (docs/own_network.md).",
+    )
+    route_files: list[str] = Field(
+        default_factory=list,
+        description="SUMO route files (.rou.xml) loaded next to the scenario's own, relative to "
+        "the file that sets them: their vehicles occlude, their persons are pedestrians; every "
+        "type must set speedDev=\"0\" and sigma=\"0\".",
+    )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _one_network(cls, data: Any) -> Any:
+        """Exactly one of sources_dir and net_file; neither: the default sources."""
+        if not isinstance(data, dict):
+            return data
+        given = [k for k in ("sources_dir", "net_file") if data.get(k) is not None]
+        if len(given) == 2:
+            raise ValueError("net_file: network.sources_dir and network.net_file are both set; "
+                             "keep one of them (a plain-XML folder or an existing .net.xml)")
+        return data if given else {**data, "sources_dir": DEFAULT_SOURCES_DIR}
 
 
 class Bus(StrictModel):
@@ -361,7 +388,7 @@ class Scenario(StrictModel):
     def _sensors_on_existing_nodes(self) -> Scenario:
         nodes = self.node_ids()
         for name, sensor in self.sensors.items():
-            if sensor.node not in nodes:
+            if sensor.node is not None and sensor.node not in nodes:
                 raise ValueError(
                     f"sensors.{name}.node: no node {sensor.node!r}; "
                     f"use one of {', '.join(nodes)}"
@@ -401,6 +428,10 @@ class Scenario(StrictModel):
             if fault.sensor not in self.sensors:
                 raise ValueError(f"faults.sensor.{name}.sensor: no sensor {fault.sensor!r}; "
                                  f"use one of {', '.join(self.sensors) or '(none)'}")
+            if self.sensors[fault.sensor].carrier_type is not None:
+                raise ValueError(f"faults.sensor.{name}.sensor: {fault.sensor!r} is carried by "
+                                 "every vehicle of a type, faults act on one sensor of one "
+                                 "node; give the fault a sensor with a node")
         senders = [n for n in self.node_ids() if n != BUS_NODE]
         use = f"use one of {', '.join(senders)}" if senders else \
             "this scenario has none: add the car or a road-side unit"
@@ -411,7 +442,8 @@ class Scenario(StrictModel):
                                      f"that sends to the bus; {use}")
 
     def node_ids(self) -> list[str]:
-        """Nodes that can carry sensors: the bus, the car (if present) and the units."""
+        """Nodes that can carry sensors: the bus, the car (if present) and the units (the
+        vehicles that carry sensors by type, ``carrier_type``, are nodes only at run time)."""
         return [BUS_NODE, *([CAR_NODE] if self.car.present else []), *self.rsus]
 
     def sensors_of(self, node: str) -> dict[str, Sensor]:

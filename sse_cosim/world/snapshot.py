@@ -75,6 +75,7 @@ class VehicleState:
     role: str  # "bus", "truck", "car" or "other"
     footprint: Footprint
     speed: float  # m/s
+    type_id: str = ""  # its SUMO vehicle type (route-file vehicles carry sensors by type)
 
 
 @dataclass(frozen=True)
