@@ -52,6 +52,8 @@ def markdown(r: dict) -> str:
         lines += _scaling(r["scaling"], t)
     if "throughput" in r:
         lines += _throughput(r["throughput"], t)
+    if "cluster" in r:
+        lines += _cluster(r["cluster"])
     if "tightness" in r:
         lines += _tightness(r["tightness"], t)
     if "soundness" in r:
@@ -79,10 +81,11 @@ def _summary(r: dict, t: dict) -> list[str]:
                              f"≤ {t['loop_b_ratio_to_a']:.0f}×",
                              c["ratio_to_a"] <= t["loop_b_ratio_to_a"]))
     for op, ratio in r.get("kernels", {}).get("ratios", {}).items():
-        value = ratio["compiled / zonoopt"]
+        value = ratio["compiled / peer"]
         if value is not None:
-            limit = t["kernels_ratio_to_zonoopt"]
-            rows.append((f"kernel {op}: compiled / ZonoOpt", f"{value:.2f}×", f"≤ {limit:.0f}×",
+            peer = {"zonoopt": "ZonoOpt", "shapely": "shapely"}[ratio["peer"]]
+            limit = t[f"kernels_ratio_to_{ratio['peer']}"]
+            rows.append((f"kernel {op}: compiled / {peer}", f"{value:.2f}×", f"≤ {limit:g}×",
                          value <= limit))
     if "scaling" in r:
         k = r["scaling"]["exponent_in_pedestrians_x_sensors"]
@@ -93,6 +96,11 @@ def _summary(r: dict, t: dict) -> list[str]:
         if "dask_2" in r["throughput"]["configs"]:
             d = r["throughput"]["configs"]["dask_2"]["speedup_vs_1_worker"]
             rows.append(("4 sweep speed-up, Dask 2 workers", f"{d:.2f}×", "≥ 1.8×", d >= 1.8))
+    if "cluster" in r:
+        c = r["cluster"]
+        rows.append((f"4 Dask cluster / local pool, runs per minute ({c['runs']} runs)",
+                     f"{c['dask_over_local']:.2f}", "≥ 0.9, rows identical",
+                     c["dask_over_local"] >= t["cluster_ratio_to_local"] and c["rows_identical"]))
     if "tightness" in r:
         tt = r["tightness"]
         for kind in ("fused", "local"):
@@ -175,15 +183,18 @@ def _gains(g: dict) -> list[str]:
 def _kernels(k: dict) -> list[str]:
     lines = ["## Compiled kernels", "",
              "µs per call, same process: the compiled kernel (numba) through the public "
-             "function, its NumPy reference, and ZonoOpt"
+             "function, its NumPy reference, and a peer: ZonoOpt"
              + ("" if k["zonoopt"] else " (not installed: `pip install -e \".[bench]\"`)")
-             + ". Problems: " + "; ".join(f"{op} {p}" for op, p in k["problems"].items()) + ".",
-             "", "| operation | compiled | reference | ZonoOpt | compiled / ZonoOpt "
+             + " for the first three, shapely clipping the same polygons for the `enclose` "
+             "ones. Problems: " + "; ".join(f"{op} {p}" for op, p in k["problems"].items())
+             + ".", "", "| operation | compiled | reference | peer | compiled / peer "
              "| reference / compiled |", "|---|---|---|---|---|---|"]
     for op, us in k["us_per_call"].items():
         ratio = k["ratios"][op]
+        peer = ratio["peer"]
         lines.append(f"| {op} | {us['compiled']:,.1f} | {us['reference']:,.1f} | "
-                     f"{_f(us.get('zonoopt'))} | {_f(ratio['compiled / zonoopt'], 2)} | "
+                     f"{_f(us.get(peer))}{f' ({peer})' if peer else ''} | "
+                     f"{_f(ratio['compiled / peer'], 2)} | "
                      f"{ratio['reference / compiled']:.1f}× |")
     return [*lines, ""]
 
@@ -219,6 +230,19 @@ def _throughput(tp: dict, t: dict) -> list[str]:
         lines.append(f"| {c['executor']} | {c['workers']} | {c['runs']} | {c['seconds']:.1f} | "
                      f"{c['runs_per_minute']:.1f} | {c['speedup_vs_1_worker']:.2f}× |")
     return [*lines, ""]
+
+
+def _cluster(c: dict) -> list[str]:
+    rows = "identical" if c["rows_identical"] else \
+        f"DIFFERENT in {len(c['rows_different'])}+ runs, e.g. {c['rows_different'][0]}"
+    return ["## 4b. A sweep on a Dask cluster", "",
+            f"`{c['scenario']}` cut to {c['duration_s']} s, seeds 1..{c['runs']}, summary only; "
+            f"{c['note']}. Every run's summary.json: {rows}.", "",
+            "| executor | workers | runs | s | runs/min |", "|---|---|---|---|---|",
+            f"| local pool | {c['workers']} | {c['runs']} | {c['local']['seconds']:.1f} | "
+            f"{c['local']['runs_per_minute']:.1f} |",
+            f"| Dask cluster | {c['workers']} | {c['runs']} | {c['dask_cluster']['seconds']:.1f} "
+            f"| {c['dask_cluster']['runs_per_minute']:.1f} |", ""]
 
 
 def _tightness(tt: dict, t: dict) -> list[str]:

@@ -83,10 +83,17 @@ class NodeObserver:
 
 
 class LocalObservers:
-    """Every node's observer, stepped together: the first fusion level of the network."""
+    """Every node's observer, stepped together: the first fusion level of the network.
+
+    The scenario's nodes have one from the start; a node that appears at run time (a vehicle
+    carrying sensors by type) gets one the first step it is in ``detections``, and keeps it
+    (predicting) after it left.
+    """
 
     def __init__(self, nodes: Iterable[str], model: MotionModel,
                  settings: EstimatorSettings) -> None:
+        self.model = model
+        self.settings = settings
         self._observers = {node: NodeObserver(node, model, settings) for node in nodes}
 
     def step(
@@ -94,6 +101,9 @@ class LocalObservers:
     ) -> dict[str, dict[str, Track]]:
         """Node -> pedestrian id -> track at ``step``, from ``detections``: node -> pedestrian
         id -> sensor name -> the strips of that node's sensors that see it now."""
+        for node in detections:
+            if node not in self._observers:
+                self._observers[node] = NodeObserver(node, self.model, self.settings)
         return {node: observer.step(step, detections.get(node, {}))
                 for node, observer in self._observers.items()}
 

@@ -39,9 +39,12 @@ def sense(snapshot: Snapshot, specs: Mapping[str, SensorSpec], faults: FaultInje
 
 
 def detections_by_node(observations: Observations) -> dict[str, dict[str, dict[str, Strips]]]:
-    """Node -> pedestrian id -> sensor name -> the strips of that node's sensors that see it."""
+    """Node -> pedestrian id -> sensor name -> the strips of that node's sensors that see it;
+    every node with a sensor in the scene is a key (with no pedestrian if it sees nobody)."""
     result: dict[str, dict[str, dict[str, Strips]]] = {}
     for obs in observations.values():
+        if obs.pose is not None:
+            result.setdefault(obs.node, {})
         for person_id, detection in obs.detections.items():
             result.setdefault(obs.node, {}).setdefault(person_id, {})[obs.sensor] = \
                 detection.strips

@@ -102,10 +102,14 @@ def write_run(
 
 
 def _portable(scenario: Scenario, out_dir: Path) -> dict:
-    """The resolved scenario with its network folder relative to the run folder, where the
-    loader looks for it (the file that sets it), so that no machine path is recorded."""
+    """The resolved scenario with its network's paths relative to the run folder, where the
+    loader looks for them (the file that sets them), so that no machine path is recorded."""
     data = scenario.model_dump(mode="json")
-    data["network"]["sources_dir"] = os.path.relpath(scenario.network.sources_dir, out_dir)
+    network = data["network"]
+    for key in ("sources_dir", "net_file"):
+        if network[key] is not None:
+            network[key] = os.path.relpath(network[key], out_dir)
+    network["route_files"] = [os.path.relpath(f, out_dir) for f in network["route_files"]]
     return data
 
 

@@ -49,7 +49,7 @@ from sse_cosim.runner.sweep import (
     run_planned,
 )
 from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
-from sse_cosim.scenario.model import Scenario
+from sse_cosim.scenario.model import Network, Scenario
 from sse_cosim.scenario.paths import expand_pattern
 
 if TYPE_CHECKING:
@@ -260,7 +260,7 @@ class ActorPlanner:
     def __call__(self, scenario: Scenario, source: str) -> str | None:
         from sse_cosim.world import demand
 
-        net_path, roadmap = self._network(scenario.network.sources_dir)
+        net_path, roadmap = self._network(scenario.network, source)
         try:
             demand.plan_actors(scenario, net_path, roadmap, source)
         except UserError as exc:
@@ -269,14 +269,15 @@ class ActorPlanner:
             return exc.problem
         return None
 
-    def _network(self, sources_dir: str) -> tuple[Path, RoadMap]:
-        if sources_dir not in self._networks:
-            from sse_cosim.world.network import build_network
+    def _network(self, network: Network, source: str) -> tuple[Path, RoadMap]:
+        key = f"{network.sources_dir}|{network.net_file}"
+        if key not in self._networks:
+            from sse_cosim.world.network import scenario_net_path
             from sse_cosim.world.roadmap import load_roadmap
 
-            net_path = build_network(sources_dir)
-            self._networks[sources_dir] = (net_path, load_roadmap(net_path))
-        return self._networks[sources_dir]
+            net_path = scenario_net_path(network, source)
+            self._networks[key] = (net_path, load_roadmap(net_path))
+        return self._networks[key]
 
 
 def plan_campaign(campaign: Campaign, feasibility: Feasibility | None = None) -> CampaignPlan:

@@ -2,7 +2,9 @@
 
 A scenario file may name one or more parent files with ``extends = "parent.toml"`` (or a
 list); parents are merged first, tables merge key by key, any other value is replaced.
-Paths inside a file (``network.sources_dir``) are relative to the file that sets them.
+Paths inside a file (``network.sources_dir``, ``network.net_file``, ``network.route_files``)
+are relative to the file that sets them. ``network.sources_dir`` and ``network.net_file`` are
+alternatives: a file (or a ``--set`` override) that sets one drops the other inherited one.
 """
 
 from __future__ import annotations
@@ -23,7 +25,11 @@ from sse_cosim.scenario.base import TAG_MARK
 from sse_cosim.scenario.model import Scenario
 
 EXTENDS_KEY = "extends"
-RELATIVE_PATH_FIELDS = (("network", "sources_dir"),)
+RELATIVE_PATH_FIELDS = (("network", "sources_dir"), ("network", "net_file"),
+                        ("network", "route_files"))
+# (table, key) -> the alternative it replaces when set
+ALTERNATIVE_FIELDS = {("network", "sources_dir"): "net_file",
+                      ("network", "net_file"): "sources_dir"}
 
 
 def load_scenario(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Scenario:
@@ -58,6 +64,7 @@ def apply_overrides(
     result = copy.deepcopy(dict(data))
     for dotted, value in overrides.items():
         _check_path(dotted, source)
+        _drop_alternatives(result, {tuple(dotted.split("."))})
         node: dict[str, Any] = result
         parts = dotted.split(".")
         for depth, part in enumerate(parts[:-1]):
@@ -143,7 +150,17 @@ def _load_merged(path: Path, chain: tuple[Path, ...]) -> dict[str, Any]:
             raise UserError(str(path), EXTENDS_KEY, f"parent file {parent!r} not found",
                             f"create it or fix the name (looked in {path.parent})")
         merged = deep_merge(merged, _load_merged(parent_path, (*chain, path)))
+    _drop_alternatives(merged, {(table, key) for table, section in raw.items()
+                                if isinstance(section, dict) for key in section})
     return deep_merge(merged, raw)
+
+
+def _drop_alternatives(data: dict[str, Any], setting: set[tuple[str, ...]]) -> None:
+    """Remove from ``data`` the alternatives of the (table, key) paths being set."""
+    for (table, key), other in ALTERNATIVE_FIELDS.items():
+        section = data.get(table)
+        if (table, key) in setting and isinstance(section, dict):
+            section.pop(other, None)
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
@@ -163,8 +180,13 @@ def _read_toml(path: Path) -> dict[str, Any]:
 def _absolutize_paths(raw: dict[str, Any], base: Path) -> None:
     for table, key in RELATIVE_PATH_FIELDS:
         section = raw.get(table)
-        if isinstance(section, dict) and isinstance(section.get(key), str):
-            section[key] = str((base / section[key]).resolve())
+        if not isinstance(section, dict):
+            continue
+        value = section.get(key)
+        if isinstance(value, str):
+            section[key] = str((base / value).resolve())
+        elif isinstance(value, list):
+            section[key] = [str((base / v).resolve()) if isinstance(v, str) else v for v in value]
 
 
 def deep_merge(base: Mapping[str, Any], override: Mapping[str, Any]) -> dict[str, Any]:

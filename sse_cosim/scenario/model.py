@@ -7,7 +7,7 @@ SUMO's navigational angle (clockwise from north); the world adapter converts.
 
 from __future__ import annotations
 
-from typing import Literal, TypeVar
+from typing import Any, Literal, TypeVar
 
 from pydantic import Field, field_validator, model_validator
 
@@ -30,11 +30,38 @@ class Simulation(StrictModel):
     seed: int = Field(1, ge=0, description="Seed of SUMO and of every random draw (noise, V2X).")
 
 
+DEFAULT_SOURCES_DIR = "../sumo_net"
+
+
 class Network(StrictModel):
-    sources_dir: str = Field(
-        "../sumo_net",
-        description="Folder of the plain-XML network sources, relative to the file that sets it.",
+    sources_dir: str | None = Field(
+        None,
+        description="Folder of the plain-XML network sources, relative to the file that sets it "
+        f"(built by netconvert; unset and without net_file: {DEFAULT_SOURCES_DIR!r}).",
     )
+    net_file: str | None = Field(
+        None,
+        description="An existing SUMO network (.net.xml), relative to the file that sets it; "
+        "instead of sources_dir (docs/own_network.md).",
+    )
+    route_files: list[str] = Field(
+        default_factory=list,
+        description="SUMO route files (.rou.xml) loaded next to the scenario's own, relative to "
+        "the file that sets them: their vehicles occlude, their persons are pedestrians; every "
+        "type must set speedDev=\"0\" and sigma=\"0\".",
+    )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _one_network(cls, data: Any) -> Any:
+        """Exactly one of sources_dir and net_file; neither: the default sources."""
+        if not isinstance(data, dict):
+            return data
+        given = [k for k in ("sources_dir", "net_file") if data.get(k) is not None]
+        if len(given) == 2:
+            raise ValueError("net_file: network.sources_dir and network.net_file are both set; "
+                             "keep one of them (a plain-XML folder or an existing .net.xml)")
+        return data if given else {**data, "sources_dir": DEFAULT_SOURCES_DIR}
 
 
 class AutomatedVehicle(StrictModel):
@@ -339,6 +366,10 @@ class Faults(StrictModel):
     )
 
 
+ACTOR_TABLES = ("automated", "vehicles", "parked", "pedestrians")
+"""The scenario's tables of actors that SUMO moves or parks (road-side units are not in SUMO)."""
+
+
 class Scenario(StrictModel):
     """One scenario: the scene, its sensors, the estimator and the controller."""
 
@@ -391,7 +422,7 @@ class Scenario(StrictModel):
     def _unique_ids(self) -> None:
         """An id names one actor or unit: it is its SUMO id and its node id."""
         seen: dict[str, str] = {}
-        for table in ("automated", "vehicles", "parked", "pedestrians", "rsus"):
+        for table in (*ACTOR_TABLES, "rsus"):
             for key in getattr(self, table):
                 if key in seen:
                     raise ValueError(f"{table}.{key}: the id {key!r} is taken by "
@@ -401,6 +432,8 @@ class Scenario(StrictModel):
     def _sensors_on_existing_nodes(self) -> None:
         nodes = self.node_ids()
         for name, sensor in self.sensors.items():
+            if sensor.node is None:  # carried by every vehicle of a type (carrier_type)
+                continue
             vehicle = self.vehicles.get(sensor.node)
             if vehicle is not None and vehicle.present and not vehicle.connected:
                 raise ValueError(f"sensors.{name}.node: vehicle {sensor.node!r} is not "
@@ -444,6 +477,10 @@ class Scenario(StrictModel):
             if fault.sensor not in self.sensors:
                 raise ValueError(f"faults.sensor.{name}.sensor: no sensor {fault.sensor!r}; "
                                  f"use one of {', '.join(self.sensors) or '(none)'}")
+            if self.sensors[fault.sensor].carrier_type is not None:
+                raise ValueError(f"faults.sensor.{name}.sensor: {fault.sensor!r} is carried by "
+                                 "every vehicle of a type, faults act on one sensor of one "
+                                 "node; give the fault a sensor with a node")
         senders = self.sender_ids()
         use = f"use one of {', '.join(senders)}" if senders else \
             "this scenario has none: add a connected vehicle or a road-side unit"
@@ -455,7 +492,8 @@ class Scenario(StrictModel):
 
     def node_ids(self) -> list[str]:
         """Nodes that can carry sensors: the automated vehicles, the connected vehicles and
-        the units (present ones, in that order)."""
+        the units (present ones, in that order; the vehicles that carry sensors by type,
+        ``carrier_type``, are nodes only at run time)."""
         connected = [vid for vid, v in present(self.vehicles).items() if v.connected]
         return [*present(self.automated), *connected, *self.rsus]
 
@@ -470,6 +508,11 @@ class Scenario(StrictModel):
         without any: the body the controller keeps clear of."""
         radii = [p.radius_m for p in present(self.pedestrians).values()]
         return max(radii, default=Pedestrian.model_fields["radius_m"].default)
+
+    def actor_ids(self) -> list[str]:
+        """The ids of every actor the scenario places in SUMO (present or not: a route file
+        may not reuse them)."""
+        return [key for table in ACTOR_TABLES for key in getattr(self, table)]
 
     def sensors_of(self, node: str) -> dict[str, Sensor]:
         """The sensors carried by ``node``, by name."""

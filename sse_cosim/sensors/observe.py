@@ -17,7 +17,7 @@ from sse_cosim.sensors.geometry import (
     visibility_regions,
 )
 from sse_cosim.sensors.measurement import Detection
-from sse_cosim.sensors.spec import SensorSpec, locate
+from sse_cosim.sensors.spec import SensorSpec, locate, sensor_instances
 from sse_cosim.world.snapshot import Pose, Snapshot
 
 
@@ -59,7 +59,9 @@ def observe(
     rng: np.random.Generator,
     want_regions: bool = False,
 ) -> dict[str, SensorObservation]:
-    """Every sensor's observation at this snapshot, by sensor name (``sensor_specs`` order).
+    """Every sensor's observation at this snapshot, by sensor name (``sensor_specs`` order;
+    a ``carrier_type`` sensor as its instances on the vehicles in the scene, in its place:
+    :func:`~sse_cosim.sensors.spec.sensor_instances`).
 
     A person is detected iff its centre is in the sensor's field of view (its kind's sector)
     and the segment to it misses every footprint but the carrier's. The tests run for all
@@ -75,6 +77,7 @@ def observe(
     for row, pid in enumerate(person_ids):
         positions[row] = snapshot.persons[pid].position
 
+    sensor_specs = sensor_instances(sensor_specs, snapshot)
     names = list(sensor_specs)
     result: dict[str, SensorObservation] = {}
     here: list[tuple[str, SensorSpec, Pose, int]] = []  # (name, spec, pose, carrier box or -1)

@@ -1,10 +1,16 @@
-"""Sensor specifications and mounting: where a sensor is, given its carrier, and its kind."""
+"""Sensor specifications and mounting: where a sensor is, given its carrier, and its kind.
+
+A sensor with a ``carrier_type`` is carried by every vehicle of that SUMO type
+(route-file vehicles, ``network.route_files``): at each step :func:`sensor_instances` turns it
+into one instance per such vehicle in the scene, named ``<sensor>@<vehicle id>``, whose node
+is the vehicle id -- a connected node that exists while the vehicle is in the scene.
+"""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import TYPE_CHECKING
 
@@ -26,7 +32,9 @@ class SensorSpec:
     ``static_pose`` is set, a road-side unit standing at that pose. The mount offsets are in
     the carrier's frame from its reference point (a vehicle's front bumper centre, a unit's
     position); ``yaw_rad`` turns the boresight CCW. ``resolution`` is the number of arc
-    chords per quarter turn of the field-of-view polygon.
+    chords per quarter turn of the field-of-view polygon. With ``carrier_type`` set the spec
+    is a template carried by every vehicle of that type (``node`` is empty; see
+    :func:`sensor_instances`).
     """
 
     name: str
@@ -37,6 +45,7 @@ class SensorSpec:
     yaw_rad: float = 0.0
     static_pose: Pose | None = None
     resolution: int = 16
+    carrier_type: str | None = None
 
     @classmethod
     def from_config(
@@ -47,12 +56,13 @@ class SensorSpec:
         static = None if unit is None else Pose(unit.x_m, unit.y_m, math.radians(unit.heading_deg))
         return cls(
             name=name,
-            node=sensor.node,
+            node=sensor.node or "",
             kind=sensor.build(),
             forward_m=float(sensor.mount.forward_m),
             left_m=float(sensor.mount.left_m),
             yaw_rad=math.radians(sensor.mount.yaw_deg),
             static_pose=static,
+            carrier_type=sensor.carrier_type,
         )
 
     @property
@@ -102,8 +112,35 @@ def specs_from_scenario(scenario: Scenario) -> dict[str, SensorSpec]:
     }
 
 
+INSTANCE_MARK = "@"
+
+
+def instance_name(sensor: str, vehicle_id: str) -> str:
+    """The name of sensor ``sensor`` carried by vehicle ``vehicle_id``: ``<sensor>@<id>``."""
+    return f"{sensor}{INSTANCE_MARK}{vehicle_id}"
+
+
+def sensor_instances(specs: Mapping[str, SensorSpec],
+                     snapshot: Snapshot) -> dict[str, SensorSpec]:
+    """The sensors at this snapshot, by name: every spec with a node as it is, every
+    ``carrier_type`` template as one instance per vehicle of that type in the scene (snapshot
+    order), in the template's place."""
+    result: dict[str, SensorSpec] = {}
+    for name, spec in specs.items():
+        if spec.carrier_type is None:
+            result[name] = spec
+            continue
+        for vehicle in snapshot.vehicles.values():
+            if vehicle.type_id == spec.carrier_type:
+                instance = instance_name(name, vehicle.id)
+                result[instance] = replace(spec, name=instance, node=vehicle.id,
+                                           carrier_type=None)
+    return result
+
+
 def find_carrier(snapshot: Snapshot, node: str) -> VehicleState | None:
-    """The vehicle carrying ``node``'s sensors (its id is the node's); None if absent."""
+    """The vehicle carrying ``node``'s sensors (its id is the node's, also for a vehicle
+    carrying sensors by type); None if absent."""
     return snapshot.vehicles.get(node)
 
 

@@ -2,8 +2,10 @@
 
 This is the geometry behind the ``enclose`` correction (:mod:`sse_cosim.sets.gains`) and the
 ``enclose`` fusion (:mod:`sse_cosim.sets.fusion`): compute the exact intersection P as a convex
-polygon (half-plane clipping in NumPy, :func:`clip_polygon`), then enclose P in a zonotope whose
-generator directions are fixed (:func:`enclose_polygon`).
+polygon (half-plane clipping, :func:`clip_polygon`), then enclose P in a zonotope whose
+generator directions are fixed (:func:`enclose_polygon`). The functions here are the NumPy
+reference; the loop runs their compiled twins (:mod:`sse_cosim.sets.enclosure_kernels`), which
+the tests check against them.
 
 With fixed unit directions D = [d_1, ..., d_k] and scales α >= 0 the zonotope is
 ⟨c, D diag(α)⟩; its half-width along the unit normal n_i ⊥ d_i is (Aα)_i with
@@ -37,22 +39,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linprog
 
+from sse_cosim.sets.enclosure_kernels import EXACT_RTOL, MARGIN, PARALLEL_SIN, REFINE_STEPS
 from sse_cosim.sets.strips import Strips
 from sse_cosim.sets.zonotope import FloatArray, Zonotope
-
-MARGIN = 1e-10
-"""Safety margin of the containment test, relative to the size of the input set: covers the
-rounding of the clipped polygon's vertices and of the zonotope's half-widths."""
-
-PARALLEL_SIN = 1e-9
-"""Directions whose angle has a sine below this are merged into one."""
-
-REFINE_STEPS = 1
-"""Re-centering steps after the least-perimeter enclosure (:func:`enclose_polygon`)."""
-
-EXACT_RTOL = 1e-8
-"""An enclosure whose area is within this of the polygon's counts as exact
-(:func:`smaller_enclosure`)."""
 
 
 def clip_polygon(vertices: FloatArray, normal: FloatArray, bound: float) -> FloatArray:
@@ -279,13 +268,14 @@ def enclose_polygon(vertices: FloatArray, directions: FloatArray, size: float,
     return center, directions[:, used] * alpha[used]
 
 
-def enclose_intersection(base: Zonotope, strips: Strips, generators: FloatArray
-                         ) -> tuple[Zonotope, FloatArray] | None:
+def enclose_intersection_reference(base: Zonotope, strips: Strips, generators: FloatArray
+                                   ) -> tuple[Zonotope, FloatArray] | None:
     """``base`` ∩ ``strips`` (2-D, ``base`` full-dimensional) exactly as a convex polygon P,
     enclosed in a zonotope along the directions of the columns of ``generators`` (2, e):
     (the enclosure, P's vertices (m, 2) about ``base``'s center), or None when P is empty or
     no enclosure was accepted. Works about ``base``'s center, so that the clipping and the
-    enclosure see numbers of the set's size, not of its position."""
+    enclosure see numbers of the set's size, not of its position. The NumPy reference of
+    :func:`~sse_cosim.sets.enclosure_kernels.enclose_intersection`."""
     corners = Zonotope.unchecked(np.zeros(2), base.generators).vertices()
     polygon = clip_to_strips(corners, strips.normals, strips.values - strips.normals @ base.center,
                              strips.radii)

@@ -15,8 +15,10 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
+from sse_cosim.sets import enclosure_kernels
 from sse_cosim.sets._registry import lookup
-from sse_cosim.sets.enclosure import enclose_intersection
+from sse_cosim.sets.enclosure import enclose_intersection_reference
+from sse_cosim.sets.enclosure_kernels import full_rank_2d
 from sse_cosim.sets.gains import intersect_strips
 from sse_cosim.sets.overlap import projection_interval, strip_covers
 from sse_cosim.sets.strips import Strips, zonotope_facet_strips
@@ -101,14 +103,32 @@ def enclose_fusion(zonotopes: Sequence[Zonotope]) -> Zonotope:
     smallest input (``volume`` fusion) when n != 2, when an input is not full-dimensional (it
     is then the smallest: volume 0), when the inputs share no point (inconsistent sources,
     which :mod:`sse_cosim.sets.overlap` detects; any set is sound), or when no
-    enclosure is accepted.
+    enclosure is accepted. The clipping and the enclosure run compiled
+    (:func:`~sse_cosim.sets.enclosure_kernels.enclose_fusion`).
     """
+    index = _smallest(zonotopes)
+    base = zonotopes[index]
+    if base.dim != 2 or not all(full_rank_2d(z.generators) for z in zonotopes):
+        return base
+    starts = np.cumsum([0] + [z.n_generators for z in zonotopes])
+    found, center, generators = enclosure_kernels.enclose_fusion(
+        np.stack([z.center for z in zonotopes]), np.hstack([z.generators for z in zonotopes]),
+        starts, index)
+    if not found:
+        return base
+    enclosed = Zonotope.unchecked(center, generators)
+    return enclosed if enclosed.volume() < base.volume() else base
+
+
+def enclose_fusion_reference(zonotopes: Sequence[Zonotope]) -> Zonotope:
+    """The NumPy reference of :func:`enclose_fusion`."""
     index = _smallest(zonotopes)
     base = zonotopes[index]
     if base.dim != 2 or not all(full_rank(z.generators) for z in zonotopes):
         return base
     others = Strips.stack([zonotope_facet_strips(z) for j, z in enumerate(zonotopes) if j != index])
-    found = enclose_intersection(base, others, np.hstack([z.generators for z in zonotopes]))
+    found = enclose_intersection_reference(base, others,
+                                           np.hstack([z.generators for z in zonotopes]))
     if found is None:
         return base
     enclosed = found[0]

@@ -25,9 +25,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from sse_cosim.sets import kernels
+from sse_cosim.sets import enclosure_kernels, kernels
 from sse_cosim.sets._registry import lookup
-from sse_cosim.sets.enclosure import enclose_intersection, smaller_enclosure
+from sse_cosim.sets.enclosure import enclose_intersection_reference, smaller_enclosure
 from sse_cosim.sets.overlap import strip_covers
 from sse_cosim.sets.strips import Strips
 from sse_cosim.sets.zonotope import (
@@ -318,20 +318,39 @@ def enclose_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
     Falls back to the ``volume`` result when n != 2, when Z is not full-dimensional, when
     Z ∩ S is empty (an inconsistent measurement: any set is sound, and
     :mod:`sse_cosim.sets.overlap` is where that is detected, as for the gains), or when
-    no enclosure is found.
+    no enclosure is found. All but the ``volume`` gain runs compiled
+    (:func:`~sse_cosim.sets.enclosure_kernels.enclose_correction`).
     """
+    if zonotope.dim != 2:
+        return _volume_result(zonotope, strips)
+    status, center, generators = enclosure_kernels.enclose_correction(
+        zonotope.center, zonotope.generators, strips.normals, strips.values, strips.radii)
+    if status == enclosure_kernels.FALLBACK:
+        return _volume_result(zonotope, strips)  # (strips that all cover Z: Z as it is)
+    enclosed = Zonotope.unchecked(center, generators)
+    if status == enclosure_kernels.EXACT:
+        return enclosed
+    other = _volume_result(zonotope, strips)
+    return enclosed if enclosed.volume() < other.volume() else other
 
-    def volume() -> Zonotope:
-        return apply_gain(zonotope, strips, GAIN_METHODS["volume"](zonotope, strips))
 
+def enclose_correction_reference(zonotope: Zonotope, strips: Strips) -> Zonotope:
+    """The NumPy reference of :func:`enclose_correction` (compiled in
+    :func:`~sse_cosim.sets.enclosure_kernels.enclose_correction`)."""
     if zonotope.dim != 2 or not full_rank(zonotope.generators) \
             or strip_covers(zonotope, strips).all():
-        return volume()  # (strips that all cover Z: it comes back as it is)
+        return _volume_result(zonotope, strips)
     edges = np.stack([-strips.normals[:, 1], strips.normals[:, 0]])
-    found = enclose_intersection(zonotope, strips, np.hstack([zonotope.generators, edges]))
+    found = enclose_intersection_reference(zonotope, strips,
+                                           np.hstack([zonotope.generators, edges]))
     if found is None:
-        return volume()
-    return smaller_enclosure(*found, volume)
+        return _volume_result(zonotope, strips)
+    return smaller_enclosure(*found, lambda: _volume_result(zonotope, strips))
+
+
+def _volume_result(zonotope: Zonotope, strips: Strips) -> Zonotope:
+    """Z ∩ S by Proposition 1 with the ``volume`` gain (the ``enclose`` correction's fallback)."""
+    return apply_gain(zonotope, strips, GAIN_METHODS["volume"](zonotope, strips))
 
 
 CORRECTION_METHODS: dict[str, CorrectionMethod] = {

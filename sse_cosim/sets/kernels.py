@@ -28,19 +28,28 @@ _BLOCK = 128  # numpy's PW_BLOCKSIZE
 
 @njit(cache=True)
 def _block_sum(values: FloatArray, first: int, count: int) -> float:
-    """numpy's pairwise_sum for count <= 128: eight running sums, combined as a tree."""
+    """numpy's pairwise_sum for count <= 128: eight running sums, combined as a tree (kept in
+    scalars: no allocation)."""
     if count < 8:
         total = 0.0
         for i in range(first, first + count):
             total += values[i]
         return total
-    r = values[first:first + 8].copy()
+    r0, r1, r2, r3 = values[first], values[first + 1], values[first + 2], values[first + 3]
+    r4, r5, r6, r7 = values[first + 4], values[first + 5], values[first + 6], values[first + 7]
     i = 8
     while i < count - count % 8:
-        for j in range(8):
-            r[j] += values[first + i + j]
+        j = first + i
+        r0 += values[j]
+        r1 += values[j + 1]
+        r2 += values[j + 2]
+        r3 += values[j + 3]
+        r4 += values[j + 4]
+        r5 += values[j + 5]
+        r6 += values[j + 6]
+        r7 += values[j + 7]
         i += 8
-    total = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+    total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
     while i < count:
         total += values[first + i]
         i += 1

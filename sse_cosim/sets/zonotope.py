@@ -29,7 +29,7 @@ from sse_cosim.sets.reduction import REDUCTION_METHODS
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
-_PARALLEL_RTOL = 1e-12
+PARALLEL_RTOL = 1e-12
 
 
 def _read_only(values: ArrayLike) -> FloatArray:
@@ -145,7 +145,7 @@ def _merge_parallel(sorted_generators: FloatArray) -> FloatArray:
     a, b = sorted_generators[:, :-1], sorted_generators[:, 1:]
     cross = a[0] * b[1] - a[1] * b[0]
     scale = np.linalg.norm(a, axis=0) * np.linalg.norm(b, axis=0)
-    starts = np.flatnonzero(np.concatenate([[True], np.abs(cross) > _PARALLEL_RTOL * scale]))
+    starts = np.flatnonzero(np.concatenate([[True], np.abs(cross) > PARALLEL_RTOL * scale]))
     return np.add.reduceat(sorted_generators, starts, axis=1)
 
 

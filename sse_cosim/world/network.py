@@ -1,4 +1,9 @@
-"""Building the SUMO network from its plain-XML sources with netconvert, cached by content.
+"""The scenario's SUMO network: an existing ``.net.xml``, or built from plain-XML sources by
+netconvert, cached by content.
+
+``scenario_net_path(network, source)`` is the ``.net.xml`` of a scenario's ``[network]``: its
+``net_file`` (checked to be a readable SUMO network; used as it is, never rebuilt), or the
+network built from its ``sources_dir``.
 
 ``build_network(sources_dir)`` returns the path of a ``.net.xml`` built from the sources in
 ``sources_dir`` (``*.nod.xml``, ``*.edg.xml``, optionally ``*.con.xml``, ``*.typ.xml`` and a
@@ -12,15 +17,21 @@ never leave a half-written net behind. The ``.net.xml`` is never edited by hand.
 from __future__ import annotations
 
 import functools
+import gzip
 import hashlib
 import os
 import shutil
 import subprocess
 import tempfile
+import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from sse_cosim.errors import UserError
 from sse_cosim.files import write_text_atomic
+
+if TYPE_CHECKING:  # the schema is only needed for type checking
+    from sse_cosim.scenario.model import Network
 
 NET_FILE_NAME = "road.net.xml"
 BUILD_DIR_NAME = "build"
@@ -39,6 +50,46 @@ NETCONVERT_TIMEOUT_S = 120
 class NetworkBuildError(UserError):
     """netconvert rejected the sources: the network does not build (a run reports it as a
     simulation failure naming the scenario)."""
+
+
+def scenario_net_path(network: Network, source: str) -> Path:
+    """The ``.net.xml`` of a scenario's ``[network]`` (see module docstring).
+
+    A missing or unreadable ``net_file``, or sources that cannot be found, are a
+    :class:`UserError` naming ``source`` and the field; sources that netconvert rejects are a
+    :class:`NetworkBuildError`.
+    """
+    if network.net_file is not None:
+        return check_net_file(Path(network.net_file), source)
+    sources = str(network.sources_dir)
+    try:
+        return build_network(sources)
+    except NetworkBuildError:
+        raise
+    except UserError as exc:
+        if exc.source != sources:
+            raise
+        raise UserError(source, "network.sources_dir", f"{sources}: {exc.problem}",
+                        exc.fix) from None
+
+
+def check_net_file(path: Path, source: str) -> Path:
+    """``path`` if it is a readable SUMO network (its root element is ``<net>``; gzipped when
+    its name ends with ``.gz``, as osmWebWizard writes it)."""
+    fix = ("point network.net_file at a SUMO .net.xml (relative to the scenario file that sets "
+           "it), or use network.sources_dir for plain-XML sources")
+    if not path.is_file():
+        raise UserError(source, "network.net_file", f"{str(path)!r} not found", fix)
+    try:
+        with gzip.open(path) if path.name.endswith(".gz") else path.open("rb") as stream:
+            _, root = next(ET.iterparse(stream, events=("start",)))
+    except (ET.ParseError, OSError, EOFError, StopIteration) as exc:
+        raise UserError(source, "network.net_file", f"{str(path)!r} cannot be read ({exc})",
+                        fix) from None
+    if root.tag != "net":
+        raise UserError(source, "network.net_file", f"{str(path)!r} is no SUMO network (its "
+                        f"root element is <{root.tag}>, not <net>)", fix)
+    return path
 
 
 def build_network(sources_dir: str | os.PathLike[str]) -> Path:

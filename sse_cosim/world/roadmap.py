@@ -134,6 +134,18 @@ class RoadMap:
         return max(lanes, key=lambda g: g.index)
 
 
+def require_pedestrian_ground(roadmap: RoadMap, source: str, field: str) -> None:
+    """A UserError naming ``source`` and ``field`` (the network's) unless the network has
+    sidewalks and a crossing, which a scenario's pedestrian needs."""
+    missing = [what for what, found in (("sidewalk", roadmap.sidewalk_lanes),
+                                        ("crossing", roadmap.crossings)) if not found]
+    if missing:
+        raise UserError(source, field, f"the network has no {' and no '.join(missing)}, which "
+                        "the scenario's pedestrian needs",
+                        "convert it with netconvert --sidewalks.guess --crossings.guess "
+                        "(docs/own_network.md), or set pedestrian.present = false")
+
+
 def lane_area(shape: np.ndarray, width: float) -> shapely.Polygon:
     """A centreline widened by ``width / 2`` to each side, cut square at both ends."""
     line = shapely.LineString(shape)

@@ -75,6 +75,7 @@ class VehicleState:
     kind: str  # "automated", "vehicle" (moving), "parked" or "other" (not in the scenario)
     footprint: Footprint
     speed: float  # m/s
+    type_id: str = ""  # its SUMO vehicle type (route-file vehicles carry sensors by type)
 
 
 @dataclass(frozen=True)

@@ -1,10 +1,16 @@
 """The SUMO world: the only module of the project that imports ``libsumo``.
 
-``SumoWorld(scenario, run_dir, scenario_name)`` is a context manager. Entering it builds (or
-reuses) the network, checks the scenario's actors against it, writes the run's SUMO files into
-``run_dir`` (``scenario.rou.xml``, ``sumo.sumocfg`` -- ``sumo-gui -c run_dir/sumo.sumocfg``
-replays the run's scene -- and ``sumo.log`` with SUMO's warnings) and starts SUMO in-process.
-Leaving it always closes SUMO, also when a step raised.
+``SumoWorld(scenario, run_dir, scenario_name)`` is a context manager. Entering it takes the
+scenario's network (``network.net_file`` as it is, or built from ``network.sources_dir``:
+:mod:`sse_cosim.world.network`), checks the scenario's actors and its route files
+(``network.route_files``, :mod:`sse_cosim.world.route_files`) against it, writes the run's SUMO
+files into ``run_dir`` (``scenario.rou.xml``, ``sumo.sumocfg`` -- ``sumo-gui -c
+run_dir/sumo.sumocfg`` replays the run's scene -- and ``sumo.log`` with SUMO's warnings) and
+starts SUMO in-process. Leaving it always closes SUMO, also when a step raised.
+
+Route-file actors. SUMO loads the scenario's route files after its own route file: their
+vehicles are in every snapshot (role ``other``, with their type id, which sensors carried by
+type follow), their persons are in ``Snapshot.persons`` like the scenario's pedestrian.
 
 Time. ``step()`` advances SUMO by one step and returns the :class:`Snapshot` of the new state.
 Its ``time`` is the time SUMO's own outputs (FCD etc.) give that state: the first step returns
@@ -44,11 +50,11 @@ a time: a second ``SumoWorld`` entered while one is open raises :class:`Simulati
 ``close()`` a new simulation can be started in the same process (the tests do so), but sweeps
 run each simulation in its own process so that they can run in parallel.
 
-Determinism. Every vehicle and person type has ``speedDev=0`` and ``sigma=0``, pedestrians do
-not dawdle (``pedestrian.striping.dawdling 0``) and SUMO's seed is the scenario's seed: one
-scenario gives one sequence of snapshots. Nobody is teleported (``time-to-teleport -1``);
-collisions are reported (``collision.action warn``, junctions included) and kept in
-``collisions``.
+Determinism. Every vehicle and person type has ``speedDev=0`` and ``sigma=0`` (the route
+files' too, or they are refused), pedestrians do not dawdle (``pedestrian.striping.dawdling
+0``) and SUMO's seed is the scenario's seed: one scenario gives one sequence of snapshots.
+Nobody is teleported (``time-to-teleport -1``); collisions are reported (``collision.action
+warn``, junctions included) and kept in ``collisions``.
 """
 
 from __future__ import annotations
@@ -69,8 +75,9 @@ from sse_cosim.files import write_text_atomic
 from sse_cosim.scenario.model import AutomatedVehicle, Scenario, present
 from sse_cosim.world import demand
 from sse_cosim.world.demand import ActorPlan, PedestrianPlan
-from sse_cosim.world.network import NetworkBuildError, build_network
-from sse_cosim.world.roadmap import RoadMap, load_roadmap
+from sse_cosim.world.network import NetworkBuildError, scenario_net_path
+from sse_cosim.world.roadmap import RoadMap, load_roadmap, require_pedestrian_ground
+from sse_cosim.world.route_files import RouteFiles, read_route_files
 from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
 
 with contextlib.redirect_stdout(io.StringIO()):
@@ -134,6 +141,7 @@ class SumoWorld:
         self._roadmap: RoadMap | None = None
         self._plan: ActorPlan | None = None
         self._net_path: Path | None = None
+        self._route_files = RouteFiles((), frozenset())
         self._open = False
         self._entered = False
         self._time = -self._dt
@@ -147,7 +155,7 @@ class SumoWorld:
         }
         self._teleports = 0
         self._collisions: list[Collision] = []
-        self._sizes: dict[str, tuple[float, float]] = {}
+        self._statics: dict[str, tuple[float, float, str]] = {}
         self._person_length: dict[str, float] = {}
 
     # --- context manager ------------------------------------------------------------------
@@ -161,18 +169,20 @@ class SumoWorld:
                                   "this process; libsumo runs one at a time -- close it first, "
                                   "or run each simulation in its own process")
         self._entered = True
-        sources = self.scenario.network.sources_dir
+        network = self.scenario.network
         try:
-            self._net_path = build_network(sources)
+            self._net_path = scenario_net_path(network, self.scenario_name)
         except NetworkBuildError as exc:
             raise SimulationError(self.scenario_name, "the road network does not build: "
                                   f"{exc.one_line()}") from exc
-        except UserError as exc:
-            if exc.source != str(sources):
-                raise
-            raise UserError(self.scenario_name, "network.sources_dir",
-                            f"{sources}: {exc.problem}", exc.fix) from None
         self._roadmap = load_roadmap(self._net_path)
+        if present(self.scenario.pedestrians):
+            require_pedestrian_ground(
+                self._roadmap, self.scenario_name,
+                "network.net_file" if network.net_file else "network.sources_dir")
+        self._route_files = read_route_files(network.route_files, self.scenario.actor_ids(),
+                                             self.scenario_name)
+        self._check_carrier_types()
         self._plan = demand.plan_actors(self.scenario, self._net_path, self._roadmap,
                                         source=self.scenario_name)
         config = self._write_files()
@@ -332,6 +342,16 @@ class SumoWorld:
             raise SimulationError(self.scenario_name, "the SUMO world is not open "
                                   "(use it inside 'with SumoWorld(...) as world:')")
 
+    def _check_carrier_types(self) -> None:
+        """A sensor carried by type names a vehicle type of the route files."""
+        for name, sensor in self.scenario.sensors.items():
+            carrier = sensor.carrier_type
+            if carrier is not None and carrier not in self._route_files.type_ids:
+                raise UserError(self.scenario_name, f"sensors.{name}.carrier_type",
+                                f"no file in network.route_files declares the type {carrier!r}",
+                                "name a vType of the route files, or carry the sensor on a "
+                                "node (sensors.<name>.node)")
+
     def _check_insertions(self) -> None:
         """Every automated and moving vehicle is on the road from its departure on; SUMO
         would keep one it has no room for waiting and insert it later (see module
@@ -368,11 +388,11 @@ class SumoWorld:
         routes = demand.write_route_file(self.scenario, self._plan,
                                          self.run_dir / demand.ROUTE_FILE_NAME)
         sim = self.scenario.simulation
+        # relative to this file, where SUMO resolves them: no machine path in a results folder
+        route_files = [routes.name, *(self._relative(p) for p in self._route_files.paths)]
         options = {
-            # relative to this file, where SUMO resolves it: no machine path in a results folder
-            "input": {"net-file": os.path.relpath(self._net_path.resolve(),
-                                                  self.run_dir.resolve()),
-                      "route-files": routes.name},
+            "input": {"net-file": self._relative(self._net_path),
+                      "route-files": ",".join(route_files)},
             "time": {"begin": "0", "step-length": f"{sim.step_length_s:.10g}"},
             "processing": {
                 "time-to-teleport": "-1",
@@ -397,6 +417,10 @@ class SumoWorld:
         lines += ["</configuration>", ""]
         return write_text_atomic(self.run_dir / CONFIG_FILE_NAME, "\n".join(lines))
 
+    def _relative(self, path: Path) -> str:
+        """``path`` relative to the run folder (where SUMO resolves the configuration's)."""
+        return os.path.relpath(path.resolve(), self.run_dir.resolve())
+
     def _snapshot(self) -> Snapshot:
         sim = libsumo.simulation
         self._time = round(sim.getTime() - self._dt, 6)
@@ -418,12 +442,12 @@ class SumoWorld:
         vehicles: dict[str, VehicleState] = {}
         for vid, values in libsumo.vehicle.getAllSubscriptionResults().items():
             x, y = values[libsumo.VAR_POSITION]
-            length, width = self._size(vid)
+            length, width, type_id = self._static(vid)
             heading = _heading(values[libsumo.VAR_ANGLE])
             vehicles[vid] = VehicleState(
                 id=vid, kind=self._kinds.get(vid, "other"),
                 footprint=Footprint(Pose(float(x), float(y), heading), length, width),
-                speed=float(values[libsumo.VAR_SPEED]))
+                speed=float(values[libsumo.VAR_SPEED]), type_id=type_id)
             if vid in self._automated:
                 self._automated[vid].distance = float(values[libsumo.VAR_DISTANCE])
         persons: dict[str, PersonState] = {}
@@ -447,12 +471,14 @@ class SumoWorld:
         half = 0.5 * self._person_size(pid)
         return float(x) - half * math.cos(heading), float(y) - half * math.sin(heading)
 
-    def _size(self, vid: str) -> tuple[float, float]:
-        size = self._sizes.get(vid)
-        if size is None:
-            size = (float(libsumo.vehicle.getLength(vid)), float(libsumo.vehicle.getWidth(vid)))
-            self._sizes[vid] = size
-        return size
+    def _static(self, vid: str) -> tuple[float, float, str]:
+        """A vehicle's length, width (m) and type id, which do not change during a run."""
+        static = self._statics.get(vid)
+        if static is None:
+            static = (float(libsumo.vehicle.getLength(vid)), float(libsumo.vehicle.getWidth(vid)),
+                      str(libsumo.vehicle.getTypeID(vid)))
+            self._statics[vid] = static
+        return static
 
     def _person_size(self, pid: str) -> float:
         length = self._person_length.get(pid)

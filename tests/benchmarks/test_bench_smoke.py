@@ -36,12 +36,19 @@ def test_every_benchmark_runs_and_reports(quick):
     _, out = quick
     data = json.loads((out / "benchmarks.json").read_text())
     for key in ("machine", "gain_methods", "kernels", "loop_cost", "tightness", "baseline",
-                "soundness", "scaling", "throughput"):
+                "soundness", "scaling", "throughput", "cluster"):
         assert key in data, key
     assert {"cpu", "cores", "python", "sumo"} <= set(data["machine"])
     assert data["command"].endswith("--quick")
     text = (out / "benchmarks.md").read_text()
     assert "## Targets" in text and "bare SUMO" in text
+    assert "Dask cluster" in text
+
+
+def test_the_cluster_sweep_gives_the_local_pools_rows(quick):
+    """The runs on the dask scheduler + workers give the same summaries as the local pool."""
+    cluster = quick[0]["cluster"]
+    assert cluster["runs"] == 10 and cluster["rows_identical"], cluster["rows_different"]
 
 
 def test_quick_figures_are_sane(quick):

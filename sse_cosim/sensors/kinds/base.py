@@ -12,7 +12,7 @@ from abc import abstractmethod
 from typing import Protocol
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from sse_cosim.scenario.base import StrictModel
 from sse_cosim.sensors.measurement import NoiseKind
@@ -56,14 +56,32 @@ class SensorMount(StrictModel):
 
 
 class SensorConfig(StrictModel):
-    """The scenario fields every kind has; a kind's schema adds ``kind`` and its own."""
+    """The scenario fields every kind has; a kind's schema adds ``kind`` and its own.
 
-    node: str = Field(description="Carrier: 'bus', 'car' or a road-side unit id.")
+    The carrier is one node (``node``) or every vehicle of a route-file type
+    (``carrier_type``), exactly one of the two.
+    """
+
+    node: str | None = Field(
+        None, description="Carrier: 'bus', 'car' or a road-side unit id (or carrier_type)."
+    )
+    carrier_type: str | None = Field(
+        None, description="Instead of node: every vehicle of this type from network.route_files "
+        "carries the sensor, as a connected node named by its vehicle id while it is in the "
+        "scene; the instance on vehicle v is named '<sensor>@v'."
+    )
     mount: SensorMount = Field(default_factory=SensorMount)
     noise: NoiseKind = Field(
         "uniform", description="'uniform': uniform within the kind's noise bounds; "
         "'worst-case': on the bounds (either sign)."
     )
+
+    @model_validator(mode="after")
+    def _one_carrier(self) -> SensorConfig:
+        if (self.node is None) == (self.carrier_type is None):
+            raise ValueError("node: set exactly one of node (one carrier) and carrier_type "
+                             "(every vehicle of a route-file type)")
+        return self
 
     @abstractmethod
     def build(self) -> SensorKind:
