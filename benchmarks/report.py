@@ -54,6 +54,8 @@ def markdown(r: dict) -> str:
         lines += _throughput(r["throughput"], t)
     if "cluster" in r:
         lines += _cluster(r["cluster"])
+    if "crowd" in r:
+        lines += _crowd(r["crowd"])
     if "tightness" in r:
         lines += _tightness(r["tightness"], t)
     if "soundness" in r:
@@ -230,6 +232,16 @@ def _throughput(tp: dict, t: dict) -> list[str]:
         lines.append(f"| {c['executor']} | {c['workers']} | {c['runs']} | {c['seconds']:.1f} | "
                      f"{c['runs_per_minute']:.1f} | {c['speedup_vs_1_worker']:.2f}× |")
     return [*lines, ""]
+
+
+def _crowd(c: dict) -> list[str]:
+    stages = ", ".join(f"{name} {us / 1000:.1f}" for name, us in c["stages_us"].items())
+    return ["## 3b. A scene with many pedestrians (real SUMO)", "",
+            f"`{c['scenario']}`: {c['pedestrians']} pedestrians, {c['steps']} steps, median of "
+            f"{c['repeats']} run(s), every per-step check on.", "",
+            "| ms per step | bare SUMO, same scene (ms) | ratio |", "|---|---|---|",
+            f"| {c['us_per_step'] / 1000:.1f} | {c['bare_us_per_step'] / 1000:.2f} | "
+            f"{c['ratio_to_bare']:.0f}× |", "", f"Stages (ms per step): {stages}.", ""]
 
 
 def _cluster(c: dict) -> list[str]:

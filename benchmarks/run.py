@@ -16,6 +16,7 @@ from pathlib import Path
 from benchmarks import (
     baseline,
     cluster,
+    crowd,
     gain_methods,
     kernels,
     loop_cost,
@@ -90,6 +91,8 @@ def run_all(out: Path, quick: bool = False, log: Callable[[str], None] = print,
     stage("scaling", lambda: scaling.run(pedestrians=(1, 4) if quick else scaling.PEDESTRIANS,
                                          sensors=(1, 2) if quick else scaling.SENSORS,
                                          steps=1 if quick else 5, warmup=1 if quick else 2))
+    stage("crowd", lambda: crowd.run(pedestrians=crowd.PEDESTRIANS, repeats=1 if quick else 2,
+                                      duration_s=1.0 if quick else 20.0))
     stage("throughput", lambda: throughput.run(runs=2 if quick else 16,
                                                duration_s=1.0 if quick else None,
                                                dask=not quick))

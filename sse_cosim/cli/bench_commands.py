@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[2]
 @click.option("--quick", is_flag=True, help="A tiny version of each benchmark (smoke test).")
 @click.option("--only", multiple=True,
               type=click.Choice(["gain_methods", "kernels", "loop_cost", "tightness", "baseline",
-                                 "soundness", "scaling", "throughput", "cluster"]),
+                                 "soundness", "scaling", "crowd", "throughput", "cluster"]),
               help="Run only this benchmark; repeatable.")
 def bench(out_dir: Path, quick: bool, only: tuple[str, ...]) -> None:
     """Benchmarks and validation: cost per step against bare SUMO, gain methods, scaling,

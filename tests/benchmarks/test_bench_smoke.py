@@ -36,13 +36,13 @@ def test_every_benchmark_runs_and_reports(quick):
     _, out = quick
     data = json.loads((out / "benchmarks.json").read_text())
     for key in ("machine", "gain_methods", "kernels", "loop_cost", "tightness", "baseline",
-                "soundness", "scaling", "throughput", "cluster"):
+                "soundness", "scaling", "crowd", "throughput", "cluster"):
         assert key in data, key
     assert {"cpu", "cores", "python", "sumo"} <= set(data["machine"])
     assert data["command"].endswith("--quick")
     text = (out / "benchmarks.md").read_text()
     assert "## Targets" in text and "bare SUMO" in text
-    assert "Dask cluster" in text
+    assert "Dask cluster" in text and "many pedestrians" in text
 
 
 def test_the_cluster_sweep_gives_the_local_pools_rows(quick):
