@@ -134,12 +134,8 @@ def _automated(vid: str, av: AutomatedVehicle, lane: int) -> Entry:
                      decel=av.comfortable_decel_mps2, emergencyDecel=av.emergency_decel_mps2,
                      apparentDecel=av.comfortable_decel_mps2, maxSpeed=av.nominal_speed_mps,
                      speedFactor=1, speedDev=0, sigma=0)
-    return vtype, av.depart_s, (
-        f'    <vehicle id={quoteattr(vid)} type={quoteattr(vid)} depart="{_num(av.depart_s)}" '
-        f'departLane="{lane}" '
-        f'departPos="{_num(av.depart_pos_m)}" departSpeed="{_num(av.nominal_speed_mps)}">\n'
-        f'        <route edges={quoteattr(" ".join(av.route_edges))}/>\n'
-        f"    </vehicle>")
+    return vtype, av.depart_s, _driving(vid, av.depart_s, lane, av.depart_pos_m,
+                                        av.nominal_speed_mps, av.route_edges)
 
 
 def _parked(vid: str, parked: ParkedVehicle) -> Entry:
@@ -160,13 +156,20 @@ def _vehicle(vid: str, vehicle: Vehicle) -> Entry:
     vtype = _element("vType", id=vid, vClass=VEHICLE_VCLASS, guiShape=VEHICLE_VCLASS,
                      length=vehicle.length_m, width=vehicle.width_m, maxSpeed=vehicle.speed_mps,
                      speedFactor=1, speedDev=0, sigma=0)
-    return vtype, vehicle.depart_s, (
-        f'    <vehicle id={quoteattr(vid)} type={quoteattr(vid)} '
-        f'depart="{_num(vehicle.depart_s)}" '
-        f'departLane="{vehicle.lane_index}" departPos="{_num(vehicle.depart_pos_m)}" '
-        f'departSpeed="{_num(vehicle.speed_mps)}">\n'
-        f'        <route edges={quoteattr(" ".join(vehicle.route_edges))}/>\n'
-        f"    </vehicle>")
+    return vtype, vehicle.depart_s, _driving(vid, vehicle.depart_s, vehicle.lane_index,
+                                             vehicle.depart_pos_m, vehicle.speed_mps,
+                                             vehicle.route_edges)
+
+
+def _driving(vid: str, depart_s: float, lane: int, depart_pos_m: float, speed_mps: float,
+             route_edges: Sequence[str]) -> str:
+    """A vehicle of its own type ``vid`` that departs at ``depart_s`` on ``lane`` of its
+    route's first edge, at ``depart_pos_m`` and ``speed_mps``."""
+    return (f'    <vehicle id={quoteattr(vid)} type={quoteattr(vid)} depart="{_num(depart_s)}" '
+            f'departLane="{lane}" departPos="{_num(depart_pos_m)}" '
+            f'departSpeed="{_num(speed_mps)}">\n'
+            f'        <route edges={quoteattr(" ".join(route_edges))}/>\n'
+            f"    </vehicle>")
 
 
 def _pedestrian(pid: str, ped: Pedestrian, plan: PedestrianPlan) -> Entry:
