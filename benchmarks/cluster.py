@@ -92,7 +92,7 @@ def _timed(tasks: list[RunTask], execution: Execution) -> tuple[float, dict[str,
     return elapsed, rows
 
 
-def run(runs: int = 1000, duration_s: float = 0.5, workers: int = 2) -> dict:
+def run(runs: int = 1000, duration_s: float = 3.0, workers: int = 2) -> dict:
     with tempfile.TemporaryDirectory(prefix="sse-bench-cluster-") as tmp:
         root = Path(tmp)
         local_s, local_rows = _timed(_tasks(root / "local", runs, duration_s),

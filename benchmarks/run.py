@@ -31,8 +31,10 @@ from benchmarks.common import machine
 TARGETS = {
     "loop_a_ratio_to_bare": 20.0,
     "loop_b_ratio_to_a": 20.0,
+    "loop_default_ratio_to_bare": 70.0,
     "kernels_ratio_to_zonoopt": 2.0,
     "kernels_ratio_to_shapely": 1.5,
+    "kernel_targets": ["intersection", "reduction", "area", "enclose intersection"],
     "scaling_exponent": 1.0,
     "throughput_speedup_2_workers": 1.8,
     "cluster_ratio_to_local": 0.9,
@@ -96,7 +98,8 @@ def run_all(out: Path, quick: bool = False, log: Callable[[str], None] = print,
     stage("throughput", lambda: throughput.run(runs=2 if quick else 16,
                                                duration_s=1.0 if quick else None,
                                                dask=not quick))
-    stage("cluster", lambda: cluster.run(runs=10 if quick else 1000))
+    stage("cluster", lambda: cluster.run(runs=10 if quick else 1000,
+                                         duration_s=0.5 if quick else 3.0))
     results["total_seconds"] = time.perf_counter() - started
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmarks.json").write_text(json.dumps(results, indent=2, default=float) + "\n",
