@@ -141,9 +141,9 @@ def require_pedestrian_ground(roadmap: RoadMap, source: str, field: str) -> None
                                         ("crossing", roadmap.crossings)) if not found]
     if missing:
         raise UserError(source, field, f"the network has no {' and no '.join(missing)}, which "
-                        "the scenario's pedestrian needs",
+                        "the scenario's pedestrians need",
                         "convert it with netconvert --sidewalks.guess --crossings.guess "
-                        "(docs/own_network.md), or set pedestrian.present = false")
+                        "(docs/own_network.md), or set pedestrians.<id>.present = false")
 
 
 def lane_area(shape: np.ndarray, width: float) -> shapely.Polygon:
