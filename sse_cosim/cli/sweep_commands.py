@@ -57,8 +57,9 @@ def sweep(scenarios: tuple[Path, ...], sweep_file: Path | None, params: tuple[st
       --param 'sensors.*_cam.noise_bound_m=[[0.5,0.5],[1,1]]'       (glob over names)
       --param 'sensors.*[node!=bus].noise_bound_m=[[0.5,0.5],[1,1]]' (every shared sensor)
 
-    A path that matches nothing stops the sweep before any run (exit status 2); a
-    combination whose value is invalid (a negative noise bound) is a failed run. OUT gets
+    A path that matches nothing, or a --set value a scenario refuses, stops the sweep before
+    any run (exit status 2); a combination whose value is invalid (a negative noise bound) is
+    a failed run. OUT gets
     sweep.json (the plan), runs/<key>/ per run, sweep.csv (one row per run; sweep.parquet
     too when pyarrow imports) and sweep_<figure>.png. Exit status 3 if any run failed.
     """
@@ -74,12 +75,14 @@ def sweep(scenarios: tuple[Path, ...], sweep_file: Path | None, params: tuple[st
     )
 
     check_scheduler(executor, scheduler)
+    assignments = [(text, *parse_assignment(text, "--set")) for text in fixed]
     spec = combine(
         load_sweep_file(sweep_file) if sweep_file else None,
         scenarios=list(scenarios),
         parameters=[parse_parameter(text) for text in params],
         seeds=parse_seeds(seeds) if seeds is not None else None,
-        fixed=dict(parse_assignment(text, "--set") for text in fixed),
+        fixed={path: value for _, path, value in assignments},
+        fixed_given={path: f"--set {text}" for text, path, _ in assignments},
     )
     runs = plan_sweep(spec)
     out_dir = writable_folder(out_dir, "--out")

@@ -36,7 +36,7 @@ from sse_cosim.reporting.outputs import RUNS_FOLDER, TaskOutcome
 from sse_cosim.reporting.sweep_report import SWEEP_PLAN
 from sse_cosim.runner.batch import scenario_files
 from sse_cosim.runner.executors import Execution, execute
-from sse_cosim.runner.parameters import parse_value, split_assignment
+from sse_cosim.runner.parameters import blame_assignments, parse_value, split_assignment
 from sse_cosim.runner.tasks import RunTask, record_failure
 from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
 from sse_cosim.scenario.paths import PART_FILTER, expand_pattern, split_path
@@ -184,7 +184,9 @@ class SweepFile(_FileModel):
 class SweepSpec:
     """What to sweep: scenario files x parameter values x seeds, with fixed overrides.
 
-    ``seeds=None`` keeps each scenario's own ``simulation.seed``.
+    ``seeds=None`` keeps each scenario's own ``simulation.seed``. ``fixed_given``: for a fixed
+    override from the command line, the option as given (``"--set PATH=VALUE"``), which its
+    errors name; the others came from the sweep file (``source``).
     """
 
     scenarios: tuple[Path, ...]
@@ -192,6 +194,11 @@ class SweepSpec:
     seeds: tuple[int, ...] | None = None
     fixed: Mapping[str, Any] = field(default_factory=dict)
     source: str = CLI
+    fixed_given: Mapping[str, str] = field(default_factory=dict)
+
+    def blame(self, pattern: str) -> str:
+        """Who set the fixed override ``pattern``: the option as given, or the sweep file."""
+        return self.fixed_given.get(pattern, f"{self.source}: set")
 
 
 def load_sweep_file(path: Path) -> SweepSpec:
@@ -225,10 +232,11 @@ def combine(
     parameters: Sequence[Parameter] = (),
     seeds: tuple[int, ...] | None = None,
     fixed: Mapping[str, Any] | None = None,
+    fixed_given: Mapping[str, str] | None = None,
 ) -> SweepSpec:
     """``base`` (a sweep file) with command-line additions: scenarios and seeds replace the
     file's, parameters replace the file's parameter of the same path or are added, fixed
-    overrides are merged over the file's."""
+    overrides are merged over the file's (``fixed_given``: each one's option as given)."""
     if base is None and not scenarios:
         raise UserError(CLI, "SCENARIOS", "no scenario to sweep",
                         "name scenario files or folders, or a sweep file with --file")
@@ -240,6 +248,7 @@ def combine(
         seeds=seeds if seeds is not None else base.seeds,
         fixed={**base.fixed, **(fixed or {})},
         source=base.source,
+        fixed_given=dict(fixed_given or {}),
     )
 
 
@@ -305,8 +314,7 @@ def _plan_scenario(spec: SweepSpec, scenario: Path) -> Iterator[PlannedRun]:
     data = load_scenario_data(scenario)
     base = validate_scenario(data, source)
     fields = base.model_dump(mode="json")
-    fixed = {path: value for pattern, value in spec.fixed.items()
-             for path in _targets(pattern, [value], fields, source)}
+    fixed = _fixed_overrides(spec, data, fields, scenario)
     targets = [_targets(p.pattern, p.values, fields, source) for p in spec.parameters]
     _check_disjoint(spec, fixed, targets, source)
     labels = _labels([p.pattern for p in spec.parameters])
@@ -327,6 +335,24 @@ def _plan_scenario(spec: SweepSpec, scenario: Path) -> Iterator[PlannedRun]:
                 overrides=overrides,
                 error=_validation_error(data, overrides, source),
             )
+
+
+def _fixed_overrides(spec: SweepSpec, data: Mapping[str, Any], fields: Mapping[str, Any],
+                     scenario: Path) -> dict[str, Any]:
+    """Path -> value of every fixed override on ``scenario``, checked before any run: they
+    hold for every run, so a pattern that selects nothing or a value the scenario refuses
+    stops the sweep with a one-line error naming the option (or the sweep file's ``set``)."""
+    fixed: dict[str, Any] = {}
+    owners: dict[str, str] = {}
+    for pattern, value in spec.fixed.items():
+        blame = f"{spec.blame(pattern)} ({scenario.name})"
+        for path in _targets(pattern, [value], fields, blame):
+            fixed[path], owners[path] = value, blame
+    try:
+        validate_scenario(apply_overrides(data, fixed, str(scenario)), str(scenario))
+    except UserError as exc:
+        raise blame_assignments(exc, owners, always=True) from None
+    return fixed
 
 
 def _targets(pattern: str, values: Sequence[Any], fields: Mapping[str, Any],
