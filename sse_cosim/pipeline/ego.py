@@ -36,7 +36,6 @@ from sse_cosim.pipeline.stages import (
 )
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.sensors import SensorSpec
-from sse_cosim.sensors.faults import FaultInjector
 from sse_cosim.world.roadmap import RoadMap
 from sse_cosim.world.snapshot import Snapshot
 
@@ -71,15 +70,13 @@ class Ego:
     """Automated vehicle ``vehicle_id``'s link, fusion centre, regions, picture and policy."""
 
     def __init__(self, vehicle_id: str, scenario: Scenario, roadmap: RoadMap, model: MotionModel,
-                 specs: Mapping[str, SensorSpec], faults: FaultInjector,
+                 settings: EstimatorSettings, specs: Mapping[str, SensorSpec],
                  link_rng: np.random.Generator) -> None:
         config, dt = scenario.estimator, scenario.simulation.step_length_s
         vehicle = scenario.automated[vehicle_id]
-        settings = EstimatorSettings(config.gain_method, config.reduction_method,
-                                     config.max_generators)
         self.id = vehicle_id
         self.controller = scenario.controller
-        self.sharing = Sharing(V2XLink(scenario.v2x, link_rng), faults, model, vehicle_id)
+        self.sharing = Sharing(V2XLink(scenario.v2x, link_rng), model, vehicle_id)
         self.centre = FusionCentre(model, settings, config.fusion_method, specs, dt, vehicle_id)
         self.context = SceneContext.build(
             roadmap, vehicle.route_edges, vehicle, scenario.controller, model.max_speed,
@@ -96,7 +93,7 @@ class Ego:
     def step(self, step: int, snapshot: Snapshot, observations: Observations, tracks: Tracks,
              timer: Laps) -> EgoStep:
         """Receive, screen and fuse, refine, picture and decide (the vehicle is in
-        ``snapshot``; every node's messages of ``step`` are already sent)."""
+        ``snapshot``; every node's messages of ``step`` are already sent to it)."""
         me = snapshot.vehicles[self.id]
         received = self.sharing.receive(step)
         shared = received.picture

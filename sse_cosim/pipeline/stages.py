@@ -77,38 +77,54 @@ class Received:
     fresh_views: list[shapely.Geometry]
 
 
-class Sharing:
-    """V2X to one automated vehicle (``receiver``, its id): every other node that is in the
-    scene sends it its estimates and visible region, as its injected faults distort them, over
-    a link with the scenario's (and the injected) range, latency and losses."""
+@dataclass(frozen=True)
+class Outgoing:
+    """A node's message of one step, the sender's position (m, shape (2,)) and the steps its
+    injected link faults add to the delivery."""
 
-    def __init__(self, link: V2XLink, faults: FaultInjector, model: MotionModel,
-                 receiver: str) -> None:
+    message: Message
+    position: np.ndarray
+    extra_latency_steps: int
+
+
+def outgoing(step: int, snapshot: Snapshot, observations: Observations, tracks: Tracks,
+             faults: FaultInjector, model: MotionModel) -> list[Outgoing]:
+    """Every node's message of ``step``, built once for all receivers: each node in the scene
+    whose message no loss burst takes sends its estimates (as its injected faults distort
+    them) and visible region."""
+    result = []
+    for node, node_tracks in tracks.items():
+        node_obs = [o for o in views_of(node, observations) if o.pose is not None]
+        if not node_obs or faults.link_lost(node):
+            continue
+        estimates = faults.corrupt_estimates(
+            node, {pid: t.estimate for pid, t in node_tracks.items()}, snapshot, model)
+        message = Message(
+            node, step, estimates, union_or_empty(o.visible for o in node_obs),
+            frozenset(pid for o in node_obs for pid in o.detections),
+            disagrees(node_tracks.values()),
+        )
+        result.append(Outgoing(message, node_obs[0].pose.position, faults.extra_latency(node)))
+    return result
+
+
+class Sharing:
+    """V2X to one automated vehicle (``receiver``, its id): every other node's message
+    (:func:`outgoing`) over a link with the scenario's (and the injected) range, latency and
+    losses."""
+
+    def __init__(self, link: V2XLink, model: MotionModel, receiver: str) -> None:
         self.receiver = receiver
         self.link = link
-        self.faults = faults
         self.model = model
 
-    def send(self, step: int, snapshot: Snapshot, observations: Observations,
-             tracks: Tracks) -> None:
-        """Queue every sender's message of ``step``."""
+    def send(self, snapshot: Snapshot, messages: Sequence[Outgoing]) -> None:
+        """Queue the messages of the other nodes, at their distance to the receiver now."""
         receiver_xy = snapshot.vehicles[self.receiver].footprint.front.position
-        for node, node_tracks in tracks.items():
-            if node == self.receiver:
-                continue
-            node_obs = [o for o in views_of(node, observations) if o.pose is not None]
-            if not node_obs or self.faults.link_lost(node):
-                continue
-            position = node_obs[0].pose.position
-            estimates = self.faults.corrupt_estimates(
-                node, {pid: t.estimate for pid, t in node_tracks.items()}, snapshot, self.model)
-            message = Message(
-                node, step, estimates, union_or_empty(o.visible for o in node_obs),
-                frozenset(pid for o in node_obs for pid in o.detections),
-                disagrees(node_tracks.values()),
-            )
-            self.link.send(message, float(np.hypot(*(position - receiver_xy))),
-                           self.faults.extra_latency(node))
+        for out in messages:
+            if out.message.sender != self.receiver:
+                self.link.send(out.message, float(np.hypot(*(out.position - receiver_xy))),
+                               out.extra_latency_steps)
 
     def receive(self, step: int) -> Received:
         """Deliver what is due by ``step``."""

@@ -33,7 +33,7 @@ from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, LocalObservers
 from sse_cosim.pipeline.ego import Ego
 from sse_cosim.pipeline.result import StepCallback, StepResult
-from sse_cosim.pipeline.stages import detections_by_node, sense
+from sse_cosim.pipeline.stages import detections_by_node, outgoing, sense
 from sse_cosim.runner.timing import NoTimer, StageTimer
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors import specs_from_scenario
@@ -76,7 +76,7 @@ def simulate(
     observers = LocalObservers(scenario.node_ids(), model, settings)
     n_steps = round(scenario.simulation.duration_s / dt)
     with SumoWorld(scenario, run_dir, scenario_name) as world:
-        egos = [Ego(vid, scenario, world.roadmap, model, specs, faults, rng)
+        egos = [Ego(vid, scenario, world.roadmap, model, settings, specs, rng)
                 for vid, rng in zip(automated, [first_link_rng, *link_rngs], strict=True)]
         for step in range(n_steps):
             timer.start()
@@ -89,8 +89,10 @@ def simulate(
             timer.lap("geometry")
             tracks = observers.step(step, detections_by_node(observations))
             timer.lap("local_fusion")
-            for ego in active:
-                ego.sharing.send(step, snapshot, observations, tracks)
+            if active:  # building a message marks its faults (docs/faults.md): only when sent
+                messages = outgoing(step, snapshot, observations, tracks, faults, model)
+                for ego in active:
+                    ego.sharing.send(snapshot, messages)
             results = {ego.id: ego.step(step, snapshot, observations, tracks, timer)
                        for ego in active}
             for vid, result in results.items():
