@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from sse_cosim.sets.kernels import FloatArray, area_2d, pairwise_sum
+from sse_cosim.sets.kernels import FloatArray, area_2d, nonzero_columns, pairwise_sum
 from sse_cosim.sets.zonotope import PARALLEL_RTOL
 
 MARGIN = 1e-10
@@ -61,10 +61,7 @@ def zonotope_vertices(generators: FloatArray) -> FloatArray:
     """Vertices (k, 2) of ⟨0, G⟩, G (2, e), counter-clockwise from the lowest
     (``Zonotope.vertices``): zero columns dropped, folded, sorted, runs of parallel columns
     summed, then the boundary as the cumulative sum of 2g_i and -2g_i."""
-    keep = np.zeros(generators.shape[1], dtype=np.bool_)
-    for j in range(generators.shape[1]):
-        keep[j] = generators[0, j] != 0.0 or generators[1, j] != 0.0
-    g = _folded_sorted(np.ascontiguousarray(generators[:, keep]))
+    g = _folded_sorted(nonzero_columns(generators))
     e = g.shape[1]
     if e == 0:
         return np.zeros((1, 2))

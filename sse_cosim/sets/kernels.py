@@ -120,7 +120,7 @@ def girard_reduce(generators: FloatArray, max_generators: int) -> FloatArray:
     dropped; the max_generators - n largest by ‖g‖₁ − ‖g‖∞ kept (stable order); the rest
     enclosed in the axis-aligned box diag(Σ_j |g_j|), its zero columns dropped."""
     n = generators.shape[0]
-    g = _nonzero_columns(generators)
+    g = nonzero_columns(generators)
     k = g.shape[1]
     if k <= max_generators:
         return g
@@ -181,7 +181,7 @@ def _project(normals: FloatArray, generators: FloatArray) -> FloatArray:
 
 
 @njit(cache=True)
-def _nonzero_columns(matrix: FloatArray) -> FloatArray:
+def nonzero_columns(matrix: FloatArray) -> FloatArray:
     """The columns of ``matrix`` (n, e) that have a nonzero entry, contiguous, in order."""
     keep = np.zeros(matrix.shape[1], dtype=np.bool_)
     for j in range(matrix.shape[1]):
@@ -266,4 +266,4 @@ def intersect_frobenius(center: FloatArray, generators: FloatArray, normals: Flo
             full[i, j] = total
     if not (np.isfinite(new_center).all() and np.isfinite(full).all()):
         raise ValueError("zonotope center and generators must be finite")
-    return new_center, _nonzero_columns(full)
+    return new_center, nonzero_columns(full)
