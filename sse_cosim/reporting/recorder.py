@@ -63,6 +63,16 @@ class SceneFrame:
     unobserved: shapely.Geometry  # walkable area where an undetected pedestrian may be
 
 
+@dataclass(frozen=True)
+class _LocalSet:
+    """A node's position set of one pedestrian at one step, and whether it detects it now."""
+
+    node: str
+    pedestrian: str
+    position: Zonotope
+    detected: bool
+
+
 @dataclass
 class RunRecorder:
     """Callable passed to ``simulate``; keeps everything the reports need."""
@@ -90,11 +100,12 @@ class RunRecorder:
         truths = {pid: np.asarray(p.position) for pid, p in sorted(result.snapshot.persons.items())}
         self.truth_rows += [{"t": t, "pedestrian": pid, "x": xy[0], "y": xy[1]}
                             for pid, xy in truths.items()]
+        local = self._check_local_sets(t, result, truths)
         for ego in result.vehicles.values():
-            self._vehicle_step(t, result, ego, truths)
+            self._vehicle_step(t, result, ego, truths, local)
 
     def _vehicle_step(self, t: float, result: StepResult, ego: EgoStep,
-                      truths: dict[str, np.ndarray]) -> None:
+                      truths: dict[str, np.ndarray], local: list[_LocalSet]) -> None:
         """One automated vehicle's row, checks, sets and regions at one step."""
         vehicle = ego.vehicle
         bus = result.snapshot.vehicles[vehicle]
@@ -108,7 +119,7 @@ class RunRecorder:
             "level": ego.decision.level.label,
             "emergency": ego.decision.level is SpeedLevel.EMERGENCY,
         }
-        local_sets = self._local_sets(t, row, result, vehicle, truths)
+        local_sets = self._record_local_sets(t, row, result, vehicle, local)
         self._flags(row, result, ego)
         fused = {pid: result.model.position(ego.estimate.fused[pid])
                  for pid in truths if pid in ego.estimate.fused}
@@ -142,26 +153,31 @@ class RunRecorder:
         for _ in range(shared_fusion_now + self._wants_scene(t)):
             self.scenes.append(_frame(t, result, ego, local_sets, fused, truths))
 
-    def _local_sets(self, t: float, row: dict[str, Any], result: StepResult, vehicle: str,
-                    truths: dict[str, np.ndarray]) -> list[tuple[str, Zonotope]]:
-        """Every node's sets of the pedestrians in the scene, checked and recorded; per node
-        whether it detects any of them and the total area of its sets (None without any)."""
-        local_sets: list[tuple[str, Zonotope]] = []
+    def _check_local_sets(self, t: float, result: StepResult,
+                          truths: dict[str, np.ndarray]) -> list[_LocalSet]:
+        """Every node's set of each pedestrian in the scene, checked once per step, however
+        many automated vehicles receive it."""
+        local: list[_LocalSet] = []
         for node, tracks in result.tracks.items():
-            areas, detected = [], False
             for pid in (pid for pid in truths if pid in tracks):
-                track = tracks[pid]
-                position = result.model.position(track.estimate)
-                local_sets.append((node, position))
-                areas.append(position.volume())
-                detected |= track.detected
+                position = result.model.position(tracks[pid].estimate)
                 self._check(t, node, pid, position, truths[pid])
-                self._set_line(t, vehicle, node, pid, "local", position)
-                if track.detected and node not in self.first_detection:
-                    self.first_detection[node] = self._moment(t, result.vehicles[vehicle])
-            row[f"{node}_detected"] = detected
-            row[f"{node}_area"] = _total(areas)
-        return local_sets
+                local.append(_LocalSet(node, pid, position, tracks[pid].detected))
+        return local
+
+    def _record_local_sets(self, t: float, row: dict[str, Any], result: StepResult,
+                           vehicle: str, local: list[_LocalSet]) -> list[tuple[str, Zonotope]]:
+        """The local sets in ``vehicle``'s record: their lines; per node whether it detects
+        any pedestrian and the total area of its sets (None without any)."""
+        for s in local:
+            self._set_line(t, vehicle, s.node, s.pedestrian, "local", s.position)
+            if s.detected and s.node not in self.first_detection:
+                self.first_detection[s.node] = self._moment(t, result.vehicles[vehicle])
+        for node in result.tracks:
+            mine = [s for s in local if s.node == node]
+            row[f"{node}_detected"] = any(s.detected for s in mine)
+            row[f"{node}_area"] = _total(s.position.volume() for s in mine)
+        return [(s.node, s.position) for s in local]
 
     def _note_fusion(self, t: float, pid: str, position: Zonotope, result: StepResult,
                      ego: EgoStep) -> None:

@@ -55,3 +55,14 @@ def test_nobody_is_hit_and_every_set_holds_the_pedestrian(run):
     assert summary["containment_violations"] == 0, summary["violations"]
     assert trace["fused_contains_truth"].dropna().astype(bool).all()
     assert set(trace.loc[trace["fused_contains_truth"].notna(), "vehicle"]) == {"bus", "bus2"}
+
+
+def test_a_local_set_is_checked_once_however_many_vehicles_receive_it(tmp_path):
+    """A stuck camera's set misses the pedestrian: each miss is one violation of that node
+    at that step, not one per automated vehicle."""
+    stuck = S3.parent / "faults" / "s3_stuck_rsu1.toml"
+    summary = run_scenario_file(stuck, tmp_path, {**SECOND_BUS, "simulation.duration_s": 12.0},
+                                plots=False)
+    local = [(v["t"], v["pedestrian"]) for v in summary["violations"] if v["node"] == "rsu1"]
+    assert local, "the stuck camera's set misses the pedestrian"
+    assert len(local) == len(set(local))
