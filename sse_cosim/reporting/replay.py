@@ -1,0 +1,201 @@
+"""``replay.html``: every step of a run, played back in the browser.
+
+:class:`ReplayLog` turns each :class:`~sse_cosim.pipeline.result.StepResult` into a compact
+frame of plain lists (no shapely object is kept): footprints, pedestrians, the sensors'
+sectors and shadows, the strips as bands, every node's local sets, and per automated vehicle
+its fused sets (paper Proposition 2), refined regions, unobserved area, speed, command and
+level. Polygons are stored once in a :class:`PolygonPool` (integer centimetres, each ring as
+its first point and then steps to the next), and frames name them by index, so that geometry
+that does not change (the road, parked vehicles, road-side units' sectors) costs one number
+per frame. :func:`replay_page` fills the page template (``replay_template.html``, plain
+JavaScript and SVG, nothing loaded from the network) with that data.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from importlib import resources
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import shapely
+
+from sse_cosim.control.speed import SpeedLevel
+from sse_cosim.scenario.model import Scenario, present
+from sse_cosim.sets import Zonotope
+from sse_cosim.world.roadmap import RoadMap
+
+if TYPE_CHECKING:  # only the types: the recorder reads results, it does not make them
+    from sse_cosim.pipeline.ego import EgoStep
+    from sse_cosim.pipeline.result import StepResult
+
+REPLAY = "replay.html"
+TEMPLATE = "replay_template.html"
+DATA_MARK = "/*REPLAY_DATA*/"  # where the template takes the data (a JSON object)
+CM = 100.0  # coordinates are stored in integer centimetres
+STRIP_MARGIN_M = 5.0  # a strip is drawn over its sensor's view box widened by this much
+STRIP_SPAN_M = 1000.0  # half-length of the band built before clipping (longer than any view)
+
+LocalSet = tuple[str, str, Zonotope, bool]  # node, pedestrian, position set, detected now
+
+
+@dataclass
+class PolygonPool:
+    """Distinct polygons, each stored once; ``add`` answers their indices.
+
+    A polygon is a list of rings (exterior first, then holes); a ring is a flat list of
+    integer centimetres ``[x0, y0, dx1, dy1, ...]``: its first point, then the step to each
+    next one (the closing point is left out).
+    """
+
+    polygons: list[list[list[int]]] = field(default_factory=list)
+    _index: dict[tuple[tuple[int, ...], ...], int] = field(default_factory=dict)
+
+    def add(self, geometry: shapely.Geometry | None) -> list[int]:
+        """The indices of ``geometry``'s polygons (none for an empty or missing one; lines
+        and points hold no area and are left out)."""
+        if geometry is None:
+            return []
+        return [self._add_rings([polygon.exterior, *polygon.interiors])
+                for polygon in _polygons(geometry)]
+
+    def add_vertices(self, vertices: np.ndarray) -> int:
+        """The index of the polygon with ``vertices``, shape (k, 2), in order."""
+        return self._add_encoded((_encode(vertices),))
+
+    def _add_rings(self, rings: Sequence[shapely.LinearRing]) -> int:
+        return self._add_encoded(tuple(_encode(shapely.get_coordinates(r)[:-1]) for r in rings))
+
+    def _add_encoded(self, rings: tuple[tuple[int, ...], ...]) -> int:
+        index = self._index.get(rings)
+        if index is None:
+            index = self._index[rings] = len(self.polygons)
+            self.polygons.append([list(ring) for ring in rings])
+        return index
+
+
+def _encode(points: np.ndarray) -> tuple[int, ...]:
+    """Points, shape (k, 2), in m as integer cm: the first point, then the steps between
+    neighbours, flattened; repeated points are dropped."""
+    cm = np.round(np.asarray(points, dtype=float).reshape(-1, 2) * CM).astype(np.int64)
+    keep = np.r_[True, np.any(np.diff(cm, axis=0) != 0, axis=1)]
+    cm = cm[keep]
+    return tuple(np.vstack([cm[:1], np.diff(cm, axis=0)]).ravel().tolist())
+
+
+def _polygons(geometry: shapely.Geometry) -> list[shapely.Polygon]:
+    """The non-empty polygons in ``geometry``, at any depth of nesting."""
+    if isinstance(geometry, shapely.Polygon):
+        return [] if geometry.is_empty else [geometry]
+    if isinstance(geometry, shapely.MultiPolygon | shapely.GeometryCollection):
+        return [p for part in shapely.get_parts(geometry) for p in _polygons(part)]
+    return []
+
+
+def _cm(value: float) -> int:
+    return round(value * CM)
+
+
+@dataclass
+class ReplayLog:
+    """Every step of a run as a compact frame (see the module docstring)."""
+
+    pool: PolygonPool = field(default_factory=PolygonPool)
+    frames: list[dict[str, Any]] = field(default_factory=list)
+
+    def add(self, result: StepResult, local: Sequence[LocalSet]) -> None:
+        """Record one step; ``local``: every node's position set of each pedestrian."""
+        snap = result.snapshot
+        self.frames.append({
+            "t": round(snap.time, 6),
+            "vehicles": [[v.id, v.kind, self.pool.add(v.footprint.polygon())[0],
+                          round(v.speed, 2)] for v in snap.vehicles.values()],
+            "pedestrians": [[p.id, _cm(p.position[0]), _cm(p.position[1]), round(p.speed, 2)]
+                            for _, p in sorted(snap.persons.items())],
+            "sectors": [[name, o.node, self.pool.add(o.visible), self.pool.add(o.occluded)]
+                        for name, o in result.observations.items() if o.pose is not None],
+            "strips": self._strips(result),
+            "local": [[node, pid, self.pool.add_vertices(z.vertices()), detected]
+                      for node, pid, z, detected in local],
+            "ego": {vid: self._ego(result, ego) for vid, ego in result.vehicles.items()},
+        })
+
+    def _strips(self, result: StepResult) -> list[list[Any]]:
+        """Each detection's strips ``|n·x - y| <= r`` as bands over its sensor's view box:
+        [sensor, node, pedestrian, polygon]."""
+        bands = []
+        for name, obs in result.observations.items():
+            box = _view_box(obs.visible, obs.occluded)
+            for pid, detection in obs.detections.items():
+                s = detection.strips
+                for normal, value, radius in zip(s.normals, s.values, s.radii, strict=True):
+                    bands += [[name, obs.node, pid, i]
+                              for i in self.pool.add(_band(normal, value, radius, box))]
+        return bands
+
+    def _ego(self, result: StepResult, ego: EgoStep) -> dict[str, Any]:
+        """One automated vehicle's speed, command and level, fused sets, refined regions and
+        unobserved area."""
+        speed = result.snapshot.vehicles[ego.vehicle].speed
+        return {
+            "speed": round(speed, 3),
+            "command": round(ego.decision.command_mps, 3),
+            "level": int(ego.decision.level),
+            "fused": [[pid, self.pool.add_vertices(result.model.position(z).vertices())]
+                      for pid, z in sorted(ego.estimate.fused.items())],
+            "refined": [[pid, self.pool.add(region)]
+                        for pid, region in sorted(ego.possible.items())],
+            "unobserved": self.pool.add(ego.unobserved),
+        }
+
+
+def _view_box(*regions: shapely.Geometry | None) -> shapely.Polygon:
+    """A box around a sensor's sector (visible and occluded parts), widened by
+    ``STRIP_MARGIN_M``."""
+    bounds = np.array([shapely.bounds(r) for r in regions if r is not None and not r.is_empty])
+    if not bounds.size:
+        return shapely.Polygon()
+    x0, y0 = bounds[:, :2].min(axis=0) - STRIP_MARGIN_M
+    x1, y1 = bounds[:, 2:].max(axis=0) + STRIP_MARGIN_M
+    return shapely.box(x0, y0, x1, y1)
+
+
+def _band(normal: np.ndarray, value: float, radius: float,
+          box: shapely.Polygon) -> shapely.Geometry:
+    """The strip ``|n·x - value| <= radius`` (``normal`` n, shape (2,)) clipped to ``box``."""
+    norm2 = float(normal @ normal)
+    direction = np.array([-normal[1], normal[0]]) / np.sqrt(norm2)
+    low, high = (normal * (value + side * radius) / norm2 for side in (-1.0, 1.0))
+    span = STRIP_SPAN_M * direction
+    band = shapely.Polygon([low - span, low + span, high + span, high - span])
+    return band.intersection(box)
+
+
+def replay_data(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: str,
+                ) -> dict[str, Any]:
+    """Everything the page shows, as one JSON-ready dict."""
+    lanes = [*roadmap.driving_lanes.values(), *roadmap.internal_lanes.values()]
+    return {
+        "title": title,
+        "dt": scenario.simulation.step_length_s,
+        "levels": [level.label for level in SpeedLevel],
+        "automated": list(present(scenario.automated)),
+        "nodes": scenario.node_ids(),
+        "road": [i for lane in lanes for i in log.pool.add(lane.polygon())],
+        "parking": [i for lane in roadmap.parking_lanes.values()
+                    for i in log.pool.add(lane.polygon())],
+        "walkable": log.pool.add(roadmap.sidewalks),
+        "crossings": log.pool.add(roadmap.crossing_area),
+        "polygons": log.pool.polygons,
+        "frames": log.frames,
+    }
+
+
+def replay_page(data: dict[str, Any]) -> str:
+    """The self-contained page: the template with ``data`` in place of ``DATA_MARK``."""
+    template = resources.files("sse_cosim.reporting").joinpath(TEMPLATE).read_text("utf-8")
+    text = json.dumps(data, separators=(",", ":"))
+    # inside a <script> element "</" would end it early; "\u003c" is the same JSON string
+    return template.replace(DATA_MARK, text.replace("<", "\\u003c"), 1)
