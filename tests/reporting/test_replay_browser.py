@@ -16,7 +16,9 @@ from sse_cosim.reporting.replay import REPLAY
 from sse_cosim.runner.run import run_scenario_file
 
 pytestmark = [pytest.mark.sumo, pytest.mark.browser]
-S3 = Path(__file__).resolve().parents[2] / "scenarios" / "s3_pedestrian.toml"
+ROOT = Path(__file__).resolve().parents[2]
+S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
+JUNCTION = ROOT / "sumo_net" / "junction"  # a four-arm junction with route-file traffic
 S3_SECONDS = 12.5  # the pedestrian steps onto the zebra at 11.5 s
 PAGE_LIMIT_BYTES_PER_S = 5e6 / 30  # a 30 s run's page stays under 5 MB
 FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -132,4 +134,26 @@ def test_a_page_with_two_automated_vehicles_shows_both(tmp_path, browser):
     assert replay.page.locator("polyline.speed-line").count() == 2
     replay.page.select_option("#ego", "bus2")
     assert replay.page.locator("#layer-unobserved > *").count() == 1
+    assert replay.problems == []
+
+
+def test_a_page_of_another_network_shows_its_map_and_route_file_traffic(tmp_path, browser):
+    junction = {
+        "network.sources_dir": str(JUNCTION),
+        "network.route_files": [str(JUNCTION / "traffic.rou.xml")],
+        "automated.bus.route_edges": ["WJ", "JE"], "automated.bus.depart_pos_m": 30.0,
+        "automated.bus.nominal_speed_mps": 13.89, "parked.truck.present": False,
+        "pedestrians.pedestrian.start_edge": "WJ", "pedestrians.pedestrian.start_pos_m": 172.0,
+        "pedestrians.pedestrian.end_edge": "JW", "pedestrians.pedestrian.end_pos_m": 170.0,
+        "simulation.duration_s": 5.0,
+    }
+    run_scenario_file(S3.with_name("s1_pedestrian.toml"), tmp_path, junction, plots=False)
+    replay = Replay(browser, tmp_path, "#step=45")
+    drawn = replay.page.eval_on_selector_all("#layer-map path",
+                                             "paths => paths.map(p => p.dataset.info)")
+    assert [info.split("\n")[0] for info in drawn] == ["walkable area", "road", "crossings"]
+    shown = replay.page.eval_on_selector_all("#layer-vehicles text",
+                                             "labels => labels.map(t => t.textContent)")
+    assert "bus" in shown and len(shown) > 1  # and the route file's vehicles
+    assert replay.page.locator("circle.pedestrian").count() == 1
     assert replay.problems == []
