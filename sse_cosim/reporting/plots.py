@@ -92,7 +92,7 @@ def key_moments(scenes: Sequence[tuple[str, SceneFrame]], roadmap: RoadMap,
     """The paper's Fig. 5: the scene at each key moment (``scenes``: the moments' names and
     their scene), two panels a row, the legend in the first."""
     rows = max(1, -(-len(scenes) // 2))
-    fig, axes = plt.subplots(rows, 2, figsize=(16, 3.6 * rows), squeeze=False)
+    fig, axes = plt.subplots(rows, 2, figsize=(13, 2.9 * rows), squeeze=False)
     for i, (ax, (moments, frame)) in enumerate(zip(axes.flat, scenes, strict=False)):
         draw_scene(ax, frame, roadmap, nodes, f"t = {frame.time:.1f} s: {moments}", legend=i == 0)
     for ax in axes.flat[len(scenes):]:

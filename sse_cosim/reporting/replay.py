@@ -79,10 +79,9 @@ class PolygonPool:
 def _encode(points: np.ndarray) -> tuple[int, ...]:
     """Points, shape (k, 2), in m as integer cm: the first point, then the steps between
     neighbours, flattened; repeated points are dropped."""
-    cm = np.round(np.asarray(points, dtype=float).reshape(-1, 2) * CM).astype(np.int64)
-    keep = np.r_[True, np.any(np.diff(cm, axis=0) != 0, axis=1)]
-    cm = cm[keep]
-    return tuple(np.vstack([cm[:1], np.diff(cm, axis=0)]).ravel().tolist())
+    cm = np.rint(np.asarray(points, dtype=float).reshape(-1, 2) * CM).astype(np.int64)
+    steps = np.diff(cm, axis=0)
+    return (*cm[0].tolist(), *steps[steps.any(axis=1)].ravel().tolist())
 
 
 def _polygons(geometry: shapely.Geometry) -> list[shapely.Polygon]:
@@ -104,35 +103,37 @@ class ReplayLog:
 
     pool: PolygonPool = field(default_factory=PolygonPool)
     frames: list[dict[str, Any]] = field(default_factory=list)
+    sensors: dict[str, str] = field(default_factory=dict)  # sensor -> the node that carries it
 
     def add(self, result: StepResult, local: Sequence[LocalSet]) -> None:
         """Record one step; ``local``: every node's position set of each pedestrian."""
         snap = result.snapshot
+        self.sensors.update((name, o.node) for name, o in result.observations.items())
         self.frames.append({
             "t": round(snap.time, 6),
             "vehicles": [[v.id, v.kind, self.pool.add(v.footprint.polygon())[0],
                           round(v.speed, 2)] for v in snap.vehicles.values()],
             "pedestrians": [[p.id, _cm(p.position[0]), _cm(p.position[1]), round(p.speed, 2)]
                             for _, p in sorted(snap.persons.items())],
-            "sectors": [[name, o.node, self.pool.add(o.visible), self.pool.add(o.occluded)]
+            "sectors": [[name, self.pool.add(o.visible), self.pool.add(o.occluded)]
                         for name, o in result.observations.items() if o.pose is not None],
             "strips": self._strips(result),
-            "local": [[node, pid, self.pool.add_vertices(z.vertices()), detected]
+            "local": [[node, pid, self.pool.add_vertices(z.vertices()), int(detected)]
                       for node, pid, z, detected in local],
             "ego": {vid: self._ego(result, ego) for vid, ego in result.vehicles.items()},
         })
 
     def _strips(self, result: StepResult) -> list[list[Any]]:
-        """Each detection's strips ``|n·x - y| <= r`` as bands over its sensor's view box:
-        [sensor, node, pedestrian, polygon]."""
+        """Each detection's strips ``|n·x - y| <= r`` (paper eq. senmodel) as bands over its
+        sensor's view box: [sensor, pedestrian, [polygon, ...]]."""
         bands = []
         for name, obs in result.observations.items():
             box = _view_box(obs.visible, obs.occluded)
             for pid, detection in obs.detections.items():
                 s = detection.strips
-                for normal, value, radius in zip(s.normals, s.values, s.radii, strict=True):
-                    bands += [[name, obs.node, pid, i]
-                              for i in self.pool.add(_band(normal, value, radius, box))]
+                bands.append([name, pid, [
+                    i for normal, value, radius in zip(s.normals, s.values, s.radii, strict=True)
+                    for i in self.pool.add(_band(normal, value, radius, box))]])
         return bands
 
     def _ego(self, result: StepResult, ego: EgoStep) -> dict[str, Any]:
@@ -151,26 +152,29 @@ class ReplayLog:
         }
 
 
-def _view_box(*regions: shapely.Geometry | None) -> shapely.Polygon:
-    """A box around a sensor's sector (visible and occluded parts), widened by
-    ``STRIP_MARGIN_M``."""
+def _view_box(*regions: shapely.Geometry | None) -> tuple[float, float, float, float] | None:
+    """The bounds (x0, y0, x1, y1) of a sensor's sector (visible and occluded parts),
+    widened by ``STRIP_MARGIN_M``; None without any."""
     bounds = np.array([shapely.bounds(r) for r in regions if r is not None and not r.is_empty])
     if not bounds.size:
-        return shapely.Polygon()
+        return None
     x0, y0 = bounds[:, :2].min(axis=0) - STRIP_MARGIN_M
     x1, y1 = bounds[:, 2:].max(axis=0) + STRIP_MARGIN_M
-    return shapely.box(x0, y0, x1, y1)
+    return (float(x0), float(y0), float(x1), float(y1))
 
 
 def _band(normal: np.ndarray, value: float, radius: float,
-          box: shapely.Polygon) -> shapely.Geometry:
-    """The strip ``|n·x - value| <= radius`` (``normal`` n, shape (2,)) clipped to ``box``."""
+          box: tuple[float, float, float, float] | None) -> shapely.Geometry:
+    """The strip ``|n·x - value| <= radius`` (``normal`` n, shape (2,)) clipped to the
+    rectangle ``box`` (x0, y0, x1, y1); empty without a box."""
+    if box is None:
+        return shapely.Polygon()
     norm2 = float(normal @ normal)
     direction = np.array([-normal[1], normal[0]]) / np.sqrt(norm2)
     low, high = (normal * (value + side * radius) / norm2 for side in (-1.0, 1.0))
     span = STRIP_SPAN_M * direction
     band = shapely.Polygon([low - span, low + span, high + span, high - span])
-    return band.intersection(box)
+    return shapely.clip_by_rect(band, *box)
 
 
 def replay_data(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: str,
@@ -183,6 +187,7 @@ def replay_data(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: str
         "levels": [level.label for level in SpeedLevel],
         "automated": list(present(scenario.automated)),
         "nodes": scenario.node_ids(),
+        "sensors": log.sensors,
         "road": [i for lane in lanes for i in log.pool.add(lane.polygon())],
         "parking": [i for lane in roadmap.parking_lanes.values()
                     for i in log.pool.add(lane.polygon())],

@@ -52,7 +52,7 @@ def test_zonotope_vertices_keep_their_order():
 @pytest.mark.parametrize("normal", [np.array([1.0, 0.0]), np.array([0.6, -1.3])])
 def test_a_band_is_its_strip_inside_the_box(normal):
     box = shapely.box(-10, -10, 10, 10)
-    band = _band(normal, 2.0, 0.5, box)
+    band = _band(normal, 2.0, 0.5, box.bounds)
     grid = np.stack(np.meshgrid(np.linspace(-9.9, 9.9, 60), np.linspace(-9.9, 9.9, 60)), -1)
     points = grid.reshape(-1, 2)
     gap = np.abs(points @ normal - 2.0) - 0.5
