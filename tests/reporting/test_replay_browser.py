@@ -114,6 +114,12 @@ def test_the_page_plays_and_every_layer_is_drawn(s3_run, browser):
     for layer in ("sectors", "shadows", "strips", "vehicles", "local", "fused", "refined",
                   "pedestrians"):
         assert replay.page.locator(f"#layer-{layer} > *").count() > 0, layer
+    replay.page.locator("#layer-fused path").dispatch_event("mouseover")
+    head, area = replay.page.inner_text("#info").split("\n")
+    assert head == "bus's fused set of pedestrian"
+    fused_area = at(pd.read_csv(s3_run / "trace.csv"), replay.time())["fused_area"].item()
+    assert float(area.removeprefix("area ").removesuffix(" m²")) == pytest.approx(fused_area,
+                                                                               rel=0.02)
     replay.page.click("#play")
     replay.page.wait_for_function("replay.current() > 121")
     replay.page.click("#play")
