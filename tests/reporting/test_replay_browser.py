@@ -123,6 +123,9 @@ def test_the_page_plays_and_every_layer_is_drawn(s3_run, browser):
     replay.page.click("#play")
     replay.page.wait_for_function("replay.current() > 121")
     replay.page.click("#play")
+    paused = replay.step()
+    replay.page.keyboard.press("ArrowRight")
+    assert replay.step() == paused + 1
     assert replay.problems == []
 
 
