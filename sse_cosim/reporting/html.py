@@ -4,8 +4,8 @@ Figures are embedded as base64 PNG and the style sheet is inline, so the file ca
 mailed or archived alone. The page holds Table I and the speed profiles (paper Fig. 6),
 the set sizes at the first shared fusion (Fig. 7), each single run's key moments (Fig. 5) and
 set areas with a link to its replay, and every sweep's parameters, failures, plots, table and
-replays. Each section shows the command that made
-its numbers: ``sse-cosim run`` per run, the recorded ``sse-cosim sweep`` per sweep.
+replays. Each section shows the command that made its numbers: ``sse-cosim run`` per run, the
+recorded ``sse-cosim sweep`` per sweep.
 """
 
 from __future__ import annotations

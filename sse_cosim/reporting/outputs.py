@@ -22,6 +22,7 @@ import shapely
 from sse_cosim.files import atomic_path, write_json_atomic, write_text_atomic
 from sse_cosim.reporting import replay
 from sse_cosim.reporting.recorder import RegionRecord, RunRecorder
+from sse_cosim.reporting.shapes import polygon_parts
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.world.roadmap import RoadMap
 
@@ -135,17 +136,8 @@ def region_polygons(region: shapely.Geometry) -> list[list[list[list[float]]]]:
     """
     return [
         [_ring(polygon.exterior), *(_ring(hole) for hole in polygon.interiors)]
-        for polygon in _polygons(region)
+        for polygon in polygon_parts(region)
     ]
-
-
-def _polygons(geometry: shapely.Geometry) -> list[shapely.Polygon]:
-    """The non-empty polygons in ``geometry``, at any depth of nesting."""
-    if isinstance(geometry, shapely.Polygon):
-        return [] if geometry.is_empty else [geometry]
-    if isinstance(geometry, shapely.MultiPolygon | shapely.GeometryCollection):
-        return [p for part in shapely.get_parts(geometry) for p in _polygons(part)]
-    return []
 
 
 def _ring(ring: shapely.LinearRing) -> list[list[float]]:

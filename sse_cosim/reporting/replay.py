@@ -23,6 +23,7 @@ import numpy as np
 import shapely
 
 from sse_cosim.control.speed import SpeedLevel
+from sse_cosim.reporting.shapes import polygon_parts
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sets import Zonotope
 from sse_cosim.world.roadmap import RoadMap
@@ -39,6 +40,7 @@ STRIP_MARGIN_M = 5.0  # a strip is drawn over its sensor's view box widened by t
 STRIP_SPAN_M = 1000.0  # half-length of the band built before clipping (longer than any view)
 
 LocalSet = tuple[str, str, Zonotope, bool]  # node, pedestrian, position set, detected now
+Rings = tuple[tuple[int, ...], ...]  # a polygon's encoded rings (see PolygonPool)
 
 
 @dataclass
@@ -50,8 +52,8 @@ class PolygonPool:
     next one (the closing point is left out).
     """
 
-    polygons: list[list[list[int]]] = field(default_factory=list)
-    _index: dict[tuple[tuple[int, ...], ...], int] = field(default_factory=dict)
+    polygons: list[Rings] = field(default_factory=list)  # written as JSON lists
+    _index: dict[Rings, int] = field(default_factory=dict)  # the same tuples, not copies
 
     def add(self, geometry: shapely.Geometry | None) -> list[int]:
         """The indices of ``geometry``'s polygons (none for an empty or missing one; lines
@@ -59,7 +61,7 @@ class PolygonPool:
         if geometry is None:
             return []
         return [self._add_rings([polygon.exterior, *polygon.interiors])
-                for polygon in _polygons(geometry)]
+                for polygon in polygon_parts(geometry)]
 
     def add_vertices(self, vertices: np.ndarray) -> int:
         """The index of the polygon with ``vertices``, shape (k, 2), in order."""
@@ -68,11 +70,11 @@ class PolygonPool:
     def _add_rings(self, rings: Sequence[shapely.LinearRing]) -> int:
         return self._add_encoded(tuple(_encode(shapely.get_coordinates(r)[:-1]) for r in rings))
 
-    def _add_encoded(self, rings: tuple[tuple[int, ...], ...]) -> int:
+    def _add_encoded(self, rings: Rings) -> int:
         index = self._index.get(rings)
         if index is None:
             index = self._index[rings] = len(self.polygons)
-            self.polygons.append([list(ring) for ring in rings])
+            self.polygons.append(rings)
         return index
 
 
@@ -83,14 +85,6 @@ def _encode(points: np.ndarray) -> tuple[int, ...]:
     steps = np.diff(cm, axis=0)
     return (*cm[0].tolist(), *steps[steps.any(axis=1)].ravel().tolist())
 
-
-def _polygons(geometry: shapely.Geometry) -> list[shapely.Polygon]:
-    """The non-empty polygons in ``geometry``, at any depth of nesting."""
-    if isinstance(geometry, shapely.Polygon):
-        return [] if geometry.is_empty else [geometry]
-    if isinstance(geometry, shapely.MultiPolygon | shapely.GeometryCollection):
-        return [p for part in shapely.get_parts(geometry) for p in _polygons(part)]
-    return []
 
 
 def _cm(value: float) -> int:
