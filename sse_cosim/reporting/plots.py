@@ -90,15 +90,17 @@ def scene(frame: SceneFrame, roadmap: RoadMap, nodes: Sequence[str], title: str)
 def key_moments(scenes: Sequence[tuple[str, SceneFrame]], roadmap: RoadMap,
                 nodes: Sequence[str], title: str) -> Figure:
     """The paper's Fig. 5: the scene at each key moment (``scenes``: the moments' names and
-    their scene), two panels a row, the legend in the first."""
+    their scene), two panels a row, one legend below them all."""
     rows = max(1, -(-len(scenes) // 2))
-    fig, axes = plt.subplots(rows, 2, figsize=(13, 2.9 * rows), squeeze=False)
-    for i, (ax, (moments, frame)) in enumerate(zip(axes.flat, scenes, strict=False)):
-        draw_scene(ax, frame, roadmap, nodes, f"t = {frame.time:.1f} s: {moments}", legend=i == 0)
+    fig, axes = plt.subplots(rows, 2, figsize=(13, 2.9 * rows + 0.6), squeeze=False,
+                             layout="constrained")
+    for ax, (moments, frame) in zip(axes.flat, scenes, strict=False):
+        draw_scene(ax, frame, roadmap, nodes, f"t = {frame.time:.1f} s: {moments}", legend=False)
     for ax in axes.flat[len(scenes):]:
         ax.set_axis_off()
+    entries = _legend_entries(axes.flat)
+    fig.legend(entries.values(), entries.keys(), fontsize=7, loc="outside lower center", ncol=6)
     fig.suptitle(f"Key moments: {title}")
-    fig.tight_layout()
     return fig
 
 
@@ -135,9 +137,17 @@ def draw_scene(ax: Axes, frame: SceneFrame, roadmap: RoadMap, nodes: Sequence[st
     ax.set_ylabel("y (m)")
     ax.set_title(title)
     if legend:
-        handles, labels = ax.get_legend_handles_labels()
-        unique = dict(zip(labels, handles, strict=True))
-        ax.legend(unique.values(), unique.keys(), fontsize=7, loc="upper left", ncol=3)
+        entries = _legend_entries([ax])
+        ax.legend(entries.values(), entries.keys(), fontsize=7, loc="upper left", ncol=3)
+
+
+def _legend_entries(axes) -> dict[str, object]:
+    """Each label drawn on ``axes`` once (where it first appears), with its last handle."""
+    entries: dict[str, object] = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            entries[label] = handle
+    return entries
 
 
 def _view_box(frame: SceneFrame) -> tuple[float, float, float, float]:
