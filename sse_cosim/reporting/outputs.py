@@ -98,8 +98,8 @@ def write_run(
         )
         write_text_atomic(out_dir / REGIONS, "".join(map(region_line, recorder.regions)))
         if recorder.replay is not None:
-            data = replay.replay_data(recorder.replay, scenario, roadmap, label(scenario))
-            write_text_atomic(out_dir / replay.REPLAY, replay.replay_page(data))
+            page = replay.replay_page(recorder.replay, scenario, roadmap, label(scenario))
+            write_text_atomic(out_dir / replay.REPLAY, page)
         if plots_wanted and not trace.empty:
             _write_plots(out_dir, scenario, recorder, trace, roadmap)
     summary = {"source": source, **recorder.summary(route_completed)}

@@ -35,12 +35,13 @@ if TYPE_CHECKING:  # only the types: the recorder reads results, it does not mak
 REPLAY = "replay.html"
 TEMPLATE = "replay_template.html"
 DATA_MARK = "/*REPLAY_DATA*/"  # where the template takes the data (a JSON object)
+POLYGONS_MARK = "/*REPLAY_POLYGONS*/"  # and the polygons (a JSON array)
 CM = 100.0  # coordinates are stored in integer centimetres
 STRIP_MARGIN_M = 5.0  # a strip is drawn over its sensor's view box widened by this much
 STRIP_SPAN_M = 1000.0  # half-length of the band built before clipping (longer than any view)
 
 LocalSet = tuple[str, str, Zonotope, bool]  # node, pedestrian, position set, detected now
-Rings = tuple[tuple[int, ...], ...]  # a polygon's encoded rings (see PolygonPool)
+Rings = tuple[bytes, ...]  # a polygon's encoded rings, each as int32 bytes (see PolygonPool)
 
 
 @dataclass
@@ -49,11 +50,21 @@ class PolygonPool:
 
     A polygon is a list of rings (exterior first, then holes); a ring is a flat list of
     integer centimetres ``[x0, y0, dx1, dy1, ...]``: its first point, then the step to each
-    next one (the closing point is left out).
+    next one (the closing point is left out). Rings are kept as int32 bytes (4 bytes a
+    number, a long run holds millions) and become JSON only when the page is written.
     """
 
-    polygons: list[Rings] = field(default_factory=list)  # written as JSON lists
+    polygons: list[Rings] = field(default_factory=list)
     _index: dict[Rings, int] = field(default_factory=dict)  # the same tuples, not copies
+
+    def rings(self, index: int) -> list[list[int]]:
+        """Polygon ``index``'s rings as lists of numbers."""
+        return [np.frombuffer(ring, dtype=np.int32).tolist() for ring in self.polygons[index]]
+
+    def to_json(self) -> str:
+        """Every polygon as one JSON array (of polygons, of rings), one polygon at a time."""
+        return "[" + ",".join(json.dumps(self.rings(i), separators=(",", ":"))
+                              for i in range(len(self.polygons))) + "]"
 
     def add(self, geometry: shapely.Geometry | None) -> list[int]:
         """The indices of ``geometry``'s polygons (none for an empty or missing one; lines
@@ -78,13 +89,12 @@ class PolygonPool:
         return index
 
 
-def _encode(points: np.ndarray) -> tuple[int, ...]:
+def _encode(points: np.ndarray) -> bytes:
     """Points, shape (k, 2), in m as integer cm: the first point, then the steps between
-    neighbours, flattened; repeated points are dropped."""
-    cm = np.rint(np.asarray(points, dtype=float).reshape(-1, 2) * CM).astype(np.int64)
+    neighbours, flattened, as int32 bytes; repeated points are dropped."""
+    cm = np.rint(np.asarray(points, dtype=float).reshape(-1, 2) * CM).astype(np.int32)
     steps = np.diff(cm, axis=0)
-    return (*cm[0].tolist(), *steps[steps.any(axis=1)].ravel().tolist())
-
+    return np.concatenate([cm[0], steps[steps.any(axis=1)].ravel()]).tobytes()
 
 
 def _cm(value: float) -> int:
@@ -171,9 +181,25 @@ def _band(normal: np.ndarray, value: float, radius: float,
     return shapely.clip_by_rect(band, *box)
 
 
+def replay_page(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: str) -> str:
+    """The self-contained page: the template with the run's data in place of ``DATA_MARK``
+    and its polygons in place of ``POLYGONS_MARK``."""
+    data = replay_data(log, scenario, roadmap, title)  # adds the map to the pool: first
+    template = resources.files("sse_cosim.reporting").joinpath(TEMPLATE).read_text("utf-8")
+    page = template.replace(DATA_MARK, _script_text(json.dumps(data, separators=(",", ":"))), 1)
+    return page.replace(POLYGONS_MARK, _script_text(log.pool.to_json()), 1)
+
+
+def _script_text(text: str) -> str:
+    """JSON ``text`` safe inside a <script> element ("</" would end it early; the escape
+    "\\u003c" is the same JSON string)."""
+    return text.replace("<", "\\u003c")
+
+
 def replay_data(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: str,
                 ) -> dict[str, Any]:
-    """Everything the page shows, as one JSON-ready dict."""
+    """Everything the page shows but the polygons (the map's are added to ``log.pool``), as
+    one JSON-ready dict."""
     lanes = [*roadmap.driving_lanes.values(), *roadmap.internal_lanes.values()]
     return {
         "title": title,
@@ -187,14 +213,6 @@ def replay_data(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: str
                     for i in log.pool.add(lane.polygon())],
         "walkable": log.pool.add(roadmap.sidewalks),
         "crossings": log.pool.add(roadmap.crossing_area),
-        "polygons": log.pool.polygons,
         "frames": log.frames,
     }
 
-
-def replay_page(data: dict[str, Any]) -> str:
-    """The self-contained page: the template with ``data`` in place of ``DATA_MARK``."""
-    template = resources.files("sse_cosim.reporting").joinpath(TEMPLATE).read_text("utf-8")
-    text = json.dumps(data, separators=(",", ":"))
-    # inside a <script> element "</" would end it early; "\u003c" is the same JSON string
-    return template.replace(DATA_MARK, text.replace("<", "\\u003c"), 1)
