@@ -184,7 +184,7 @@ def _band(normal: np.ndarray, value: float, radius: float,
 def replay_page(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: str) -> str:
     """The self-contained page: the template with the run's data in place of ``DATA_MARK``
     and its polygons in place of ``POLYGONS_MARK``."""
-    data = replay_data(log, scenario, roadmap, title)  # adds the map to the pool: first
+    data = _replay_data(log, scenario, roadmap, title)  # adds the map to the pool: first
     template = resources.files("sse_cosim.reporting").joinpath(TEMPLATE).read_text("utf-8")
     page = template.replace(DATA_MARK, _script_text(json.dumps(data, separators=(",", ":"))), 1)
     return page.replace(POLYGONS_MARK, _script_text(log.pool.to_json()), 1)
@@ -196,7 +196,7 @@ def _script_text(text: str) -> str:
     return text.replace("<", "\\u003c")
 
 
-def replay_data(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: str,
+def _replay_data(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: str,
                 ) -> dict[str, Any]:
     """Everything the page shows but the polygons (the map's are added to ``log.pool``), as
     one JSON-ready dict."""
