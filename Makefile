@@ -1,6 +1,6 @@
 # Two commands set everything up on a fresh machine (Python 3.11, pip, make):
 #   make run   -- all paper scenarios and a noise sweep, reports into results/ (report.html)
-#   make test  -- ruff + pytest
+#   make test  -- ruff + pytest (installs Debian's chromium for the browser tests if missing)
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
@@ -31,7 +31,9 @@ $(BENCHSTAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/pip install --quiet -e ".[dask,bench]"
 	touch $@ $(STAMP)
 
+# The browser tests drive Debian's chromium (playwright never downloads a browser).
 test: $(DEVSTAMP)
+	command -v chromium >/dev/null || (apt-get update && apt-get install -y chromium chromium-driver)
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q
 

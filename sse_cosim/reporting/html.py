@@ -2,9 +2,10 @@
 
 Figures are embedded as base64 PNG and the style sheet is inline, so the file can be
 mailed or archived alone. The page holds Table I and the speed profiles (paper Fig. 6),
-the set sizes at the first shared fusion (Fig. 7), each single run's set areas, and every
-sweep's parameters, failures, plots and table. Each section shows the command that made
-its numbers: ``sse-cosim run`` per run, the recorded ``sse-cosim sweep`` per sweep.
+the set sizes at the first shared fusion (Fig. 7), each single run's key moments (Fig. 5) and
+set areas with a link to its replay, and every sweep's parameters, failures, plots, table and
+replays. Each section shows the command that made its numbers: ``sse-cosim run`` per run, the
+recorded ``sse-cosim sweep`` per sweep.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import pandas as pd
 from sse_cosim import __version__
 from sse_cosim.errors import UserError
 from sse_cosim.files import write_text_atomic
+from sse_cosim.reporting.outputs import KEY_MOMENTS
 from sse_cosim.reporting.paper import (
     DIFFERENCE_NOTE,
     POLICY_TITLES,
@@ -36,6 +38,7 @@ from sse_cosim.reporting.paper import (
     table1,
     write_paper_report,
 )
+from sse_cosim.reporting.replay import REPLAY
 from sse_cosim.reporting.safety_report import SAFETY_PLAN
 from sse_cosim.reporting.sweep_report import (
     PLOTTED,
@@ -51,7 +54,8 @@ from sse_cosim.reporting.sweep_report import (
 REPORT = "report.html"
 TABLE_ROWS_MAX = 500  # longer tables are cut (the CSV files have every row)
 FAILURES_MAX = 50
-RUN_FIGURES = (("set_areas.png", "Set areas over time"),)
+RUN_FIGURES = ((KEY_MOMENTS, "Key moments (paper Fig. 5)"),
+               ("set_areas.png", "Set areas over time"))
 CARD_FIGURES = (
     "average_speed_mps", "travel_time_s", "min_distance_bus_pedestrian_m",
     "first_detection_fused_bus_to_crossing_m", "containment_violations", "collisions",
@@ -90,8 +94,8 @@ def single_runs(folders: Sequence[Path], sweeps: Sequence[SweepFolder]) -> list[
 def render_report(runs: Sequence[RunFolder], sweeps: Sequence[SweepFolder], out_dir: Path,
                   command: str) -> str:
     """The whole page as one HTML string."""
-    sections = [_paper_section(runs, out_dir), _runs_section(runs),
-                *(_sweep_section(sweep, i) for i, sweep in enumerate(sweeps, 1))]
+    sections = [_paper_section(runs, out_dir), _runs_section(runs, out_dir),
+                *(_sweep_section(sweep, i, out_dir) for i, sweep in enumerate(sweeps, 1))]
     sections = [s for s in sections if s]
     toc = "".join(f'<li><a href="#{anchor}">{html.escape(title)}</a></li>'
                   for anchor, title in _headings(runs, sweeps))
@@ -160,7 +164,7 @@ def _faults_section(runs: Sequence[RunFolder]) -> str:
     ])
 
 
-def _runs_section(runs: Sequence[RunFolder]) -> str:
+def _runs_section(runs: Sequence[RunFolder], out_dir: Path) -> str:
     if not runs:
         return ""
     cards = []
@@ -173,6 +177,7 @@ def _runs_section(runs: Sequence[RunFolder]) -> str:
             f'<div class="card"><h3>{html.escape(run.label)}</h3>'
             f"<p class=\"where\">{html.escape(_shown(run.path))}</p>"
             f"{_command(_run_command(run.summary.get('source', '?'), {}, run.path))}"
+            f"{_replay_link(run.path, out_dir, 'Replay this run')}"
             f'<table class="facts">{facts}</table>{images}</div>'
         )
     return ('<h2 id="runs">Runs</h2><p>Every run outside a sweep; scenario.json in each '
@@ -180,7 +185,26 @@ def _runs_section(runs: Sequence[RunFolder]) -> str:
             f'<div class="cards">{"".join(cards)}</div>')
 
 
-def _sweep_section(sweep: SweepFolder, number: int) -> str:
+def _replay_link(folder: Path, out_dir: Path, text: str) -> str:
+    """A link to ``folder``'s replay, relative to the report in ``out_dir``; nothing if the run
+    kept no replay (a summaries-only sweep)."""
+    if not (folder / REPLAY).is_file():
+        return ""
+    href = Path(os.path.relpath(folder / REPLAY, out_dir)).as_posix()
+    return f'<a class="replay" href="{html.escape(href)}">{html.escape(text)}</a>'
+
+
+def _sweep_replays(sweep: SweepFolder, out_dir: Path) -> str:
+    """Links to the replays of the sweep's runs (nothing if none kept one)."""
+    links = [link for run in sweep.runs
+             if (link := _replay_link(sweep.run_folder(run["key"]), out_dir, run["key"]))]
+    if not links:
+        return ""
+    return (f"<details><summary>Replays ({len(links)} runs)</summary>"
+            f'<p class="replays">{" ".join(links)}</p></details>')
+
+
+def _sweep_section(sweep: SweepFolder, number: int, out_dir: Path) -> str:
     table = sweep_table(sweep)
     counts = table["status"].value_counts()
     seeds = sweep.plan.get("seeds")
@@ -208,6 +232,7 @@ def _sweep_section(sweep: SweepFolder, number: int) -> str:
         f'<div class="figures">{images}</div>',
         "<details><summary>Every run (sweep.csv, with the command that reproduces it)"
         f'</summary><div class="scroll">{_table(every)}</div></details>',
+        _sweep_replays(sweep, out_dir),
     ])
 
 
@@ -303,6 +328,8 @@ ul.fail { color: #a3132b; font-size: .9rem; }
 .scroll { overflow-x: auto; }
 .figures { display: grid; grid-template-columns: repeat(auto-fill, minmax(540px, 1fr));
            gap: .5rem 1rem; }
+a.replay { display: inline-block; margin: .2rem 0 .4rem; font-weight: 600; }
+p.replays a { margin-right: .6rem; }
 details summary { cursor: pointer; font-weight: 600; margin: 1rem 0 .4rem; }
 footer { margin-top: 3rem; color: #687087; font-size: .85rem; }
 """

@@ -1,6 +1,6 @@
 """A run's folder: ``trace.csv``, ``truth.csv``, ``pedestrians.csv``, ``sets.jsonl``,
-``regions.jsonl``, ``summary.json``, ``scenario.json`` and plots -- or ``error.json`` if the run
-failed.
+``regions.jsonl``, ``summary.json``, ``scenario.json``, ``replay.html`` and plots (among them
+``key_moments.png``) -- or ``error.json`` if the run failed.
 
 Every file is written whole or not at all (:mod:`sse_cosim.files`); ``summary.json`` is
 written last, so a folder with a summary is a finished run. With ``summary_only`` (large
@@ -20,7 +20,9 @@ import numpy as np
 import shapely
 
 from sse_cosim.files import atomic_path, write_json_atomic, write_text_atomic
+from sse_cosim.reporting import replay
 from sse_cosim.reporting.recorder import RegionRecord, RunRecorder
+from sse_cosim.reporting.shapes import polygon_parts
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.world.roadmap import RoadMap
 
@@ -34,6 +36,7 @@ SETS = "sets.jsonl"
 REGIONS = "regions.jsonl"
 SUMMARY = "summary.json"
 SCENARIO = "scenario.json"
+KEY_MOMENTS = "key_moments.png"  # the paper's Fig. 5: the scene at the run's key moments
 ERROR = "error.json"  # instead of summary.json: {"key", "error"}, the one line that stopped it
 RUNS_FOLDER = "runs"  # a batch, sweep or campaign keeps run <key> in <its folder>/runs/<key>/
 DECIMALS = 6  # positions in trace.csv and regions.jsonl: 1e-6 m (a re-check allows 1e-5 m)
@@ -94,6 +97,9 @@ def write_run(
             out_dir / SETS, "".join(json.dumps(line) + "\n" for line in recorder.set_lines)
         )
         write_text_atomic(out_dir / REGIONS, "".join(map(region_line, recorder.regions)))
+        if recorder.replay is not None:
+            page = replay.replay_page(recorder.replay, scenario, roadmap, label(scenario))
+            write_text_atomic(out_dir / replay.REPLAY, page)
         if plots_wanted and not trace.empty:
             _write_plots(out_dir, scenario, recorder, trace, roadmap)
     summary = {"source": source, **recorder.summary(route_completed)}
@@ -130,17 +136,8 @@ def region_polygons(region: shapely.Geometry) -> list[list[list[list[float]]]]:
     """
     return [
         [_ring(polygon.exterior), *(_ring(hole) for hole in polygon.interiors)]
-        for polygon in _polygons(region)
+        for polygon in polygon_parts(region)
     ]
-
-
-def _polygons(geometry: shapely.Geometry) -> list[shapely.Polygon]:
-    """The non-empty polygons in ``geometry``, at any depth of nesting."""
-    if isinstance(geometry, shapely.Polygon):
-        return [] if geometry.is_empty else [geometry]
-    if isinstance(geometry, shapely.MultiPolygon | shapely.GeometryCollection):
-        return [p for part in shapely.get_parts(geometry) for p in _polygons(part)]
-    return []
 
 
 def _ring(ring: shapely.LinearRing) -> list[list[float]]:
@@ -179,3 +176,5 @@ def _write_plots(out_dir, scenario, recorder, trace, roadmap) -> None:
     for frame in recorder.scenes:
         plots.save_figure(plots.scene(frame, roadmap, nodes, title),
                           out_dir / f"scene_t{frame.time:06.2f}.png")
+    plots.save_figure(plots.key_moments(recorder.key_moments.scenes(), roadmap, nodes, title),
+                      out_dir / KEY_MOMENTS)

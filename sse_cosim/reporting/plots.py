@@ -1,4 +1,5 @@
-"""Figures: speed profiles (paper Fig. 6), set areas, scene snapshots (Figs. 5 and 7)."""
+"""Figures: speed profiles (paper Fig. 6), set areas, scene snapshots and the key moments of a
+run (Figs. 5 and 7)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import shapely
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from sse_cosim.files import atomic_path
@@ -81,6 +83,31 @@ def set_areas(trace: pd.DataFrame, nodes: Sequence[str], title: str) -> Figure:
 def scene(frame: SceneFrame, roadmap: RoadMap, nodes: Sequence[str], title: str) -> Figure:
     """Footprints, fields of view, shadows, strips, local and fused zonotopes at one time."""
     fig, ax = plt.subplots(figsize=(10, 5))
+    draw_scene(ax, frame, roadmap, nodes, f"{title}, t = {frame.time:.1f} s")
+    return fig
+
+
+def key_moments(scenes: Sequence[tuple[str, SceneFrame]], roadmap: RoadMap,
+                nodes: Sequence[str], title: str) -> Figure:
+    """The paper's Fig. 5: the scene at each key moment (``scenes``: the moments' names and
+    their scene), two panels a row, one legend below them all."""
+    rows = max(1, -(-len(scenes) // 2))
+    fig, axes = plt.subplots(rows, 2, figsize=(13, 2.9 * rows + 0.6), squeeze=False,
+                             layout="constrained")
+    for ax, (moments, frame) in zip(axes.flat, scenes, strict=False):
+        draw_scene(ax, frame, roadmap, nodes, f"t = {frame.time:.1f} s: {moments}", legend=False)
+    for ax in axes.flat[len(scenes):]:
+        ax.set_axis_off()
+    entries = _legend_entries(axes.flat)
+    fig.legend(entries.values(), entries.keys(), fontsize=7, loc="outside lower center", ncol=6)
+    fig.suptitle(f"Key moments: {title}")
+    return fig
+
+
+def draw_scene(ax: Axes, frame: SceneFrame, roadmap: RoadMap, nodes: Sequence[str], title: str,
+               legend: bool = True) -> None:
+    """Draw ``frame`` (footprints, fields of view, shadows, strips, local and fused
+    zonotopes, the true positions) on ``ax``."""
     _fill(ax, roadmap.sidewalks, "0.85", "sidewalk")
     _fill(ax, roadmap.crossing_area, "w", "zebra", hatch="||")
     for _name, (node, visible, occluded) in frame.sectors.items():
@@ -108,11 +135,19 @@ def scene(frame: SceneFrame, roadmap: RoadMap, nodes: Sequence[str], title: str)
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.set_title(f"{title}, t = {frame.time:.1f} s")
-    handles, labels = ax.get_legend_handles_labels()
-    unique = dict(zip(labels, handles, strict=True))
-    ax.legend(unique.values(), unique.keys(), fontsize=7, loc="upper left", ncol=3)
-    return fig
+    ax.set_title(title)
+    if legend:
+        entries = _legend_entries([ax])
+        ax.legend(entries.values(), entries.keys(), fontsize=7, loc="upper left", ncol=3)
+
+
+def _legend_entries(axes) -> dict[str, object]:
+    """Each label drawn on ``axes`` once (where it first appears), with its last handle."""
+    entries: dict[str, object] = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            entries[label] = handle
+    return entries
 
 
 def _view_box(frame: SceneFrame) -> tuple[float, float, float, float]:

@@ -1,5 +1,6 @@
 """Collects what a run produced, step by step: trace rows, the pedestrians' truth, per
-pedestrian checks, sets, regions, summary figures, scene frames.
+pedestrian checks, sets, regions, summary figures, scene frames (at chosen times and at the
+run's key moments) and, for ``replay.html``, a compact frame of every step.
 
 Soundness is checked per pedestrian (paper Section III): at every step every pedestrian in the
 scene lies in each set the automated vehicle holds of it (local, fused), in its refined region,
@@ -22,6 +23,7 @@ import numpy as np
 import shapely
 
 from sse_cosim.control.speed import SpeedLevel
+from sse_cosim.reporting.replay import ReplayLog
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors.faults import FaultLog
 from sse_cosim.sets import Zonotope
@@ -63,6 +65,42 @@ class SceneFrame:
     unobserved: shapely.Geometry  # walkable area where an undetected pedestrian may be
 
 
+@dataclass
+class KeyMoments:
+    """The scenes of a run's key moments (the paper's Fig. 5), seen by its first automated
+    vehicle: the start, the first detection by any node, the first fusion of shared sets,
+    the first slow-down to ``slow`` or below, the first stop and the closest approach to a
+    pedestrian (kept up to date while the distance shrinks)."""
+
+    frames: dict[str, SceneFrame] = field(default_factory=dict)  # moment -> its scene
+    done: set[str] = field(default_factory=set)  # the firsts already seen
+    closest_m: float = float("inf")
+    previous: SpeedLevel | None = None
+
+    def due(self, level: SpeedLevel, distance: float | None, detected: bool,
+            shared_fusion: bool) -> list[str]:
+        """The moments that this step is (a step may be several)."""
+        before, self.previous = (level if self.previous is None else self.previous), level
+        slowed = before < SpeedLevel.SLOW <= level
+        firsts = {"start": True, "first detection": detected,
+                  "first shared fusion": shared_fusion, "first slow-down": slowed,
+                  "first stop": level >= SpeedLevel.STOP}
+        due = [name for name, now in firsts.items() if now and name not in self.done]
+        self.done.update(due)
+        if distance is not None and distance < self.closest_m:
+            self.closest_m = distance
+            due.append("closest approach")
+        return due
+
+    def scenes(self) -> list[tuple[str, SceneFrame]]:
+        """Each distinct scene once, in time order, with the names of its moments."""
+        names: dict[float, list[str]] = {}
+        for name, frame in self.frames.items():
+            names.setdefault(frame.time, []).append(name)
+        by_time = {frame.time: frame for frame in self.frames.values()}
+        return [(", ".join(names[t]), by_time[t]) for t in sorted(by_time)]
+
+
 @dataclass(frozen=True)
 class _LocalSet:
     """A node's position set of one pedestrian at one step, and whether it detects it now."""
@@ -75,16 +113,19 @@ class _LocalSet:
 
 @dataclass
 class RunRecorder:
-    """Callable passed to ``simulate``; keeps everything the reports need."""
+    """Callable passed to ``simulate``; keeps everything the reports need (``replay``:
+    every step's frame for ``replay.html``, None to keep none)."""
 
     scenario: Scenario
     scene_times: tuple[float, ...] = ()
+    replay: ReplayLog | None = None
     rows: list[dict[str, Any]] = field(default_factory=list)
     truth_rows: list[dict[str, Any]] = field(default_factory=list)  # t, pedestrian, x, y
     pedestrian_rows: list[dict[str, Any]] = field(default_factory=list)  # per vehicle and person
     set_lines: list[dict[str, Any]] = field(default_factory=list)
     regions: list[RegionRecord] = field(default_factory=list)  # serialised only when written
     scenes: list[SceneFrame] = field(default_factory=list)
+    key_moments: KeyMoments = field(default_factory=KeyMoments)
     violations: list[dict[str, Any]] = field(default_factory=list)
     first_detection: dict[str, dict[str, float]] = field(default_factory=dict)
     first_shared_fusion: dict[str, Any] | None = None
@@ -101,6 +142,9 @@ class RunRecorder:
         self.truth_rows += [{"t": t, "pedestrian": pid, "x": xy[0], "y": xy[1]}
                             for pid, xy in truths.items()]
         local = self._check_local_sets(t, result, truths)
+        if self.replay is not None:
+            self.replay.add(result, [(s.node, s.pedestrian, s.position, s.detected)
+                                     for s in local])
         for ego in result.vehicles.values():
             self._vehicle_step(t, result, ego, truths, local)
 
@@ -150,8 +194,15 @@ class RunRecorder:
                                for pid, c in checks.items())
         self.rows.append(row)
         shared_fusion_now = (self.first_shared_fusion or {}).get("t") == t
-        for _ in range(shared_fusion_now + self._wants_scene(t)):
-            self.scenes.append(_frame(t, result, ego, local_sets, fused, truths))
+        moments = [] if vehicle != next(iter(result.vehicles)) else self.key_moments.due(
+            ego.decision.level, row["distance_bus_pedestrian"], any(s.detected for s in local),
+            shared_fusion_now)
+        wanted = shared_fusion_now + self._wants_scene(t)
+        if not (moments or wanted):
+            return
+        frame = _frame(t, result, ego, local_sets, fused, truths)
+        self.scenes += [frame] * wanted
+        self.key_moments.frames.update(dict.fromkeys(moments, frame))
 
     def _check_local_sets(self, t: float, result: StepResult,
                           truths: dict[str, np.ndarray]) -> list[_LocalSet]:

@@ -9,6 +9,7 @@ from typing import Any
 from sse_cosim.files import portable_path
 from sse_cosim.reporting.outputs import write_run
 from sse_cosim.reporting.recorder import RunRecorder
+from sse_cosim.reporting.replay import ReplayLog
 from sse_cosim.runner.simulation import simulate
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.scenario.model import Scenario
@@ -40,7 +41,8 @@ def run_scenario(
     ``source`` is recorded (and named in messages) relative to the current folder where it
     lies below it, so that a results folder holds no machine path."""
     source = portable_path(source)
-    recorder = RunRecorder(scenario, tuple(scene_times))
+    recorder = RunRecorder(scenario, tuple(scene_times),
+                           replay=None if summary_only else ReplayLog())
     info = simulate(scenario, out_dir / "sumo", source, recorder)
     return write_run(out_dir, scenario, recorder, info.roadmap, source, info.arrived, plots,
                      summary_only)

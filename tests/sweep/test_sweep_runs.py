@@ -63,7 +63,8 @@ def test_a_sweep_writes_one_row_per_run(local_sweep):
     assert table["travel_time_s"].notna().all()
     assert run_folders(local_sweep) == sorted(table["key"])
     assert (local_sweep / "sweep_average_speed_mps.png").is_file()
-    assert (local_sweep / "runs" / table["key"][0] / "trace.csv").is_file()
+    assert all((local_sweep / "runs" / key / name).is_file()
+               for key in table["key"] for name in ("trace.csv", "replay.html"))
 
 
 def test_dask_gives_the_same_rows_bit_for_bit(local_sweep, tmp_path):
@@ -125,7 +126,13 @@ def test_report_embeds_every_figure(local_sweep, tmp_path):
     page = (tmp_path / "report.html").read_text(encoding="utf-8")
     assert "Table I: average bus speed" in page
     assert f"Sweep: {local_sweep}" in page
-    assert page.count('src="data:image/png;base64,') >= 5  # speeds, set areas, sweep plots
+    assert page.count('src="data:image/png;base64,') >= 6  # speeds, key moments, set areas,
+    # sweep plots
+    assert 'alt="Key moments (paper Fig. 5)"' in page
+    sweep_runs = os.path.relpath(local_sweep / "runs", tmp_path)
+    replays = ["single/replay.html", *(f"{sweep_runs}/{key}/replay.html"
+                                       for key in pd.read_csv(local_sweep / "sweep.csv")["key"])]
+    assert [link for link in replays if f'class="replay" href="{link}"' not in page] == []
     assert page.count("src=") == page.count('src="data:image/png;base64,')
     assert "<link" not in page and "<script" not in page
     assert (tmp_path / "table1.csv").is_file()

@@ -1,0 +1,168 @@
+"""``replay.html`` of real runs, opened in headless Chromium (Debian's ``chromium``, driven by
+playwright): what it draws at a step matches the run's files, it plays, and it loads nothing
+from the network and logs no error. Without Chromium these tests fail; they never skip."""
+
+from __future__ import annotations
+
+import shutil
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from sse_cosim.reporting.replay import REPLAY
+from sse_cosim.runner.run import run_scenario_file
+
+pytestmark = [pytest.mark.sumo, pytest.mark.browser]
+ROOT = Path(__file__).resolve().parents[2]
+S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
+JUNCTION = ROOT / "sumo_net" / "junction"  # a four-arm junction with route-file traffic
+S3_SECONDS = 12.5  # the pedestrian steps onto the zebra at 11.5 s
+PAGE_LIMIT_BYTES_PER_S = 5e6 / 30  # a 30 s run's page stays under 5 MB
+FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory) -> Iterator:
+    """A headless Chromium with a fresh profile."""
+    chromium = shutil.which("chromium")
+    if chromium is None:
+        pytest.fail("chromium is not installed: `apt-get install -y chromium chromium-driver` "
+                    "(make test installs it where it is missing)")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        pytest.fail("playwright is not installed: pip install -e '.[dev]'")
+    with sync_playwright() as driver:
+        context = driver.chromium.launch_persistent_context(
+            str(tmp_path_factory.mktemp("chromium-profile")), executable_path=chromium,
+            headless=True, args=FLAGS, viewport={"width": 1400, "height": 900})
+        yield context
+        context.close()
+
+
+class Replay:
+    """One replay page open in the browser, with every console error, page error and network
+    request it made."""
+
+    def __init__(self, browser, folder: Path, fragment: str = "") -> None:
+        self.problems: list[str] = []
+        self.page = browser.new_page()
+        self.page.on("console", lambda m: m.type == "error" and self.problems.append(m.text))
+        self.page.on("pageerror", lambda e: self.problems.append(str(e)))
+        self.page.on("request", lambda r: r.url.startswith("file:")
+                     or self.problems.append(f"loads {r.url}"))
+        self.page.goto((folder / REPLAY).as_uri() + fragment)
+        self.page.wait_for_function("window.replay !== undefined")
+
+    def step(self) -> int:
+        return self.page.evaluate("replay.current()")
+
+    def time(self) -> float:
+        return self.page.evaluate("replay.data.frames[replay.current()].t")
+
+    def level(self, vehicle: str) -> str:
+        return self.page.locator(f'.level[data-vehicle="{vehicle}"] .value').inner_text()
+
+    def slide_to(self, step: int) -> None:
+        self.page.evaluate("s => { const el = document.getElementById('slider'); el.value = s; "
+                           "el.dispatchEvent(new Event('input')); }", step)
+
+
+@pytest.fixture(scope="module")
+def s3_run(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("s3_replay")
+    run_scenario_file(S3, out, {"simulation.duration_s": S3_SECONDS}, plots=False)
+    return out
+
+
+def at(table: pd.DataFrame, t: float) -> pd.DataFrame:
+    return table[np.isclose(table["t"], t)]
+
+
+def test_the_page_draws_the_pedestrian_and_shows_the_level_of_the_step(s3_run, browser):
+    trace = pd.read_csv(s3_run / "trace.csv")
+    truth = pd.read_csv(s3_run / "truth.csv")
+    replay = Replay(browser, s3_run, "#step=120")
+    assert replay.step() == 120
+    truth_now = at(truth, replay.time()).set_index("pedestrian").loc["pedestrian"]
+    marker = replay.page.locator('circle.pedestrian[data-id="pedestrian"]')
+    # the scene's user space is (x, -y) in m, the stored coordinates are rounded to 1 cm
+    assert float(marker.get_attribute("cx")) == pytest.approx(truth_now["x"], abs=0.006)
+    assert float(marker.get_attribute("cy")) == pytest.approx(-truth_now["y"], abs=0.006)
+    shown, scene = marker.bounding_box(), replay.page.locator("#scene").bounding_box()
+    assert scene["x"] < shown["x"] < scene["x"] + scene["width"]
+    assert scene["y"] < shown["y"] < scene["y"] + scene["height"]
+    level_now = at(trace, replay.time()).set_index("vehicle").loc["bus", "level"]
+    assert replay.level("bus") == level_now
+    marker.click()
+    assert replay.page.inner_text("#info").startswith("pedestrian pedestrian\nposition (")
+
+    replay.slide_to(10)
+    assert replay.step() == 10
+    level_then = at(trace, replay.time()).set_index("vehicle").loc["bus", "level"]
+    assert level_then != level_now  # the bus slows down between the two steps
+    assert replay.level("bus") == level_then
+    assert replay.problems == []
+
+
+def test_the_page_plays_and_every_layer_is_drawn(s3_run, browser):
+    replay = Replay(browser, s3_run, "#step=120")
+    for layer in ("sectors", "shadows", "strips", "vehicles", "local", "fused", "refined",
+                  "pedestrians"):
+        assert replay.page.locator(f"#layer-{layer} > *").count() > 0, layer
+    replay.page.locator("#layer-fused path").dispatch_event("mouseover")
+    head, area = replay.page.inner_text("#info").split("\n")
+    assert head == "bus's fused set of pedestrian"
+    fused_area = at(pd.read_csv(s3_run / "trace.csv"), replay.time())["fused_area"].item()
+    assert float(area.removeprefix("area ").removesuffix(" m²")) == pytest.approx(fused_area,
+                                                                               rel=0.02)
+    replay.page.click("#play")
+    replay.page.wait_for_function("replay.current() > 121")
+    replay.page.click("#play")
+    paused = replay.step()
+    replay.page.keyboard.press("ArrowRight")
+    assert replay.step() == paused + 1
+    assert replay.problems == []
+
+
+def test_a_page_stays_small(s3_run):
+    assert (s3_run / REPLAY).stat().st_size < PAGE_LIMIT_BYTES_PER_S * S3_SECONDS
+
+
+def test_a_page_with_two_automated_vehicles_shows_both(tmp_path, browser):
+    second_bus = {"automated.bus2.depart_s": 3.0, "simulation.duration_s": 5.0}
+    run_scenario_file(S3, tmp_path, second_bus, plots=False)
+    replay = Replay(browser, tmp_path, "#step=40")
+    assert replay.page.locator(".level").count() == 2
+    trace = at(pd.read_csv(tmp_path / "trace.csv"), replay.time()).set_index("vehicle")
+    assert [replay.level(v) for v in ("bus", "bus2")] == list(trace.loc[["bus", "bus2"], "level"])
+    assert replay.page.locator("polyline.speed-line").count() == 2
+    replay.page.select_option("#ego", "bus2")
+    assert replay.page.locator("#layer-unobserved > *").count() == 1
+    assert replay.problems == []
+
+
+def test_a_page_of_another_network_shows_its_map_and_route_file_traffic(tmp_path, browser):
+    junction = {
+        "network.sources_dir": str(JUNCTION),
+        "network.route_files": [str(JUNCTION / "traffic.rou.xml")],
+        "automated.bus.route_edges": ["WJ", "JE"], "automated.bus.depart_pos_m": 30.0,
+        "automated.bus.nominal_speed_mps": 13.89, "parked.truck.present": False,
+        "pedestrians.pedestrian.start_edge": "WJ", "pedestrians.pedestrian.start_pos_m": 172.0,
+        "pedestrians.pedestrian.end_edge": "JW", "pedestrians.pedestrian.end_pos_m": 170.0,
+        "simulation.duration_s": 5.0,
+    }
+    run_scenario_file(S3.with_name("s1_pedestrian.toml"), tmp_path, junction, plots=False)
+    replay = Replay(browser, tmp_path, "#step=45")
+    drawn = replay.page.eval_on_selector_all("#layer-map path",
+                                             "paths => paths.map(p => p.dataset.info)")
+    assert [info.split("\n")[0] for info in drawn] == ["walkable area", "road", "crossings"]
+    shown = replay.page.eval_on_selector_all("#layer-vehicles text",
+                                             "labels => labels.map(t => t.textContent)")
+    assert "bus" in shown and len(shown) > 1  # and the route file's vehicles
+    assert replay.page.locator("circle.pedestrian").count() == 1
+    assert replay.problems == []
