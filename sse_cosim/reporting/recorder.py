@@ -190,7 +190,7 @@ class RunRecorder:
         row["own_occluded_m2"] = ego.picture.own_occluded_m2
         row["distance_to_crossing"] = ego.picture.distance_to_crossing
         row["distance_bus_pedestrian"] = min((c.distance for c in checks.values()), default=None)
-        row["collision"] = any(c.distance <= self.scenario.pedestrians[pid].radius_m
+        row["collision"] = any(c.distance <= self.scenario.person_radius_m(pid)
                                for pid, c in checks.items())
         self.rows.append(row)
         shared_fusion_now = (self.first_shared_fusion or {}).get("t") == t
@@ -388,10 +388,14 @@ class RunRecorder:
         }
 
     def _pedestrian_summary(self) -> dict[str, dict[str, Any]]:
-        """Per pedestrian: when a fused set first held it, its containment violations, its
-        least distance to the vehicle and its collisions (times contact began)."""
+        """Per pedestrian (the scenario's, then those of route files as they appeared): when a
+        fused set first held it, its containment violations, its least distance to the vehicle
+        and its collisions (times contact began)."""
         result = {}
-        for pid, ped in present(self.scenario.pedestrians).items():
+        ids = dict.fromkeys([*present(self.scenario.pedestrians),
+                             *(r["pedestrian"] for r in self.pedestrian_rows)])
+        for pid in ids:
+            radius = self.scenario.person_radius_m(pid)
             rows = [r for r in self.pedestrian_rows if r["pedestrian"] == pid]
             fused = [r["t"] for r in rows if r["contained_fused"] is not None]
             result[pid] = {
@@ -399,7 +403,7 @@ class RunRecorder:
                 "containment_violations": sum(v["pedestrian"] == pid for v in self.violations),
                 "min_distance_m": min((r["distance"] for r in rows), default=None),
                 "collisions": sum(
-                    _entries([r["distance"] <= ped.radius_m for r in rows if r["vehicle"] == v])
+                    _entries([r["distance"] <= radius for r in rows if r["vehicle"] == v])
                     for v in present(self.scenario.automated)),
             }
         return result

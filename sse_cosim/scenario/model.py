@@ -509,6 +509,13 @@ class Scenario(StrictModel):
         radii = [p.radius_m for p in present(self.pedestrians).values()]
         return max(radii, default=Pedestrian.model_fields["radius_m"].default)
 
+    def person_radius_m(self, person_id: str) -> float:
+        """The body radius of person ``person_id`` (m): its own if the scenario places it, else
+        (a person from a route file) :meth:`pedestrian_radius_m`, the radius the controller
+        keeps clear of."""
+        pedestrian = self.pedestrians.get(person_id)
+        return self.pedestrian_radius_m() if pedestrian is None else pedestrian.radius_m
+
     def actor_ids(self) -> list[str]:
         """The ids of every actor the scenario places in SUMO (present or not: a route file
         may not reuse them)."""

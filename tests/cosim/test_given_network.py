@@ -16,10 +16,12 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from sse_cosim.errors import UserError
 from sse_cosim.pipeline.result import StepResult
+from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.runner.simulation import simulate
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.world.sumo import CONFIG_FILE_NAME, SumoWorld
@@ -104,3 +106,13 @@ def test_what_sumo_cannot_run_is_refused_before_it_starts(
     assert info.value.field == field and info.value.source == "given_net"
     for word in words:
         assert word in info.value.problem
+
+
+def test_a_run_records_the_route_file_person_like_the_scenarios(tmp_path: Path) -> None:
+    """The recorder checks and summarises a person from a route file too (its radius is the
+    one the controller keeps clear of); it used to stop the run with a KeyError."""
+    summary = run_scenario_file(SCENARIO, tmp_path, {"simulation.duration_s": 4.0}, plots=False)
+    assert list(summary["pedestrians"]) == ["pedestrian", "walker0"]
+    rows = pd.read_csv(tmp_path / "pedestrians.csv")
+    assert set(rows["pedestrian"]) == {"pedestrian", "walker0"}
+    assert summary["collisions"] == 0 and summary["containment_violations"] == 0
