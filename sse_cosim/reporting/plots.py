@@ -25,6 +25,8 @@ KIND_COLORS = {"automated": "tab:blue", "parked": "tab:red", "vehicle": "gold"}
 KIND_LABELS = {"automated": "automated vehicle", "parked": "parked vehicle",
                "vehicle": "moving vehicle"}
 RSU_COLORS = ["tab:green", "tab:cyan", "tab:olive", "tab:pink"]
+VIEW_PAD_M = 5.0  # scene plots: room around what they show (m)
+VIEW_MIN_M = (60.0, 28.0)  # scene plots: the least width and height shown (m)
 
 
 def save_figure(fig: Figure, target: Path) -> Path:
@@ -151,11 +153,27 @@ def _legend_entries(axes) -> dict[str, object]:
 
 
 def _view_box(frame: SceneFrame) -> tuple[float, float, float, float]:
-    """A window around the automated vehicles and the crossing area."""
-    automated = [p for kind, p in frame.footprints.values() if kind == "automated"]
-    x0 = min(p.bounds[0] for p in automated) - 5.0 if automated else 120.0
-    x1 = max(x0 + 60.0, 225.0)
-    return (x0, -14.0, x1, 14.0)
+    """A window (x0, y0, x1, y1, m) around the automated vehicles, the pedestrians, their fused
+    sets and the hidden walkable ground near the crossings, padded by :data:`VIEW_PAD_M` and
+    at least :data:`VIEW_MIN_M` wide and high (on any network)."""
+    parts = [p for kind, p in frame.footprints.values() if kind == "automated"]
+    parts += [shapely.Point(t) for t in frame.truths.values()]
+    parts += [shapely.MultiPoint(z.vertices()) for z in frame.fused_sets.values()]
+    if not frame.unobserved.is_empty:
+        parts.append(frame.unobserved)
+    if not parts:
+        return (-VIEW_MIN_M[0] / 2, -VIEW_MIN_M[1] / 2, VIEW_MIN_M[0] / 2, VIEW_MIN_M[1] / 2)
+    x0, y0, x1, y1 = shapely.union_all(parts).bounds
+    (x0, x1), (y0, y1) = (_widen(x0, x1, VIEW_MIN_M[0]), _widen(y0, y1, VIEW_MIN_M[1]))
+    return (x0, y0, x1, y1)
+
+
+def _widen(low: float, high: float, least: float) -> tuple[float, float]:
+    """[low, high] padded by VIEW_PAD_M on each side, then widened about its middle to
+    ``least`` if shorter."""
+    low, high = low - VIEW_PAD_M, high + VIEW_PAD_M
+    extra = max(0.0, least - (high - low)) / 2
+    return low - extra, high + extra
 
 
 def _fill(ax, geometry, color, label, alpha: float = 1.0, hatch: str | None = None) -> None:
