@@ -64,6 +64,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -160,6 +161,14 @@ class _Scene:
     eroded: Mapping[str, BaseGeometry]  # sensor -> visible region shrunk by jitter + margin
     ground: BaseGeometry | None
 
+    @cached_property
+    def regions(self) -> tuple[tuple[str, ...], np.ndarray]:
+        """The sensors' names and their eroded regions (an array of prepared geometries, for
+        shapely's vectorized predicates)."""
+        regions = np.array(list(self.eroded.values()), dtype=object)
+        shapely.prepare(regions)
+        return tuple(self.eroded), regions
+
 
 def associate(
     model: MotionModel,
@@ -236,14 +245,11 @@ def _candidates(scene: _Scene, estimate: Zonotope, skip: str | None = None) -> _
             if _inside(found.parallelograms[d], path):
                 inside.append(int(d))
     polygon = _polygon(scene.model.position(estimate))
-    wholly, partly = set(), set()
-    for sensor, region in scene.eroded.items():
-        if sensor == skip or region.is_empty:
-            continue
-        if region.covers(polygon):
-            wholly.add(sensor)
-        elif region.intersects(polygon):
-            partly.add(sensor)
+    names, regions = scene.regions
+    covers = shapely.covers(regions, polygon)
+    meets = shapely.intersects(regions, polygon) & ~covers
+    wholly = {n for n, c in zip(names, covers, strict=True) if c and n != skip}
+    partly = {n for n, m in zip(names, meets, strict=True) if m and n != skip}
     return _View({s: tuple(c) for s, c in candidates.items()}, tuple(inside),
                  frozenset(wholly), frozenset(partly))
 
@@ -259,26 +265,37 @@ def _claimed(track: LocalTrack, view: _View) -> list[int]:
 
 def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[int]
              ) -> LocalTrack | None:
-    """R3, R4, R6 for one predicted track: the corrected track, or None if it ended."""
-    estimate, occupied, joined = track.estimate, track.occupied, []
-    sensors = sorted(view.wholly | view.partly)
-    for sensor in sensors:
-        if sensor not in view.wholly | view.partly:
-            continue  # S sees none of X: every pedestrian in X may be hidden from it
+    """R3, R4, R6 for one predicted track: the corrected track, or None if it ended.
+
+    Sensors with a single possibility (wholly visible, one candidate left) cut X together in
+    one Proposition 1 step; the others then each replace X by the hull of their possibilities.
+    Only sensors that see part of X take part (one that sees none of it may miss them all).
+    """
+    paths = scene.detections.paths
+    occupied, certain, ambiguous = track.occupied, [], []
+    for sensor in sorted(view.wholly | view.partly):
         candidates = view.candidates.get(sensor, ())
         used = [d for d in candidates if d not in left_out]
         occupied = occupied and len(used) == len(candidates)
-        options = [_cut(scene, estimate, scene.detections.paths[d]) for d in used]
+        if sensor in view.partly or len(used) > 1:
+            ambiguous.append((sensor, used))
+        elif used:
+            certain.append(used[0])
+        else:
+            return None  # R6: wholly visible, no pedestrian in it
+    estimate = track.estimate
+    if certain:
+        estimate = _cut(scene, estimate, Strips.stack([paths[d] for d in certain]))
+    for sensor, used in ambiguous:
+        options = [_cut(scene, estimate, paths[d]) for d in used]
         if sensor in view.partly:
             options.append(_hidden(scene, estimate, track.estimate, sensor))
-        if not options:
-            return None  # R6: wholly visible, no pedestrian in it
         estimate = _hull(options) if len(options) > 1 else options[0]
-        joined += used
     if scene.ground is not None and not scene.ground.intersects(
             _polygon(scene.model.position(estimate))):
         return None  # R6: off the walkable ground
     estimate = estimate.reduce(scene.settings.max_generators, scene.settings.reduction_method)
+    joined = certain + [d for _, used in ambiguous for d in used]
     return replace(track, estimate=estimate, occupied=occupied, joined=tuple(sorted(joined)))
 
 
