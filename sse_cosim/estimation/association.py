@@ -62,7 +62,7 @@ everything else is kept apart.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import TYPE_CHECKING
@@ -72,7 +72,6 @@ import shapely
 from shapely.geometry import MultiPoint, Polygon
 from shapely.geometry.base import BaseGeometry
 
-from sse_cosim.estimation.bus_fusion import fuse_sets
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.vote import interval_hull
 from sse_cosim.sets import (
@@ -294,6 +293,9 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
     if scene.ground is not None and not scene.ground.intersects(
             _polygon(scene.model.position(estimate))):
         return None  # R6: off the walkable ground
+    if scene.model.state_bounds is not None:  # the speed bound, always true (A3)
+        estimate = intersect_strips(estimate, scene.model.state_bounds,
+                                    scene.settings.gain_method)
     estimate = estimate.reduce(scene.settings.max_generators, scene.settings.reduction_method)
     joined = certain + [d for _, used in ambiguous for d in used]
     return replace(track, estimate=estimate, occupied=occupied, joined=tuple(sorted(joined)))
@@ -457,22 +459,26 @@ class NodeTracks:
 
 @dataclass(frozen=True)
 class FusedTrack:
-    """A set for the pedestrians of its ``sources`` ((node, track id), sorted): their
+    """A set for the pedestrians of its ``sources`` ((node, track id), in the order of the
+    nodes given, then by id): their
     intersection (Prop. 2) when they certainly hold the same pedestrians, else one source."""
 
     estimate: Zonotope
     sources: tuple[tuple[str, int], ...]
 
 
-def associate_nodes(
-    nodes: Sequence[NodeTracks],
-    model: MotionModel,
-    settings: EstimatorSettings,
-    fusion_method: str,
-) -> list[FusedTrack]:
+Fusion = Callable[[Sequence[Zonotope]], Zonotope]
+"""Encloses the intersection of state sets of the same pedestrians (Proposition 2), e.g.
+``lambda sets: bus_fusion.fuse_sets(sets, method, settings, model)``."""
+
+
+def associate_nodes(nodes: Sequence[NodeTracks], model: MotionModel, fusion: Fusion
+                    ) -> list[FusedTrack]:
     """The second fusion level over anonymous tracks: every track of every node lands in
-    exactly one result; tracks linked by certain pairs (module docstring) are fused
-    (:func:`~sse_cosim.estimation.bus_fusion.fuse_sets`), the rest come back alone."""
+    exactly one result; tracks linked by certain pairs (module docstring) are fused by
+    ``fusion`` (called only on groups of two or more), the rest come back alone. Cost: one
+    region test per (track, other node), exact overlap tests only for box-overlapping pairs.
+    """
     keys = [(n.node, tid) for n in nodes for tid in sorted(n.tracks)]
     sets = {(n.node, tid): z for n in nodes for tid, z in n.tracks.items()}
     group = {key: key for key in keys}
@@ -490,8 +496,8 @@ def associate_nodes(
     members: dict[tuple[str, int], list[tuple[str, int]]] = {}
     for key in keys:
         members.setdefault(root(key), []).append(key)
-    return [FusedTrack(fuse_sets([sets[k] for k in sorted(m)], fusion_method, settings, model),
-                       tuple(sorted(m))) for m in members.values()]
+    return [FusedTrack(fusion([sets[k] for k in m]) if len(m) > 1 else sets[m[0]], tuple(m))
+            for m in members.values()]
 
 
 def _sole_meeting(estimate: Zonotope, other: NodeTracks, model: MotionModel) -> int | None:

@@ -20,6 +20,7 @@ from sse_cosim.estimation.association import (
     associate,
     associate_nodes,
 )
+from sse_cosim.estimation.bus_fusion import fuse_sets
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings
 from sse_cosim.scenario.model import Estimator
@@ -29,6 +30,11 @@ DT = 0.5
 SPEED = 1.5  # m/s: at most 0.75 m per step
 NOISE = 0.3  # m: strip half-width
 SETTINGS = EstimatorSettings("enclose", "girard", 8)
+
+
+def fusion(sets):
+    """Proposition 2 as the bus does it (``enclose``), for :func:`associate_nodes`."""
+    return fuse_sets(sets, "enclose", SETTINGS, motion_model())
 
 
 def motion_model(jitter: float = 0.0) -> MotionModel:
@@ -150,7 +156,7 @@ def test_fusion_across_nodes_keeps_every_detected_pedestrian(seed, people):
             node.step(rng, k, path)
         fused = associate_nodes(
             [NodeTracks(name, {t.track_id: t.estimate for t in node.tracks}, node.visible)
-             for name, node in zip("ab", nodes, strict=True)], model, SETTINGS, "enclose")
+             for name, node in zip("ab", nodes, strict=True)], model, fusion)
         sources = sorted(s for f in fused for s in f.sources)
         assert sources == sorted((name, t.track_id) for name, node in zip("ab", nodes,
                                                                           strict=True)
@@ -275,7 +281,7 @@ def test_nodes_fuse_only_certain_pairs():
     fused = associate_nodes([NodeTracks("a", {t.track_id: t.estimate for t in a.tracks},
                                         a.visible),
                              NodeTracks("b", {t.track_id: t.estimate for t in b.tracks},
-                                        b.visible)], model, SETTINGS, "enclose")
+                                        b.visible)], model, fusion)
     pairs = [f for f in fused if len(f.sources) == 2]
     assert len(pairs) == 1 and covered(model, [pairs[0].estimate], alone[0])
     assert all(len(f.sources) == 1 for f in fused if f is not pairs[0])
@@ -317,7 +323,7 @@ def test_overlapping_tracks_of_pedestrians_the_other_node_cannot_see_are_kept_ap
                    Point(p1).buffer(0.2))
     b = NodeTracks("b", {0: Zonotope(np.array([0.35, 0.0]), 0.3 * np.eye(2))},
                    Point(p2).buffer(0.2))
-    fused = associate_nodes([a, b], model, SETTINGS, "enclose")
+    fused = associate_nodes([a, b], model, fusion)
     assert sorted(f.sources for f in fused) == [(("a", 0),), (("b", 0),)]
     assert all(covered(model, [f.estimate for f in fused], p) for p in (p1, p2))
 
@@ -330,9 +336,9 @@ def test_a_track_is_not_fused_with_a_larger_track_that_holds_someone_else():
     a = NodeTracks("a", {0: Zonotope(p1, 0.3 * np.eye(2))}, box(-3, -3, 0.7, 3))
     b = NodeTracks("b", {0: Zonotope(np.array([0.5, 0.0]), np.diag([0.9, 0.5]))},
                    box(-3, -3, 3, 3))
-    fused = associate_nodes([a, b], model, SETTINGS, "enclose")
+    fused = associate_nodes([a, b], model, fusion)
     assert sorted(f.sources for f in fused) == [(("a", 0),), (("b", 0),)]
     assert all(covered(model, [f.estimate for f in fused], p) for p in (p1, p2))
     b_alone = NodeTracks("b", {0: Zonotope(p1, 0.35 * np.eye(2))}, box(-3, -3, 3, 3))
-    assert [f.sources for f in associate_nodes([a, b_alone], model, SETTINGS, "enclose")] \
+    assert [f.sources for f in associate_nodes([a, b_alone], model, fusion)] \
         == [(("a", 0), ("b", 0))]
