@@ -460,8 +460,8 @@ class NodeTracks:
 @dataclass(frozen=True)
 class FusedTrack:
     """A set for the pedestrians of its ``sources`` ((node, track id), in the order of the
-    nodes given, then by id): their
-    intersection (Prop. 2) when they certainly hold the same pedestrians, else one source."""
+    nodes given, then by id): their intersection (Prop. 2) when they certainly hold the same
+    pedestrians, else the one source's set."""
 
     estimate: Zonotope
     sources: tuple[tuple[str, int], ...]
