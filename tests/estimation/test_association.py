@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Point, Polygon, box
@@ -22,7 +23,7 @@ from sse_cosim.estimation.association import (
 )
 from sse_cosim.estimation.bus_fusion import fuse_sets
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import EstimatorSettings
+from sse_cosim.estimation.observer import AnonymousNodeObserver, EstimatorSettings
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips, Zonotope
 
@@ -342,3 +343,25 @@ def test_a_track_is_not_fused_with_a_larger_track_that_holds_someone_else():
     b_alone = NodeTracks("b", {0: Zonotope(p1, 0.35 * np.eye(2))}, box(-3, -3, 3, 3))
     assert [f.sources for f in associate_nodes([a, b_alone], model, fusion)] \
         == [(("a", 0), ("b", 0))]
+
+
+@pytest.mark.parametrize("state_model", ["position", "constant-velocity"])
+def test_anonymous_node_observer_keeps_every_pedestrian(state_model):
+    config = Estimator(state_model=state_model, max_pedestrian_speed_mps=SPEED,
+                       max_velocity_change_mps=2 * SPEED)
+    model = MotionModel.from_config(config, DT)
+    observer = AnonymousNodeObserver("car", model, SETTINGS)
+    rng = np.random.default_rng(4)
+    sensors = [Sensor("front", Point(-1, 0).buffer(3.0)), Sensor("side", box(-1, -20, 20, 20))]
+    paths = crossing_walks(rng, 3, 14)
+    seen: set[int] = set()
+    for k, path in enumerate(paths):
+        seen |= {i for i, p in enumerate(path)
+                 if any(s.region.contains(Point(p)) for s in sensors)}
+        tracks = observer.step(k, detections(rng, path, sensors),
+                               {s.name: s.region for s in sensors})
+        assert all(key == t.person_id and key.startswith("car:") and t.step == k
+                   for key, t in tracks.items())
+        for i in seen:
+            assert covered(model, [t.estimate for t in tracks.values()], path[i]), (k, i)
+    assert seen == {0, 1, 2}
