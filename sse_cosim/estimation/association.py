@@ -243,7 +243,7 @@ def _candidates(scene: _Scene, estimate: Zonotope, skip: str | None = None) -> _
             candidates.setdefault(sensor, []).append(int(d))
             if _inside(found.parallelograms[d], path):
                 inside.append(int(d))
-    polygon = _polygon(scene.model.position(estimate))
+    polygon = _polygon(path)  # the regions are eroded by the jitter: s in them, p visible
     names, regions = scene.regions
     covers = shapely.covers(regions, polygon)
     meets = shapely.intersects(regions, polygon) & ~covers
