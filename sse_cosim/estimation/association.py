@@ -19,6 +19,7 @@ Assumptions (all sets are about the path point s of :mod:`sse_cosim.estimation.m
 - A4 persistence: a pedestrian in the scene stays in it (hidden or not) while it is tracked;
   a pedestrian may appear at any time and anywhere. (A person the simulation removes takes
   A4 with it: its track ends once wholly visible, but until then rule R2 may trust it.)
+- A5 ground (only if a walkable ground is given): pedestrians stay on it.
 
 Rules of one step at one node (each proof in a line or two; "X" is a track's prediction):
 
@@ -33,18 +34,21 @@ Rules of one step at one node (each proof in a line or two; "X" is a track's pre
   hidden from S (in X minus S's visible region shrunk by the jitter) or in X ∩ d for one of
   its candidates d (R1). The corrected set is that one possibility, or the enclosure of the
   union of them all (a hull: 2-D the exact convex hull enclosed along the sets' directions,
-  else the interval hull). Sensors are taken in turn; each proof holds for every pedestrian
-  in the prediction, so the turn order is free.
+  else the interval hull). Sensors are taken in turn (those with a single possibility
+  together, one Proposition 1 step); each proof holds for every pedestrian in the
+  prediction, so the order is free.
 - R4 claimed detections: a track that claims nothing leaves out the possibility X ∩ d of a
-  d claimed by another track: the only pedestrian it stands for is d's, which the claimer
-  keeps (claimers never leave anything out). It is then no longer known to be occupied.
+  d claimed by another track: a pedestrian of X whose detection is d is d's pedestrian,
+  which the claimer keeps (claimers never leave anything out: two tracks that claim each
+  other's detections would otherwise both drop it). It is then no longer known to be
+  occupied.
 - R5 new tracks: a detection that no track claims and whose set does not lie inside a
   prediction starts an occupied track (its pedestrian may be new and then in no other set);
   it is corrected with the other sensors by R1-R3, and the detections it claims (R2) start
   nothing. A detection inside a prediction X needs no track: its pedestrian is in X, kept by
   R3.
 - R6 end: a track with no possibility left (wholly visible, no candidate) holds no
-  pedestrian; so does one whose position set misses the walkable ground.
+  pedestrian; so does one whose position set misses the walkable ground (A5).
 - R7 merge: two tracks whose hull is at most :data:`MERGE_GROWTH` larger than the smaller
   of them become that hull (it covers both; occupied if either was).
 
@@ -57,7 +61,15 @@ the same pedestrians when A lies wholly in b's visible region (so each of A's pe
 detected by b and, by the invariant above, in a track of b that meets A) and B is the only
 track of b that meets A, and the same with a and b swapped. Only then is A ∩ B (Prop. 2)
 sound in place of both; tracks linked by such certain pairs form one group and are fused,
-everything else is kept apart.
+everything else is kept apart. All tracks are brought to the fusing step first; a region
+seen earlier is trusted only for A grown by how far a pedestrian may have walked since.
+
+Cost: bounding boxes prefilter every track-detection and track-track pair, and the regions
+are tested with shapely's vectorized predicates, so a step is about linear in the number of
+(track, sensor that sees it) pairs; a hull is enclosed along the edges of its options only
+(the enclosure's cost grows with the cube of its directions). 50 random walkers under 16
+disc sensors (about 100 detections a step): about 0.6 s a step on one core (``enclose``
+gain), 1 s with ``frobenius``.
 """
 
 from __future__ import annotations
@@ -289,7 +301,12 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
         options = [_cut(scene, estimate, paths[d]) for d in used]
         if sensor in view.partly:
             options.append(_hidden(scene, estimate, track.estimate, sensor))
-        estimate = _hull(options) if len(options) > 1 else options[0]
+        if len(options) == 1:
+            estimate = options[0]
+            continue
+        edges = [scene.model.position_matrix @ estimate.generators,
+                 *(scene.detections.parallelograms[d].generators for d in used)]
+        estimate = _hull(options, np.hstack(edges))  # along the edges of every option
     if scene.ground is not None and not scene.ground.intersects(
             _polygon(scene.model.position(estimate))):
         return None  # R6: off the walkable ground
@@ -349,12 +366,13 @@ def _enclose(points: FloatArray, generators: FloatArray) -> Zonotope | None:
     return Zonotope.unchecked(origin + center, enclosure_generators)
 
 
-def _hull(sets: Sequence[Zonotope]) -> Zonotope:
+def _hull(sets: Sequence[Zonotope], generators: FloatArray) -> Zonotope:
     """A zonotope holding every set (R3, R7): 2-D the enclosure of the convex hull of their
-    vertices along their directions, else (or if that fails) the interval hull."""
+    vertices along the directions of ``generators`` (2, e) and the axes (their edges, and
+    few: the cost of the enclosure grows with their cube), else (or if that fails) the
+    interval hull."""
     if sets[0].dim == 2:
-        enclosure = _enclose(np.vstack([z.vertices() for z in sets]),
-                             np.hstack([z.generators for z in sets]))
+        enclosure = _enclose(np.vstack([z.vertices() for z in sets]), generators)
         if enclosure is not None:
             return enclosure
     return interval_hull(sets)
@@ -395,7 +413,7 @@ def _near_duplicate(first: Zonotope, second: Zonotope, model: MotionModel) -> Zo
     areas = sorted(model.position(z).volume() for z in (first, second))
     if areas[1] > (1.0 + MERGE_GROWTH) * areas[0]:
         return None  # the hull is at least as large as the larger one
-    union = _hull([first, second])
+    union = _hull([first, second], np.hstack([first.generators, second.generators]))
     return union if model.position(union).volume() <= (1.0 + MERGE_GROWTH) * areas[0] else None
 
 
