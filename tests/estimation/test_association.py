@@ -365,3 +365,12 @@ def test_anonymous_node_observer_keeps_every_pedestrian(state_model):
         for i in seen:
             assert covered(model, [t.estimate for t in tracks.values()], path[i]), (k, i)
     assert seen == {0, 1, 2}
+
+
+def test_a_track_off_the_walkable_ground_ends():
+    model = motion_model()
+    ground = box(-5, -1, 5, 1)
+    tracks = (LocalTrack(0, Zonotope(np.array([0.0, 0.0]), 0.3 * np.eye(2)), 0, True),
+              LocalTrack(1, Zonotope(np.array([0.0, 4.0]), 0.3 * np.eye(2)), 0, True))
+    result = associate(model, SETTINGS, tracks, [], {}, 1, 2, ground)
+    assert [t.track_id for t in result.tracks] == [0]
