@@ -2,8 +2,11 @@
 
 Every node (bus, connected car, road-side unit) runs one. A track starts from the strips of
 its first detection; when the node loses sight it keeps predicting, so the set grows by the
-process noise each step and still contains the pedestrian. Detections are associated with
-tracks by the pedestrian's id (the simulation knows who is who; the paper has one pedestrian).
+process noise each step and still contains the pedestrian. :class:`NodeObserver` associates
+detections with tracks by the pedestrian's id (the simulation knows who is who; the paper has
+one pedestrian); :class:`AnonymousNodeObserver` works from anonymous detections, as a real
+perception stack reports them (:mod:`sse_cosim.estimation.association`), with node-local
+track ids.
 """
 
 from __future__ import annotations
@@ -11,6 +14,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
+from shapely.geometry.base import BaseGeometry
+
+from sse_cosim.estimation.association import AnonymousDetection, Association, associate
 from sse_cosim.estimation.correction import Suspicion, correct
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.sets import Strips, Zonotope, intersect_strips
@@ -80,6 +86,39 @@ class NodeObserver:
                                        update.conflict)
         self.tracks = updated
         return updated
+
+
+class AnonymousNodeObserver:
+    """A node's observer from anonymous detections (paper Fig. 3, first fusion level).
+
+    Tracks are started, corrected, merged and ended by
+    :func:`~sse_cosim.estimation.association.associate`; every pedestrian the node has
+    detected stays inside one of their sets. The output has :class:`Track`'s shape, keyed by
+    ``"<node>:<track id>"``: the id is local to the node, so tracks of different nodes never
+    share a key (fusing them by key would assume they hold the same pedestrian; use
+    :func:`~sse_cosim.estimation.association.associate_nodes`). No sensor is flagged: the
+    consistency vote needs to know which strips are about the same pedestrian.
+    """
+
+    def __init__(self, node: str, model: MotionModel, settings: EstimatorSettings,
+                 ground: BaseGeometry | None = None) -> None:
+        self.node = node
+        self.model = model
+        self.settings = settings
+        self.ground = ground
+        self.association = Association((), 0)
+
+    def step(self, step: int, detections: Sequence[AnonymousDetection],
+             visible: Mapping[str, BaseGeometry]) -> dict[str, Track]:
+        """Tracks at ``step`` from ``detections`` (this node's sensors at ``step``, in a fixed
+        order) and ``visible``: sensor name -> its visible region now (a pedestrian inside
+        it is detected by it; a sensor left out sees nothing)."""
+        self.association = associate(
+            self.model, self.settings, self.association.tracks, detections, visible, step,
+            self.association.next_id, self.ground)
+        tracks = [Track(f"{self.node}:{t.track_id}", t.estimate, step, bool(t.joined))
+                  for t in self.association.tracks]
+        return {track.person_id: track for track in tracks}
 
 
 class LocalObservers:
