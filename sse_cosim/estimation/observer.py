@@ -11,8 +11,9 @@ track ids.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Generic, Protocol, TypeVar
 
 from shapely.geometry.base import BaseGeometry
 
@@ -88,6 +89,16 @@ class NodeObserver:
         return updated
 
 
+@dataclass(frozen=True)
+class NodeScan:
+    """What a node's sensors report at one step without ids: every detection (in a fixed
+    order) and each sensor's visible region (sensor name -> shapely geometry; a pedestrian
+    inside it is detected by that sensor; a sensor left out sees nothing)."""
+
+    detections: tuple[AnonymousDetection, ...] = ()
+    visible: Mapping[str, BaseGeometry] = field(default_factory=dict)
+
+
 class AnonymousNodeObserver:
     """A node's observer from anonymous detections (paper Fig. 3, first fusion level).
 
@@ -108,42 +119,63 @@ class AnonymousNodeObserver:
         self.ground = ground
         self.association = Association((), 0)
 
-    def step(self, step: int, detections: Sequence[AnonymousDetection],
-             visible: Mapping[str, BaseGeometry]) -> dict[str, Track]:
-        """Tracks at ``step`` from ``detections`` (this node's sensors at ``step``, in a fixed
-        order) and ``visible``: sensor name -> its visible region now (a pedestrian inside
-        it is detected by it; a sensor left out sees nothing)."""
+    def step(self, step: int, scan: NodeScan) -> dict[str, Track]:
+        """Tracks at ``step`` from the node's ``scan`` at ``step``."""
         self.association = associate(
-            self.model, self.settings, self.association.tracks, detections, visible, step,
-            self.association.next_id, self.ground)
+            self.model, self.settings, self.association.tracks, scan.detections, scan.visible,
+            step, self.association.next_id, self.ground)
         tracks = [Track(f"{self.node}:{t.track_id}", t.estimate, step, bool(t.joined))
                   for t in self.association.tracks]
         return {track.person_id: track for track in tracks}
 
 
-class LocalObservers:
+NodeInput = TypeVar("NodeInput", Mapping[str, Mapping[str, Strips]], NodeScan)
+"""What one node's observer takes at a step: labelled detections (pedestrian id -> sensor
+name -> strips, :class:`NodeObserver`) or a :class:`NodeScan` (:class:`AnonymousNodeObserver`)."""
+
+
+class Observer(Protocol[NodeInput]):
+    """One node's observer: its tracks at a step from that step's input."""
+
+    def step(self, step: int, found: NodeInput, /) -> dict[str, Track]: ...
+
+
+class LocalObservers(Generic[NodeInput]):
     """Every node's observer, stepped together: the first fusion level of the network.
 
-    The scenario's nodes have one from the start; a node that appears at run time (a vehicle
-    carrying sensors by type) gets one the first step it is in ``detections``, and keeps it
-    (predicting) after it left.
+    The scenario's nodes have one from the start (``make(node)``); a node that appears at run
+    time (a vehicle carrying sensors by type) gets one the first step it is in the input, and
+    keeps it (predicting, from ``idle``: nothing seen) after it left. Use :meth:`labelled` or
+    :meth:`anonymous`.
     """
 
-    def __init__(self, nodes: Iterable[str], model: MotionModel,
-                 settings: EstimatorSettings) -> None:
-        self.model = model
-        self.settings = settings
-        self._observers = {node: NodeObserver(node, model, settings) for node in nodes}
+    def __init__(self, nodes: Iterable[str], make: Callable[[str], Observer[NodeInput]],
+                 idle: NodeInput) -> None:
+        self._make = make
+        self._idle = idle
+        self._observers = {node: make(node) for node in nodes}
 
-    def step(
-        self, step: int, detections: Mapping[str, Mapping[str, Mapping[str, Strips]]]
-    ) -> dict[str, dict[str, Track]]:
-        """Node -> pedestrian id -> track at ``step``, from ``detections``: node -> pedestrian
-        id -> sensor name -> the strips of that node's sensors that see it now."""
-        for node in detections:
+    @classmethod
+    def labelled(cls, nodes: Iterable[str], model: MotionModel, settings: EstimatorSettings
+                 ) -> LocalObservers[Mapping[str, Mapping[str, Strips]]]:
+        """Observers that associate detections by the pedestrian's id."""
+        return LocalObservers(nodes, lambda node: NodeObserver(node, model, settings), {})
+
+    @classmethod
+    def anonymous(cls, nodes: Iterable[str], model: MotionModel, settings: EstimatorSettings
+                  ) -> LocalObservers[NodeScan]:
+        """Observers of anonymous detections (node-local track ids)."""
+        return LocalObservers(
+            nodes, lambda node: AnonymousNodeObserver(node, model, settings), NodeScan())
+
+    def step(self, step: int, found: Mapping[str, NodeInput]) -> dict[str, dict[str, Track]]:
+        """Node -> track key -> track at ``step``, from ``found``: node -> what that node's
+        sensors report now (labelled: pedestrian id -> sensor name -> strips; anonymous: its
+        :class:`NodeScan`)."""
+        for node in found:
             if node not in self._observers:
-                self._observers[node] = NodeObserver(node, self.model, self.settings)
-        return {node: observer.step(step, detections.get(node, {}))
+                self._observers[node] = self._make(node)
+        return {node: observer.step(step, found.get(node, self._idle))
                 for node, observer in self._observers.items()}
 
 

@@ -73,7 +73,7 @@ def simulate(
                                  config.max_generators)
     specs = specs_from_scenario(scenario)
     faults = FaultInjector(scenario, specs, fault_rng)
-    observers = LocalObservers(scenario.node_ids(), model, settings)
+    observers = LocalObservers.labelled(scenario.node_ids(), model, settings)
     n_steps = round(scenario.simulation.duration_s / dt)
     with SumoWorld(scenario, run_dir, scenario_name) as world:
         egos = [Ego(vid, scenario, world.roadmap, model, settings, specs, rng)
