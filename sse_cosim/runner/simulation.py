@@ -30,10 +30,10 @@ import numpy as np
 
 from sse_cosim.control.speed import SpeedLevel
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import EstimatorSettings, LocalObservers
+from sse_cosim.estimation.observer import EstimatorSettings
 from sse_cosim.pipeline.ego import Ego
 from sse_cosim.pipeline.result import StepCallback, StepResult
-from sse_cosim.pipeline.stages import detections_by_node, outgoing, sense
+from sse_cosim.pipeline.stages import first_level, outgoing, sense
 from sse_cosim.runner.timing import NoTimer, StageTimer
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors import specs_from_scenario
@@ -73,7 +73,7 @@ def simulate(
                                  config.max_generators)
     specs = specs_from_scenario(scenario)
     faults = FaultInjector(scenario, specs, fault_rng)
-    observers = LocalObservers.labelled(scenario.node_ids(), model, settings)
+    observers = first_level(config.association, scenario.node_ids(), model, settings)
     n_steps = round(scenario.simulation.duration_s / dt)
     with SumoWorld(scenario, run_dir, scenario_name) as world:
         egos = [Ego(vid, scenario, world.roadmap, model, settings, specs, rng)
@@ -87,7 +87,7 @@ def simulate(
             timer.lap("sumo")
             observations = sense(snapshot, specs, faults, noise_rng)
             timer.lap("geometry")
-            tracks = observers.step(step, detections_by_node(observations))
+            tracks = observers.step(step, observations)
             timer.lap("local_fusion")
             if active:  # building a message marks its faults (docs/faults.md): only when sent
                 messages = outgoing(step, snapshot, observations, tracks, faults, model)
