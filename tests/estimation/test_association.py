@@ -14,6 +14,7 @@ from shapely.geometry import Point, Polygon, box
 from shapely.geometry.base import BaseGeometry
 from shapely.ops import unary_union
 
+from sse_cosim.estimation.anonymous_fusion import AnonymousFusionCentre
 from sse_cosim.estimation.association import (
     AnonymousDetection,
     LocalTrack,
@@ -25,7 +26,10 @@ from sse_cosim.estimation.association import (
 from sse_cosim.estimation.bus_fusion import fuse_sets
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import AnonymousNodeObserver, EstimatorSettings, NodeScan
-from sse_cosim.scenario.model import Estimator
+from sse_cosim.estimation.occupancy import OccupancyTracker
+from sse_cosim.estimation.v2x import Message, V2XLink
+from sse_cosim.pipeline.stages import RefinedRegions
+from sse_cosim.scenario.model import V2X, Estimator
 from sse_cosim.sets import Strips, Zonotope
 
 DT = 0.5
@@ -375,3 +379,45 @@ def test_a_track_off_the_walkable_ground_ends():
               LocalTrack(1, Zonotope(np.array([0.0, 4.0]), 0.3 * np.eye(2)), 0, True))
     result = associate(model, SETTINGS, tracks, [], {}, 1, 2, ground)
     assert [t.track_id for t in result.tracks] == [0]
+
+
+@settings(max_examples=8, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), people=st.integers(2, 4))
+def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined_region(
+        seed, people):
+    """The vehicle's pipeline on crossing paths with overlapping sets: own and received tracks
+    fused (AnonymousFusionCentre, over a V2X link with latency), refined with the clear regions
+    of each fused track: every pedestrian the vehicle or the sender (by the step of its newest
+    message) has detected is in some fused set and in some refined region (fails if a view is
+    taken as clear for a track that meets one of the viewer's tracks)."""
+    rng = np.random.default_rng(seed)
+    model = motion_model()
+    sensors = {"bus": [random_sensor(rng, "bus_a"), random_sensor(rng, "bus_b")],
+               "rsu": [random_sensor(rng, "rsu_a")]}
+    observers = {node: AnonymousNodeObserver(node, model, SETTINGS) for node in sensors}
+    views = {node: unary_union([s.region for s in mine]) for node, mine in sensors.items()}
+    centre = AnonymousFusionCentre(model, SETTINGS, "enclose", ["bus_a", "bus_b"], DT, "bus")
+    link = V2XLink(V2X(latency_steps=1), np.random.default_rng(0))
+    refined = RefinedRegions(OccupancyTracker(model, DT), history=False)
+    first_seen: dict[str, dict[int, int]] = {node: {} for node in sensors}
+    for k, positions in enumerate(crossing_walks(rng, people, 12)):
+        tracks = {}
+        for node, mine in sensors.items():
+            for i, p in enumerate(positions):
+                if any(s.region.contains(Point(p)) for s in mine):
+                    first_seen[node].setdefault(i, k)
+            scan = NodeScan(tuple(detections(rng, positions, mine)),
+                            {s.name: s.region for s in mine})
+            tracks[node] = observers[node].step(k, scan)
+        link.send(Message("rsu", k, {key: t.estimate for key, t in tracks["rsu"].items()},
+                          views["rsu"]), 0.0)
+        link.deliver(k)
+        shared = link.picture(k, model)
+        estimate, clear = centre.step(tracks, shared, views["bus"])
+        possible = refined.update(k, {}, estimate, clear)
+        rsu_step = k - shared.ages.get("rsu", k + 1)  # the step of its newest message
+        known = set(first_seen["bus"]) | {
+            i for i, first in first_seen["rsu"].items() if first <= rsu_step}
+        for i in known:
+            assert covered(model, estimate.fused.values(), positions[i]), (k, i)
+            assert any(r.distance(Point(positions[i])) <= 1e-7 for r in possible.values()), (k, i)
