@@ -96,8 +96,10 @@ class AnonymousFusionCentre:
         return BusEstimate(screen, estimates, flags, inputs), clear
 
     def _node_tracks(self, node: _Node) -> NodeTracks:
-        """``node``'s tracks for :func:`associate_nodes` (ids: the keys' ranks), and how far a
-        pedestrian may have walked since its view was taken."""
+        """``node``'s tracks for :func:`associate_nodes` (ids: the keys' ranks), its view
+        (prepared: every other node's tracks are tested against it), and how far a pedestrian
+        may have walked since the view was taken."""
+        shapely.prepare(node.view)
         return NodeTracks(node.node, dict(enumerate(node.tracks[k] for k in sorted(node.tracks))),
                           node.view, self.model.max_speed * self.step_length * node.age)
 
