@@ -506,7 +506,8 @@ def associate_nodes(nodes: Sequence[NodeTracks], model: MotionModel, fusion: Fus
             key = group[key]
         return key
 
-    sole = {(key, other.node): _sole_meeting(sets[key], other, model)
+    polygons = {key: _polygon(model.position(sets[key])) for key in keys}
+    sole = {(key, other.node): _sole_meeting(sets[key], polygons[key], other, model)
             for key in keys for other in nodes if other.node != key[0]}
     for (key, node), partner in sole.items():
         if partner is not None and sole[((node, partner), key[0])] == key[1]:
@@ -518,11 +519,17 @@ def associate_nodes(nodes: Sequence[NodeTracks], model: MotionModel, fusion: Fus
             for m in members.values()]
 
 
-def _sole_meeting(estimate: Zonotope, other: NodeTracks, model: MotionModel) -> int | None:
-    """The id of ``other``'s only track meeting ``estimate`` when ``estimate``'s position set,
-    grown by ``other.reach``, lies wholly in ``other``'s region; else None."""
-    polygon = _buffer(_polygon(model.position(estimate)), other.reach + VISIBLE_MARGIN)
-    if not other.visible.covers(polygon):
+def _sole_meeting(estimate: Zonotope, position: BaseGeometry, other: NodeTracks,
+                  model: MotionModel) -> int | None:
+    """The id of ``other``'s only track meeting ``estimate`` when ``estimate``'s position set
+    (``position``, as a polygon), grown by ``other.reach``, lies wholly in ``other``'s region;
+    else None. The region's bounding box is tested first."""
+    grow = other.reach + VISIBLE_MARGIN
+    x0, y0, x1, y1 = position.bounds
+    vx0, vy0, vx1, vy1 = other.visible.bounds if not other.visible.is_empty else (0, 0, -1, -1)
+    if x0 - grow < vx0 or y0 - grow < vy0 or x1 + grow > vx1 or y1 + grow > vy1:
+        return None  # the grown set pokes out of the region's box
+    if not other.visible.covers(_buffer(position, grow)):
         return None
     path = model.position_matrix @ estimate
     box = path.interval_hull()
