@@ -2,7 +2,8 @@
 
 Each automated vehicle is a fusing node (paper Fig. 3): it receives over its own V2X link what
 every other node sends it, screens and fuses its own and the received estimates
-(:class:`~sse_cosim.estimation.fusion_centre.FusionCentre`), refines where each known
+(:class:`~sse_cosim.estimation.fusion_centre.FusionCentre`; anonymous tracks:
+:class:`~sse_cosim.estimation.anonymous_fusion.AnonymousFusionCentre`), refines where each known
 pedestrian can be and where an undetected one may be (negative information), builds its
 situational picture and decides its speed level. :class:`Ego` owns all of that state; the
 co-simulation holds one per automated vehicle.
