@@ -29,13 +29,16 @@ from sse_cosim.sets import Zonotope
 class BusEstimate:
     """What the bus knows of every pedestrian at one step.
 
-    ``screen``: what it fused and whom it flagged; ``fused``: pedestrian id -> fused state
-    set; ``flags``: per sensor and node, and whether its picture is inconsistent.
+    ``screen``: what it fused and whom it flagged; ``fused``: pedestrian id (or fused track,
+    :mod:`~sse_cosim.estimation.anonymous_fusion`) -> fused state set; ``flags``: per sensor
+    and node, and whether its picture is inconsistent; ``inputs``: the same keys -> source
+    -> the sets fused into it.
     """
 
     screen: BusScreen
     fused: dict[str, Zonotope]
     flags: StepFlags
+    inputs: dict[str, dict[str, Zonotope]]
 
 
 class FusionCentre:
@@ -71,4 +74,6 @@ class FusionCentre:
         fused = fuse_at_bus({pid: own[pid] for pid in screen.own}, screen.received,
                             self.fusion_method, self.settings, self.model)
         flags = step_flags(self.sensors, tracks, screen, bool(shared.inconsistent), self.node)
-        return BusEstimate(screen, fused, flags)
+        inputs = {pid: screen.inputs(pid, own[pid].estimate if pid in own else None)
+                  for pid in fused}
+        return BusEstimate(screen, fused, flags, inputs)

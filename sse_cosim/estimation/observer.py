@@ -2,15 +2,22 @@
 
 Every node (bus, connected car, road-side unit) runs one. A track starts from the strips of
 its first detection; when the node loses sight it keeps predicting, so the set grows by the
-process noise each step and still contains the pedestrian. Detections are associated with
-tracks by the pedestrian's id (the simulation knows who is who; the paper has one pedestrian).
+process noise each step and still contains the pedestrian. :class:`NodeObserver` associates
+detections with tracks by the pedestrian's id (the simulation knows who is who; the paper has
+one pedestrian); :class:`AnonymousNodeObserver` works from anonymous detections, as a real
+perception stack reports them (:mod:`sse_cosim.estimation.association`), with node-local
+track ids.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Generic, Protocol, TypeVar
 
+from shapely.geometry.base import BaseGeometry
+
+from sse_cosim.estimation.association import AnonymousDetection, Association, associate
 from sse_cosim.estimation.correction import Suspicion, correct
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.sets import Strips, Zonotope, intersect_strips
@@ -82,29 +89,93 @@ class NodeObserver:
         return updated
 
 
-class LocalObservers:
-    """Every node's observer, stepped together: the first fusion level of the network.
+@dataclass(frozen=True)
+class NodeScan:
+    """What a node's sensors report at one step without ids: every detection (in a fixed
+    order) and each sensor's visible region (sensor name -> shapely geometry; a pedestrian
+    inside it is detected by that sensor; a sensor left out sees nothing)."""
 
-    The scenario's nodes have one from the start; a node that appears at run time (a vehicle
-    carrying sensors by type) gets one the first step it is in ``detections``, and keeps it
-    (predicting) after it left.
+    detections: tuple[AnonymousDetection, ...] = ()
+    visible: Mapping[str, BaseGeometry] = field(default_factory=dict)
+
+
+class AnonymousNodeObserver:
+    """A node's observer from anonymous detections (paper Fig. 3, first fusion level).
+
+    Tracks are started, corrected, merged and ended by
+    :func:`~sse_cosim.estimation.association.associate`; every pedestrian the node has
+    detected stays inside one of their sets. The output has :class:`Track`'s shape, keyed by
+    ``"<node>:<track id>"``: the id is local to the node, so tracks of different nodes never
+    share a key (fusing them by key would assume they hold the same pedestrian; use
+    :func:`~sse_cosim.estimation.association.associate_nodes`). No sensor is flagged: the
+    consistency vote needs to know which strips are about the same pedestrian.
     """
 
-    def __init__(self, nodes: Iterable[str], model: MotionModel,
-                 settings: EstimatorSettings) -> None:
+    def __init__(self, node: str, model: MotionModel, settings: EstimatorSettings,
+                 ground: BaseGeometry | None = None) -> None:
+        self.node = node
         self.model = model
         self.settings = settings
-        self._observers = {node: NodeObserver(node, model, settings) for node in nodes}
+        self.ground = ground
+        self.association = Association((), 0)
 
-    def step(
-        self, step: int, detections: Mapping[str, Mapping[str, Mapping[str, Strips]]]
-    ) -> dict[str, dict[str, Track]]:
-        """Node -> pedestrian id -> track at ``step``, from ``detections``: node -> pedestrian
-        id -> sensor name -> the strips of that node's sensors that see it now."""
-        for node in detections:
+    def step(self, step: int, scan: NodeScan) -> dict[str, Track]:
+        """Tracks at ``step`` from the node's ``scan`` at ``step``."""
+        self.association = associate(
+            self.model, self.settings, self.association.tracks, scan.detections, scan.visible,
+            step, self.association.next_id, self.ground)
+        tracks = [Track(f"{self.node}:{t.track_id}", t.estimate, step, bool(t.joined))
+                  for t in self.association.tracks]
+        return {track.person_id: track for track in tracks}
+
+
+NodeInput = TypeVar("NodeInput", Mapping[str, Mapping[str, Strips]], NodeScan)
+"""What one node's observer takes at a step: labelled detections (pedestrian id -> sensor
+name -> strips, :class:`NodeObserver`) or a :class:`NodeScan` (:class:`AnonymousNodeObserver`)."""
+
+
+class Observer(Protocol[NodeInput]):
+    """One node's observer: its tracks at a step from that step's input."""
+
+    def step(self, step: int, found: NodeInput, /) -> dict[str, Track]: ...
+
+
+class LocalObservers(Generic[NodeInput]):
+    """Every node's observer, stepped together: the first fusion level of the network.
+
+    The scenario's nodes have one from the start (``make(node)``); a node that appears at run
+    time (a vehicle carrying sensors by type) gets one the first step it is in the input, and
+    keeps it (predicting, from ``idle``: nothing seen) after it left. Use :meth:`labelled` or
+    :meth:`anonymous`.
+    """
+
+    def __init__(self, nodes: Iterable[str], make: Callable[[str], Observer[NodeInput]],
+                 idle: NodeInput) -> None:
+        self._make = make
+        self._idle = idle
+        self._observers = {node: make(node) for node in nodes}
+
+    @classmethod
+    def labelled(cls, nodes: Iterable[str], model: MotionModel, settings: EstimatorSettings
+                 ) -> LocalObservers[Mapping[str, Mapping[str, Strips]]]:
+        """Observers that associate detections by the pedestrian's id."""
+        return LocalObservers(nodes, lambda node: NodeObserver(node, model, settings), {})
+
+    @classmethod
+    def anonymous(cls, nodes: Iterable[str], model: MotionModel, settings: EstimatorSettings
+                  ) -> LocalObservers[NodeScan]:
+        """Observers of anonymous detections (node-local track ids)."""
+        return LocalObservers(
+            nodes, lambda node: AnonymousNodeObserver(node, model, settings), NodeScan())
+
+    def step(self, step: int, found: Mapping[str, NodeInput]) -> dict[str, dict[str, Track]]:
+        """Node -> track key -> track at ``step``, from ``found``: node -> what that node's
+        sensors report now (labelled: pedestrian id -> sensor name -> strips; anonymous: its
+        :class:`NodeScan`)."""
+        for node in found:
             if node not in self._observers:
-                self._observers[node] = NodeObserver(node, self.model, self.settings)
-        return {node: observer.step(step, detections.get(node, {}))
+                self._observers[node] = self._make(node)
+        return {node: observer.step(step, found.get(node, self._idle))
                 for node, observer in self._observers.items()}
 
 

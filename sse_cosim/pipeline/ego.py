@@ -2,7 +2,8 @@
 
 Each automated vehicle is a fusing node (paper Fig. 3): it receives over its own V2X link what
 every other node sends it, screens and fuses its own and the received estimates
-(:class:`~sse_cosim.estimation.fusion_centre.FusionCentre`), refines where each known
+(:class:`~sse_cosim.estimation.fusion_centre.FusionCentre`; anonymous tracks:
+:class:`~sse_cosim.estimation.anonymous_fusion.AnonymousFusionCentre`), refines where each known
 pedestrian can be and where an undetected one may be (negative information), builds its
 situational picture and decides its speed level. :class:`Ego` owns all of that state; the
 co-simulation holds one per automated vehicle.
@@ -19,7 +20,7 @@ import shapely
 
 from sse_cosim.control.picture import Picture, SceneContext, assess
 from sse_cosim.control.speed import Decision, fallback_floor, make_policy
-from sse_cosim.estimation.fusion_centre import BusEstimate, FusionCentre
+from sse_cosim.estimation.fusion_centre import BusEstimate
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings
 from sse_cosim.estimation.occupancy import UnobservedArea
@@ -28,9 +29,8 @@ from sse_cosim.pipeline.stages import (
     Observations,
     Sharing,
     Tracks,
-    clear_regions,
-    detected_now,
     known_regions,
+    second_level,
     union_or_empty,
     views_of,
 )
@@ -77,13 +77,15 @@ class Ego:
         self.id = vehicle_id
         self.controller = scenario.controller
         self.sharing = Sharing(V2XLink(scenario.v2x, link_rng), model, vehicle_id)
-        self.centre = FusionCentre(model, settings, config.fusion_method, specs, dt, vehicle_id)
+        self.fusion = second_level(config.association, model, settings, config.fusion_method,
+                                   specs, dt, vehicle_id)
         self.context = SceneContext.build(
             roadmap, vehicle.route_edges, vehicle, scenario.controller, model.max_speed,
             model.jitter, scenario.pedestrian_radius_m(), dt,
         )
         self.policy = make_policy(self.context)
-        self.known = known_regions(config.filter, model, dt, self.context.walkable)
+        self.known = known_regions(config.filter, model, dt, self.context.walkable,
+                                   history=config.association == "labelled")
         # hidden ground is tracked near the crossings on its route; outside it counts as occupied
         self.unobserved = UnobservedArea(
             self.context.walkable, model, dt, scenario.v2x.latency_steps,
@@ -98,8 +100,7 @@ class Ego:
         received = self.sharing.receive(step)
         shared = received.picture
         views = views_of(self.id, observations)
-        clear = clear_regions(views, tracks[self.id], shared)
-        estimate = self.centre.step(tracks, shared, clear, detected_now(tracks[self.id], shared))
+        estimate, clear = self.fusion.step(tracks, shared, views)
         timer.lap("sharing_fusion")
         possible = self.known.update(step, observations, estimate, clear)
         unknown = self.unobserved.update(

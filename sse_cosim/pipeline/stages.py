@@ -7,18 +7,26 @@ in network coordinates (m).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Generic, Protocol
 
 import numpy as np
 import shapely
 
+from sse_cosim.estimation.anonymous_fusion import AnonymousFusionCentre
+from sse_cosim.estimation.association import AnonymousDetection
 from sse_cosim.estimation.flags import disagrees
-from sse_cosim.estimation.fusion_centre import BusEstimate
+from sse_cosim.estimation.fusion_centre import BusEstimate, FusionCentre
 from sse_cosim.estimation.kalman import KalmanTracker, all_detections
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import Track
+from sse_cosim.estimation.observer import (
+    EstimatorSettings,
+    LocalObservers,
+    NodeInput,
+    NodeScan,
+    Track,
+)
 from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker
 from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
 from sse_cosim.sensors import SensorObservation, SensorSpec, observe
@@ -27,7 +35,7 @@ from sse_cosim.sets import Strips
 from sse_cosim.world.snapshot import Snapshot
 
 Observations = dict[str, SensorObservation]  # sensor name -> its observation at this step
-Tracks = Mapping[str, Mapping[str, Track]]  # node -> pedestrian id -> local track
+Tracks = Mapping[str, Mapping[str, Track]]  # node -> pedestrian id (or track key) -> track
 
 
 def sense(snapshot: Snapshot, specs: Mapping[str, SensorSpec], faults: FaultInjector,
@@ -49,6 +57,43 @@ def detections_by_node(observations: Observations) -> dict[str, dict[str, dict[s
             result.setdefault(obs.node, {}).setdefault(person_id, {})[obs.sensor] = \
                 detection.strips
     return result
+
+
+def scans_by_node(observations: Observations) -> dict[str, NodeScan]:
+    """Node -> its sensors' detections without ids (sensor by sensor, each in the snapshot's
+    order of persons) and their visible regions; every node with a sensor in the scene is a
+    key. The person ids of the observations stay here: they never reach the estimation."""
+    detections: dict[str, list[AnonymousDetection]] = {}
+    visible: dict[str, dict[str, shapely.Geometry]] = {}
+    for obs in observations.values():
+        if obs.pose is not None:
+            visible.setdefault(obs.node, {})[obs.sensor] = obs.visible
+        detections.setdefault(obs.node, []).extend(
+            AnonymousDetection(obs.sensor, d.strips) for d in obs.detections.values())
+    return {node: NodeScan(tuple(detections[node]), regions)
+            for node, regions in visible.items()}
+
+
+class FirstLevel(Generic[NodeInput]):
+    """Every node's observer fed from the observations (``inputs``: by id or anonymous)."""
+
+    def __init__(self, observers: LocalObservers[NodeInput],
+                 inputs: Callable[[Observations], Mapping[str, NodeInput]]) -> None:
+        self.observers = observers
+        self.inputs = inputs
+
+    def step(self, step: int, observations: Observations) -> dict[str, dict[str, Track]]:
+        """Node -> track key -> its local track at ``step``."""
+        return self.observers.step(step, self.inputs(observations))
+
+
+def first_level(association: str, nodes: Iterable[str], model: MotionModel,
+                settings: EstimatorSettings) -> FirstLevel:
+    """The first fusion level of ``estimator.association``: ``labelled`` (tracks by person
+    id) or ``anonymous`` (node-local tracks from anonymous detections)."""
+    if association == "anonymous":
+        return FirstLevel(LocalObservers.anonymous(nodes, model, settings), scans_by_node)
+    return FirstLevel(LocalObservers.labelled(nodes, model, settings), detections_by_node)
 
 
 def views_of(node: str, observations: Observations) -> list[SensorObservation]:
@@ -91,7 +136,8 @@ def outgoing(step: int, snapshot: Snapshot, observations: Observations, tracks: 
              faults: FaultInjector, model: MotionModel) -> list[Outgoing]:
     """Every node's message of ``step``, built once for all receivers: each node in the scene
     whose message no loss burst takes sends its estimates (as its injected faults distort
-    them) and visible region."""
+    them), visible region and the keys of the tracks its sensors detect now (by id, those
+    are the pedestrians it sees)."""
     result = []
     for node, node_tracks in tracks.items():
         node_obs = [o for o in views_of(node, observations) if o.pose is not None]
@@ -101,7 +147,7 @@ def outgoing(step: int, snapshot: Snapshot, observations: Observations, tracks: 
             node, {pid: t.estimate for pid, t in node_tracks.items()}, snapshot, model)
         message = Message(
             node, step, estimates, union_or_empty(o.visible for o in node_obs),
-            frozenset(pid for o in node_obs for pid in o.detections),
+            frozenset(key for key, t in node_tracks.items() if t.detected),
             disagrees(node_tracks.values()),
         )
         result.append(Outgoing(message, node_obs[0].pose.position, faults.extra_latency(node)))
@@ -153,6 +199,52 @@ def detected_now(own: Mapping[str, Track], shared: SharedPicture) -> frozenset[s
         *shared.detected.values())
 
 
+Clear = dict[str, list[ClearRegion]]  # fused key -> the regions seen without its pedestrians
+
+
+class SecondLevel(Protocol):
+    """An automated vehicle's fusion of its own and the received tracks, and the regions seen
+    without the pedestrians of each fused set (negative information)."""
+
+    def step(self, tracks: Tracks, shared: SharedPicture,
+             views: Sequence[SensorObservation]) -> tuple[BusEstimate, Clear]: ...
+
+
+class LabelledFusion:
+    """By person id: the screen (vote, probation), Proposition 2 per pedestrian, flags."""
+
+    def __init__(self, centre: FusionCentre) -> None:
+        self.centre = centre
+
+    def step(self, tracks: Tracks, shared: SharedPicture,
+             views: Sequence[SensorObservation]) -> tuple[BusEstimate, Clear]:
+        own = tracks[self.centre.node]
+        clear = clear_regions(views, own, shared)
+        return self.centre.step(tracks, shared, clear, detected_now(own, shared)), clear
+
+
+class AnonymousFusion:
+    """Anonymous tracks, fused only where they certainly hold the same pedestrians."""
+
+    def __init__(self, centre: AnonymousFusionCentre) -> None:
+        self.centre = centre
+
+    def step(self, tracks: Tracks, shared: SharedPicture,
+             views: Sequence[SensorObservation]) -> tuple[BusEstimate, Clear]:
+        return self.centre.step(tracks, shared, union_or_empty(o.visible for o in views))
+
+
+def second_level(association: str, model: MotionModel, settings: EstimatorSettings,
+                 fusion_method: str, sensors: Iterable[str], step_length: float,
+                 node: str) -> SecondLevel:
+    """Automated vehicle ``node``'s second fusion level of ``estimator.association``."""
+    if association == "anonymous":
+        return AnonymousFusion(AnonymousFusionCentre(model, settings, fusion_method, sensors,
+                                                     step_length, node))
+    return LabelledFusion(FusionCentre(model, settings, fusion_method, sensors, step_length,
+                                       node))
+
+
 class KnownRegions(Protocol):
     """Where each known pedestrian can be (pedestrian id -> region), for the controller."""
 
@@ -163,16 +255,20 @@ class KnownRegions(Protocol):
 class RefinedRegions:
     """The fused sets refined with negative information
     (:class:`~sse_cosim.estimation.occupancy.OccupancyTracker`). When the bus's picture turns
-    inconsistent the refinement's history is forgotten: it may hold a faulty source."""
+    inconsistent the refinement's history is forgotten: it may hold a faulty source. Without
+    ``history`` it is forgotten every step: a fused track of anonymous tracks names no
+    pedestrian, and may hold another one at the next step (a merge, or a newcomer inside its
+    set), whom the previous step's region need not hold."""
 
-    def __init__(self, tracker: OccupancyTracker) -> None:
+    def __init__(self, tracker: OccupancyTracker, history: bool = True) -> None:
         self.tracker = tracker
+        self.history = history
         self._was_inconsistent = False
 
     def update(self, step: int, observations: Observations, estimate: BusEstimate,
                clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, shapely.Geometry]:
         inconsistent = estimate.flags.inconsistent
-        if inconsistent and not self._was_inconsistent:
+        if not self.history or (inconsistent and not self._was_inconsistent):
             self.tracker.forget()
         self._was_inconsistent = inconsistent
         return self.tracker.update(step, estimate.fused, clear)
@@ -192,8 +288,10 @@ class KalmanRegions:
 
 
 def known_regions(filter_name: str, model: MotionModel, step_length: float,
-                  walkable: shapely.Geometry) -> KnownRegions:
-    """The region stage of ``estimator.filter``: ``zonotope`` or ``kalman``."""
+                  walkable: shapely.Geometry, history: bool = True) -> KnownRegions:
+    """The region stage of ``estimator.filter``: ``zonotope`` or ``kalman``; ``history``:
+    whether the refined regions carry a fused set's key from one step to the next (false for
+    anonymous tracks, :class:`RefinedRegions`)."""
     if filter_name == "kalman":
         return KalmanRegions(KalmanTracker(model))
-    return RefinedRegions(OccupancyTracker(model, step_length, walkable))
+    return RefinedRegions(OccupancyTracker(model, step_length, walkable), history)

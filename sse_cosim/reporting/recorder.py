@@ -5,7 +5,12 @@ run's key moments) and, for ``replay.html``, a compact frame of every step.
 Soundness is checked per pedestrian (paper Section III): at every step every pedestrian in the
 scene lies in each set the automated vehicle holds of it (local, fused), in its refined region,
 and in a refined region or the unobserved area; each miss is a violation, counted per
-pedestrian.
+pedestrian. With anonymous tracks (``estimator.association = "anonymous"``) no set names a
+pedestrian, so the checks are per pedestrian over all sets: one that some node has detected
+lies in some track set of that node; one that an automated vehicle has detected, or that a
+sender detected by the step of its newest message to that vehicle, lies in some fused set and
+some refined region of that vehicle. The true ids the recorder reads from the observations
+serve these checks only.
 
 The recorder only reads :class:`~sse_cosim.pipeline.result.StepResult`; writing files is
 :mod:`sse_cosim.reporting.outputs`'s job.
@@ -132,13 +137,20 @@ class RunRecorder:
     fusion_larger_than_input: int = 0  # steps where the fused set outgrew its smallest input
     flag_steps: Counter = field(default_factory=Counter)  # "<sensor or node>: <flag>" -> steps
     faults: FaultLog = field(init=False)
+    anonymous: bool = field(init=False)  # sets of anonymous tracks: checked over all sets
+    first_seen: dict[str, dict[str, int]] = field(default_factory=dict)  # node -> pid -> step
 
     def __post_init__(self) -> None:
         self.faults = FaultLog(self.scenario)
+        self.anonymous = self.scenario.estimator.association == "anonymous"
 
     def __call__(self, result: StepResult) -> None:
         t = round(result.snapshot.time, 6)
         truths = {pid: np.asarray(p.position) for pid, p in sorted(result.snapshot.persons.items())}
+        for obs in result.observations.values():
+            seen = self.first_seen.setdefault(obs.node, {})
+            for pid in obs.detections:
+                seen.setdefault(pid, result.step)
         self.truth_rows += [{"t": t, "pedestrian": pid, "x": xy[0], "y": xy[1]}
                             for pid, xy in truths.items()]
         local = self._check_local_sets(t, result, truths)
@@ -165,17 +177,15 @@ class RunRecorder:
         }
         local_sets = self._record_local_sets(t, row, result, vehicle, local)
         self._flags(row, result, ego)
-        fused = {pid: result.model.position(ego.estimate.fused[pid])
-                 for pid in truths if pid in ego.estimate.fused}
         checks = {pid: _PedestrianCheck(pid) for pid in truths}
-        for pid, position in fused.items():
-            checks[pid].fused = self._check(t, FUSED, pid, position, truths[pid])
-            self._note_fusion(t, pid, position, result, ego)
+        if self.anonymous:
+            fused, regions = self._check_anonymous(t, result, ego, truths, checks)
+        else:
+            fused, regions = self._check_labelled(t, result, ego, truths, checks)
+        for key, position in fused.items():
+            self._note_fusion(t, key, position, result, ego)
         row["fused_area"] = _total(z.volume() for z in fused.values())
         row["fused_contains_truth"] = _all(c.fused for c in checks.values())
-        regions = {pid: ego.possible[pid] for pid in truths if pid in ego.possible}
-        for pid, region in regions.items():
-            checks[pid].refined = self._check_region(t, pid, region, truths[pid])
         row["possible_area"] = _total(r.area for r in regions.values())
         row["possible_contains_truth"] = _all(c.refined for c in checks.values())
         self._note_regions(t, ego)
@@ -204,15 +214,56 @@ class RunRecorder:
         self.scenes += [frame] * wanted
         self.key_moments.frames.update(dict.fromkeys(moments, frame))
 
+    def _check_labelled(self, t: float, result: StepResult, ego: EgoStep,
+                        truths: dict[str, np.ndarray], checks: dict[str, _PedestrianCheck]
+                        ) -> tuple[dict[str, Zonotope], dict[str, shapely.Geometry]]:
+        """Each pedestrian in its own fused set and refined region; those of the pedestrians in
+        the scene (position sets) by id."""
+        fused = {pid: result.model.position(ego.estimate.fused[pid])
+                 for pid in truths if pid in ego.estimate.fused}
+        for pid, position in fused.items():
+            checks[pid].fused = self._check(t, FUSED, pid, [position], truths[pid])
+        regions = {pid: ego.possible[pid] for pid in truths if pid in ego.possible}
+        for pid, region in regions.items():
+            checks[pid].refined = self._check_region(t, pid, [region], truths[pid])
+        return fused, regions
+
+    def _check_anonymous(self, t: float, result: StepResult, ego: EgoStep,
+                         truths: dict[str, np.ndarray], checks: dict[str, _PedestrianCheck]
+                         ) -> tuple[dict[str, Zonotope], dict[str, shapely.Geometry]]:
+        """Each pedestrian the vehicle knows of (module docstring) in some fused set and some
+        refined region; every fused set (position sets) and refined region, by fused key."""
+        fused = {key: result.model.position(z) for key, z in ego.estimate.fused.items()}
+        known = self._detected_by(ego.vehicle, result.step)
+        for sender, age in ego.shared.ages.items():
+            known |= self._detected_by(sender, result.step - age)
+        for pid in sorted(known & truths.keys()):
+            checks[pid].fused = self._check(t, FUSED, pid, list(fused.values()), truths[pid])
+            checks[pid].refined = self._check_region(t, pid, list(ego.possible.values()),
+                                                     truths[pid])
+        return fused, dict(ego.possible)
+
+    def _detected_by(self, node: str, step: int) -> set[str]:
+        """The pedestrians ``node`` has detected by ``step``."""
+        return {pid for pid, first in self.first_seen.get(node, {}).items() if first <= step}
+
     def _check_local_sets(self, t: float, result: StepResult,
                           truths: dict[str, np.ndarray]) -> list[_LocalSet]:
-        """Every node's set of each pedestrian in the scene, checked once per step, however
-        many automated vehicles receive it."""
+        """Every node's set of each pedestrian in the scene (anonymous: every track of every
+        node, each pedestrian the node has detected checked against them all), checked once
+        per step, however many automated vehicles receive it."""
         local: list[_LocalSet] = []
         for node, tracks in result.tracks.items():
+            if self.anonymous:
+                mine = [_LocalSet(node, key, result.model.position(track.estimate),
+                                  track.detected) for key, track in tracks.items()]
+                for pid in sorted(self._detected_by(node, result.step) & truths.keys()):
+                    self._check(t, node, pid, [s.position for s in mine], truths[pid])
+                local += mine
+                continue
             for pid in (pid for pid in truths if pid in tracks):
                 position = result.model.position(tracks[pid].estimate)
-                self._check(t, node, pid, position, truths[pid])
+                self._check(t, node, pid, [position], truths[pid])
                 local.append(_LocalSet(node, pid, position, tracks[pid].detected))
         return local
 
@@ -232,9 +283,9 @@ class RunRecorder:
 
     def _note_fusion(self, t: float, pid: str, position: Zonotope, result: StepResult,
                      ego: EgoStep) -> None:
-        """Record a fused set: its line, whether it outgrew its smallest input, the first
-        fusion and the first fusion of shared sets."""
-        inputs = _fusion_inputs(result, ego, pid)
+        """Record a fused set (``pid``: its pedestrian, or its fused key): its line, whether it
+        outgrew its smallest input, the first fusion and the first fusion of shared sets."""
+        inputs = ego.estimate.inputs[pid]
         smallest = min(result.model.position(z).volume() for z in inputs.values())
         if position.volume() > smallest * (1 + 1e-9) + 1e-12:
             self.fusion_larger_than_input += 1
@@ -259,15 +310,18 @@ class RunRecorder:
             self.faults.update(result.step, round(result.snapshot.time, 6), result.faults,
                                flags.sensors, flags.nodes, ego.shared.ages)
 
-    def _check(self, t: float, node: str, pid: str, position: Zonotope,
+    def _check(self, t: float, node: str, pid: str, positions: list[Zonotope],
                truth: np.ndarray) -> bool:
-        """Whether pedestrian ``pid``'s true position (shape (2,)) lies in ``position``."""
-        return self._violation_unless(bool(position.contains(truth, tol=1e-7)), t, node, pid,
-                                      truth)
+        """Whether pedestrian ``pid``'s true position (shape (2,)) lies in one of
+        ``positions``."""
+        inside = any(bool(z.contains(truth, tol=1e-7)) for z in positions)
+        return self._violation_unless(inside, t, node, pid, truth)
 
-    def _check_region(self, t: float, pid: str, region: shapely.Geometry,
+    def _check_region(self, t: float, pid: str, regions: list[shapely.Geometry],
                       truth: np.ndarray) -> bool:
-        inside = bool(shapely.distance(region, shapely.Point(truth)) <= 1e-7)
+        """Whether pedestrian ``pid``'s true position lies in one of ``regions``."""
+        point = shapely.Point(truth)
+        inside = any(shapely.distance(r, point) <= 1e-7 for r in regions)
         return self._violation_unless(inside, t, "possible", pid, truth)
 
     def _check_accounted(self, t: float, pid: str, ego: EgoStep, truth: np.ndarray) -> bool:
@@ -308,7 +362,7 @@ class RunRecorder:
         """Record the first step at which the bus fuses two or more sets (paper Fig. 7)."""
         if self.first_shared_fusion is not None:
             return
-        inputs = _fusion_inputs(result, ego, person_id)
+        inputs = ego.estimate.inputs[person_id]
         if len(inputs) < 2:
             return
         self.first_shared_fusion = {
@@ -462,13 +516,6 @@ def _all(flags) -> bool | None:
 def _all_known(flags: list[bool | None]) -> bool | None:
     """Whether every flag holds; None if any is unknown."""
     return None if None in flags else all(flags)
-
-
-def _fusion_inputs(result: StepResult, ego: EgoStep, person_id: str) -> dict[str, Zonotope]:
-    """The state sets the bus fused for ``person_id``: its own and the received ones that
-    passed the consistency screen."""
-    own = result.tracks[ego.vehicle].get(person_id)
-    return ego.estimate.screen.inputs(person_id, None if own is None else own.estimate)
 
 
 def _entries(flags: list[bool]) -> int:

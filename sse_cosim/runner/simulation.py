@@ -5,15 +5,18 @@ Data flows one way through a step (:mod:`sse_cosim.pipeline`):
 1. the SUMO snapshot (footprints, speeds, the pedestrians' true positions);
 2. sensors: visibility, detections, strips -- as the scenario's injected faults distort them;
 3. every node's observer: predict, leave out strips inconsistent with the prediction and the
-   other sensors, correct with the rest (Proposition 1), reduce;
+   other sensors, correct with the rest (Proposition 1), reduce -- or, with
+   ``estimator.association = "anonymous"``, associate the node's detections without ids
+   with its tracks (:mod:`sse_cosim.estimation.association`);
 4. V2X: every node sends every automated vehicle other than itself its estimates and visible
    region, over that vehicle's own link;
 5. each automated vehicle (:class:`~sse_cosim.pipeline.ego.Ego`) screens its own and the
    received estimates (a consistent majority, negative information), fuses those it keeps
-   (Proposition 2) and flags the rest; 6. it refines where each known pedestrian can be and
-   where an undetected one may be (negative information); 7. its situational picture; 8. its
-   speed level (no faster than the fallback level while its picture is inconsistent), set
-   back into SUMO; 9. the step's record, to ``on_step``.
+   (Proposition 2) and flags the rest (anonymous: fuses the tracks that certainly hold the
+   same pedestrians, :mod:`sse_cosim.estimation.anonymous_fusion`); 6. it refines where each
+   known pedestrian can be and where an undetected one may be (negative information); 7. its
+   situational picture; 8. its speed level (no faster than the fallback level while its
+   picture is inconsistent), set back into SUMO; 9. the step's record, to ``on_step``.
 
 Random draws: the sensor noise, the first automated vehicle's link and the faults draw from
 the seed's first three streams (so a run with one automated vehicle draws as it always did);
@@ -30,10 +33,10 @@ import numpy as np
 
 from sse_cosim.control.speed import SpeedLevel
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import EstimatorSettings, LocalObservers
+from sse_cosim.estimation.observer import EstimatorSettings
 from sse_cosim.pipeline.ego import Ego
 from sse_cosim.pipeline.result import StepCallback, StepResult
-from sse_cosim.pipeline.stages import detections_by_node, outgoing, sense
+from sse_cosim.pipeline.stages import first_level, outgoing, sense
 from sse_cosim.runner.timing import NoTimer, StageTimer
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors import specs_from_scenario
@@ -73,7 +76,7 @@ def simulate(
                                  config.max_generators)
     specs = specs_from_scenario(scenario)
     faults = FaultInjector(scenario, specs, fault_rng)
-    observers = LocalObservers(scenario.node_ids(), model, settings)
+    observers = first_level(config.association, scenario.node_ids(), model, settings)
     n_steps = round(scenario.simulation.duration_s / dt)
     with SumoWorld(scenario, run_dir, scenario_name) as world:
         egos = [Ego(vid, scenario, world.roadmap, model, settings, specs, rng)
@@ -87,7 +90,7 @@ def simulate(
             timer.lap("sumo")
             observations = sense(snapshot, specs, faults, noise_rng)
             timer.lap("geometry")
-            tracks = observers.step(step, detections_by_node(observations))
+            tracks = observers.step(step, observations)
             timer.lap("local_fusion")
             if active:  # building a message marks its faults (docs/faults.md): only when sent
                 messages = outgoing(step, snapshot, observations, tracks, faults, model)

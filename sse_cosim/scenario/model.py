@@ -182,6 +182,14 @@ class Estimator(StrictModel):
         description="Pedestrian regions the controller uses: the zonotopes refined with negative "
         "information, or a Kalman filter's 3-sigma ellipses (baseline, not guaranteed).",
     )
+    association: Literal["labelled", "anonymous"] = Field(
+        "labelled",
+        description="How detections find their tracks: 'labelled' by the simulation's person id "
+        "(the default; every published result), 'anonymous' without any id, as a real "
+        "perception stack reports them: each node starts, keeps and ends tracks by "
+        "set-membership association, and each automated vehicle fuses only tracks that surely "
+        "hold the same pedestrians (docs/method.md). No faults, no Kalman filter.",
+    )
 
     @field_validator("gain_method")
     @classmethod
@@ -417,7 +425,23 @@ class Scenario(StrictModel):
         self._sensors_on_existing_nodes()
         self._faults_on_existing_targets()
         self._broken_assumptions_declared()
+        self._anonymous_without_ids()
         return self
+
+    def _anonymous_without_ids(self) -> None:
+        """Injected faults (their vote and probation) and the Kalman baseline tell pedestrians
+        apart by their id, which anonymous detections do not carry."""
+        if self.estimator.association != "anonymous":
+            return
+        if self.estimator.filter == "kalman":
+            raise ValueError("estimator.filter: the Kalman baseline associates detections by "
+                             "person id, which estimator.association = 'anonymous' hides; use "
+                             "filter = 'zonotope' or association = 'labelled'")
+        for table in ("sensor", "node", "link"):
+            for name in getattr(self.faults, table):
+                raise ValueError(f"faults.{table}.{name}: injected faults are screened per "
+                                 "person id, which estimator.association = 'anonymous' hides; "
+                                 "remove the [faults] tables or use association = 'labelled'")
 
     def _unique_ids(self) -> None:
         """An id names one actor or unit: it is its SUMO id and its node id."""

@@ -97,6 +97,13 @@ CASES = [
                 "dropout_probability = 1.5\n"), ("faults.sensor.f.dropout_probability",)),
     Case("node fault on the bus", extend('[faults.node.n]\nnode = "bus"\nkind = "shrink"\n'),
          ("faults.node.n.node", "sends to an automated vehicle", "add a connected vehicle")),
+    Case("faults with anonymous detections",
+         extend('[estimator]\nassociation = "anonymous"\n[faults.sensor.f]\n'
+                'sensor = "bus_front"\nkind = "dropout"\n'),
+         ("faults.sensor.f", "association = 'anonymous'", "remove the [faults]")),
+    Case("Kalman baseline with anonymous detections",
+         extend('[estimator]\nassociation = "anonymous"\nfilter = "kalman"\n'),
+         ("estimator.filter", "person id", "filter = 'zonotope'")),
     # --- the estimator's assumptions: broken only when declared ---
     Case("pedestrian faster than the estimator's bound",
          extend("[pedestrians.pedestrian]\nwalking_speed_mps = 2.8\n"),

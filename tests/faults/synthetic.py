@@ -100,7 +100,7 @@ class Harness:
         truth, _ = trajectory(rng, steps, self.speed, self.jitter)
         settings = EstimatorSettings(self.gain, "girard", 8)
         nodes = sorted({s.node for s in self.sensors.values()} | {BUS})
-        observers = LocalObservers(nodes, self.model, settings)
+        observers = LocalObservers.labelled(nodes, self.model, settings)
         link = V2XLink(V2X(latency_steps=self.latency), np.random.default_rng(0))
         centre = FusionCentre(self.model, settings, "strips", self.sensors, DT, BUS)
         records = []

@@ -71,7 +71,7 @@ def test_refined_regions_forget_their_history_when_the_picture_turns_inconsisten
     large = {"ped": Zonotope(np.zeros(2), np.eye(2) * 3.0)}
 
     def estimate(fused, inconsistent: bool) -> BusEstimate:
-        return BusEstimate(BusScreen(), fused, StepFlags(inconsistent=inconsistent))
+        return BusEstimate(BusScreen(), fused, StepFlags(inconsistent=inconsistent), {})
 
     regions = RefinedRegions(OccupancyTracker(model, DT, walkable))
     regions.update(0, {}, estimate(small, False), {})

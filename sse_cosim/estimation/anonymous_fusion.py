@@ -1,0 +1,132 @@
+"""An automated vehicle's second fusion level over anonymous tracks, and its negative information.
+
+With ``estimator.association = "anonymous"`` no set carries a pedestrian's id: every node's
+tracks are keyed ``"<node>:<id>"`` (:class:`~sse_cosim.estimation.observer.AnonymousNodeObserver`),
+and the vehicle fuses its own and the received tracks only where they certainly hold the same
+pedestrians (:func:`~sse_cosim.estimation.association.associate_nodes`, Proposition 2). Each
+result is a *fused track*, named by its sources joined with ``+`` (``"bus:3+rsu:0"``); the
+names hold for one step only (a track may merge or gain a pedestrian from one step to the
+next), so nothing downstream may carry a fused track's history across steps.
+
+Negative information for a fused track F (the regions seen without its pedestrians,
+:class:`~sse_cosim.estimation.occupancy.ClearRegion`): node b's view R, taken ``age`` steps
+ago, is clear for F when no track of b (as b sent it, predicted to now) meets F's path set.
+
+Proof. Let P be a pedestrian whose path point s_k lies in F, and suppose P's position
+p_{k-age} was in R. Then b's sensors detected P at step k - age (assumption A2 of
+:mod:`~sse_cosim.estimation.association`), so P's state then lay in one of b's tracks (the
+first level's invariant: every pedestrian b has detected stays inside a track set of b), and
+that track's prediction to step k holds P's state at k (A3): it meets F at s_k. So if no
+track of b meets F, no pedestrian of F was in R at step k - age, which is what a clear region
+states. The vehicle's own node is one such b (age 0, its sensors' regions now). The test uses
+every track of b, hidden or not, and errs towards "meets" (tolerance), so it never declares
+a region clear by rounding.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+
+import shapely
+
+from sse_cosim.estimation.association import (
+    MEET_TOL,
+    NodeTracks,
+    associate_nodes,
+)
+from sse_cosim.estimation.bus_fusion import fuse_sets
+from sse_cosim.estimation.bus_screen import BusScreen
+from sse_cosim.estimation.flags import step_flags
+from sse_cosim.estimation.fusion_centre import BusEstimate
+from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.observer import EstimatorSettings, Track
+from sse_cosim.estimation.occupancy import ClearRegion
+from sse_cosim.estimation.v2x import SharedPicture
+from sse_cosim.sets import Zonotope, zonotopes_disjoint
+
+
+@dataclass(frozen=True)
+class _Node:
+    """One node's tracks at the fusing step by key, its view and that view's age (steps)."""
+
+    node: str
+    tracks: dict[str, Zonotope]
+    view: shapely.Geometry
+    age: int
+
+
+class AnonymousFusionCentre:
+    """Automated vehicle ``node``'s fusion of anonymous tracks, with their clear regions."""
+
+    def __init__(self, model: MotionModel, settings: EstimatorSettings, fusion_method: str,
+                 sensors: Iterable[str], step_length: float, node: str) -> None:
+        self.node = node
+        self.model = model
+        self.settings = settings
+        self.fusion_method = fusion_method
+        self.sensors = list(sensors)
+        self.step_length = step_length
+
+    def step(self, tracks: Mapping[str, Mapping[str, Track]], shared: SharedPicture,
+             own_view: shapely.Geometry) -> tuple[BusEstimate, dict[str, list[ClearRegion]]]:
+        """The fused tracks of this step and, per fused track, the regions seen without its
+        pedestrians (module docstring).
+
+        ``tracks``: node -> track key -> local track (the vehicle's own among them);
+        ``shared``: the senders' newest messages brought to this step; ``own_view``: the
+        union of the vehicle's sensors' visible regions now.
+        """
+        own = {key: t.estimate for key, t in tracks.get(self.node, {}).items()}
+        nodes = [_Node(self.node, own, own_view, 0), *_senders(shared)]
+        fused = associate_nodes([self._node_tracks(n) for n in nodes], self.model,
+                                self._fuse)
+        ranked = {n.node: sorted(n.tracks) for n in nodes}
+        every = {key: z for n in nodes for key, z in n.tracks.items()}  # keys: network-wide
+        estimates: dict[str, Zonotope] = {}
+        inputs: dict[str, dict[str, Zonotope]] = {}
+        for track in fused:
+            keys = [ranked[node][index] for node, index in track.sources]
+            name = "+".join(keys)
+            estimates[name] = track.estimate
+            inputs[name] = {key: every[key] for key in keys}
+        clear = {name: self._clear(z, nodes) for name, z in estimates.items()}
+        screen = BusScreen(node=self.node)  # no vote: it needs to know who is who
+        flags = step_flags(self.sensors, tracks, screen, bool(shared.inconsistent), self.node)
+        return BusEstimate(screen, estimates, flags, inputs), clear
+
+    def _node_tracks(self, node: _Node) -> NodeTracks:
+        """``node``'s tracks for :func:`associate_nodes` (ids: the keys' ranks), its view
+        (prepared: every other node's tracks are tested against it), and how far a pedestrian
+        may have walked since the view was taken."""
+        shapely.prepare(node.view)
+        return NodeTracks(node.node, dict(enumerate(node.tracks[k] for k in sorted(node.tracks))),
+                          node.view, self.model.max_speed * self.step_length * node.age)
+
+    def _fuse(self, sets: Sequence[Zonotope]) -> Zonotope:
+        return fuse_sets(sets, self.fusion_method, self.settings, self.model)
+
+    def _clear(self, fused: Zonotope, nodes: Sequence[_Node]) -> list[ClearRegion]:
+        """The views of the nodes none of whose tracks meets ``fused`` (module docstring)."""
+        path = self.model.position_matrix @ fused
+        return [ClearRegion(n.view, n.age) for n in nodes if not n.view.is_empty
+                and not any(self._meet(path, z) for z in n.tracks.values())]
+
+    def _meet(self, path: Zonotope, estimate: Zonotope) -> bool:
+        """Whether the path set ``path`` meets ``estimate``'s (boxes first, then exactly; both
+        err towards "meets" by :data:`MEET_TOL`)."""
+        other = self.model.position_matrix @ estimate
+        (lo, hi), (other_lo, other_hi) = path.interval_hull(), other.interval_hull()
+        if (lo > other_hi + MEET_TOL).any() or (other_lo > hi + MEET_TOL).any():
+            return False
+        return not zonotopes_disjoint(path, other, MEET_TOL)
+
+
+def _senders(shared: SharedPicture) -> list[_Node]:
+    """Every sender's tracks in its newest message (predicted to now), view and age."""
+    tracks: dict[str, dict[str, Zonotope]] = {sender: {} for sender in shared.regions}
+    for key, by_sender in shared.estimates.items():
+        for sender, estimate in by_sender.items():
+            tracks[sender][key] = estimate
+    return [_Node(sender, tracks[sender], shared.regions[sender], shared.ages[sender])
+            for sender in sorted(shared.regions)]

@@ -1,0 +1,423 @@
+"""Association of anonymous detections: every pedestrian ever detected stays inside a track
+set, at a node (:func:`associate`) and across nodes (:func:`associate_nodes`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from itertools import pairwise
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from shapely.geometry import Point, Polygon, box
+from shapely.geometry.base import BaseGeometry
+from shapely.ops import unary_union
+
+from sse_cosim.estimation.anonymous_fusion import AnonymousFusionCentre
+from sse_cosim.estimation.association import (
+    AnonymousDetection,
+    LocalTrack,
+    NodeTracks,
+    _polygon,
+    associate,
+    associate_nodes,
+)
+from sse_cosim.estimation.bus_fusion import fuse_sets
+from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.observer import AnonymousNodeObserver, EstimatorSettings, NodeScan
+from sse_cosim.estimation.occupancy import OccupancyTracker
+from sse_cosim.estimation.v2x import Message, V2XLink
+from sse_cosim.pipeline.stages import RefinedRegions
+from sse_cosim.scenario.model import V2X, Estimator
+from sse_cosim.sets import Strips, Zonotope
+
+DT = 0.5
+SPEED = 1.5  # m/s: at most 0.75 m per step
+NOISE = 0.3  # m: strip half-width
+SETTINGS = EstimatorSettings("enclose", "girard", 8)
+
+
+def fusion(sets):
+    """Proposition 2 as the bus does it (``enclose``), for :func:`associate_nodes`."""
+    return fuse_sets(sets, "enclose", SETTINGS, motion_model())
+
+
+def motion_model(jitter: float = 0.0) -> MotionModel:
+    config = Estimator(state_model="position", max_pedestrian_speed_mps=SPEED,
+                       position_jitter_m=jitter)
+    return MotionModel.from_config(config, DT)
+
+
+@dataclass(frozen=True)
+class Sensor:
+    name: str
+    region: BaseGeometry
+
+
+def detections(rng: np.random.Generator, positions: np.ndarray, sensors: list[Sensor]
+               ) -> list[AnonymousDetection]:
+    """Every position (n, 2) inside a sensor's region is detected by it (A2): strips along a
+    random heading with noise |v| <= NOISE (A1); each sensor's detections come shuffled."""
+    found = []
+    for sensor in sensors:
+        seen = [p for p in positions if sensor.region.contains(Point(p))]
+        for index in rng.permutation(len(seen)):
+            angle = rng.uniform(0, 2 * np.pi)
+            h = np.array([[np.cos(angle), np.sin(angle)], [-np.sin(angle), np.cos(angle)]])
+            noise = rng.uniform(-NOISE, NOISE, 2)
+            found.append(AnonymousDetection(
+                sensor.name, Strips(h, h @ seen[index] + noise, np.full(2, NOISE))))
+    return found
+
+
+@dataclass
+class Node:
+    """One node's association state over a run."""
+
+    sensors: list[Sensor]
+    model: MotionModel
+    tracks: tuple[LocalTrack, ...] = ()
+    next_id: int = 0
+    seen: set[int] = field(default_factory=set)  # pedestrians detected so far
+    most_tracks: int = 0
+
+    def step(self, rng: np.random.Generator, k: int, observed: np.ndarray) -> None:
+        found = detections(rng, observed, self.sensors)
+        self.seen |= {i for i, p in enumerate(observed)
+                      if any(s.region.contains(Point(p)) for s in self.sensors)}
+        result = associate(self.model, SETTINGS, self.tracks, found,
+                           {s.name: s.region for s in self.sensors}, k, self.next_id)
+        self.tracks, self.next_id = result.tracks, result.next_id
+        self.most_tracks = max(self.most_tracks, len(self.tracks))
+
+    @property
+    def visible(self) -> BaseGeometry:
+        return unary_union([s.region for s in self.sensors])
+
+
+def covered(model: MotionModel, sets, point: np.ndarray) -> bool:
+    return any((model.position_matrix @ z).contains(point, tol=1e-7) for z in sets)
+
+
+def crossing_walks(rng: np.random.Generator, people: int, steps: int) -> np.ndarray:
+    """Paths (steps, people, 2) from a circle of radius 3.5 m through the middle, at most
+    SPEED * DT per step (Euclidean): they cross, and their sets overlap."""
+    angles = rng.uniform(0, 2 * np.pi, people)
+    start = 3.5 * np.column_stack([np.cos(angles), np.sin(angles)])
+    paths = np.zeros((steps, people, 2))
+    paths[0] = start
+    for k in range(1, steps):
+        towards = -start + rng.normal(0, 1.0, (people, 2))
+        unit = towards / np.linalg.norm(towards, axis=1, keepdims=True)
+        paths[k] = paths[k - 1] + unit * rng.uniform(0, SPEED * DT, (people, 1))
+    return paths
+
+
+def random_sensor(rng: np.random.Generator, name: str) -> Sensor:
+    """A disc or a half-plane (cut to a large box)."""
+    if rng.random() < 0.5:
+        center = rng.uniform(-4, 4, 2)
+        return Sensor(name, Point(center).buffer(rng.uniform(2.0, 5.0)))
+    angle = rng.uniform(0, 2 * np.pi)
+    normal = np.array([np.cos(angle), np.sin(angle)])
+    along = np.array([-normal[1], normal[0]])
+    offset = rng.uniform(-2, 2)
+    corners = [offset * normal + s * along + t * normal
+               for s, t in ((-50, 0), (50, 0), (50, 50), (-50, 50))]
+    return Sensor(name, Polygon(corners))
+
+
+def jittered(rng: np.random.Generator, path: np.ndarray, jitter: float) -> np.ndarray:
+    """Simulated positions p = s + e with |e| <= jitter."""
+    angles = rng.uniform(0, 2 * np.pi, len(path))
+    sizes = rng.uniform(0, jitter, len(path))
+    return path + sizes[:, None] * np.column_stack([np.cos(angles), np.sin(angles)])
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), people=st.integers(2, 4), count=st.integers(1, 3),
+       jitter=st.sampled_from([0.0, 0.1]))
+def test_every_detected_pedestrian_stays_in_a_track_set(seed, people, count, jitter):
+    rng = np.random.default_rng(seed)
+    model = motion_model(jitter)
+    paths = crossing_walks(rng, people, 16)
+    node = Node([random_sensor(rng, f"s{i}") for i in range(count)], model)
+    for k, path in enumerate(paths):
+        node.step(rng, k, jittered(rng, path, jitter))
+        for i in node.seen:
+            assert covered(model, [t.estimate for t in node.tracks], path[i]), (k, i)
+    assert node.most_tracks <= 3 * people
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), people=st.integers(2, 4))
+def test_fusion_across_nodes_keeps_every_detected_pedestrian(seed, people):
+    rng = np.random.default_rng(seed)
+    model = motion_model()
+    paths = crossing_walks(rng, people, 14)
+    nodes = [Node([random_sensor(rng, f"{n}s{i}") for i in range(2)], model) for n in "ab"]
+    for k, path in enumerate(paths):
+        for node in nodes:
+            node.step(rng, k, path)
+        fused = associate_nodes(
+            [NodeTracks(name, {t.track_id: t.estimate for t in node.tracks}, node.visible)
+             for name, node in zip("ab", nodes, strict=True)], model, fusion)
+        sources = sorted(s for f in fused for s in f.sources)
+        assert sources == sorted((name, t.track_id) for name, node in zip("ab", nodes,
+                                                                          strict=True)
+                                 for t in node.tracks)
+        for i in nodes[0].seen | nodes[1].seen:
+            assert covered(model, [f.estimate for f in fused], path[i]), (k, i)
+
+
+def run(model: MotionModel, sensors: list[Sensor], paths: np.ndarray, seed: int = 0,
+        ) -> list[tuple[LocalTrack, ...]]:
+    """The tracks of one node at every step, checked for soundness on the way."""
+    rng = np.random.default_rng(seed)
+    node = Node(sensors, model)
+    history = []
+    for k, path in enumerate(paths):
+        node.step(rng, k, path)
+        for i in node.seen:
+            assert covered(model, [t.estimate for t in node.tracks], path[i]), (k, i)
+        history.append(node.tracks)
+    return history
+
+
+def straight(start, end, steps: int) -> np.ndarray:
+    """A straight walk (steps, 2) from ``start`` to ``end``, within the speed bound."""
+    walk = np.linspace(np.asarray(start, float), np.asarray(end, float), steps)
+    assert (np.linalg.norm(np.diff(walk, axis=0), axis=1) <= SPEED * DT).all()
+    return walk
+
+
+WIDE = Sensor("wide", box(-20, -20, 20, 20))
+
+
+def test_two_pedestrians_crossing_end_with_one_tight_track_each():
+    model = motion_model()
+    paths = np.stack([straight((-4, -0.2), (4, -0.2), 17), straight((4, 0.2), (-4, 0.2), 17)],
+                     axis=1)
+    history = run(model, [WIDE, Sensor("second", box(-20, -20, 20, 20))], paths)
+    final = history[-1]
+    assert len(final) == 2
+    for i in range(2):
+        holding = [t for t in final if covered(model, [t.estimate], paths[-1, i])]
+        assert len(holding) == 1 and holding[0].occupied
+        assert model.position(holding[0].estimate).volume() < (2 * NOISE) ** 2 * 2
+
+
+def test_pedestrian_hidden_then_reappearing():
+    """Behind an occluder the set grows; back in sight the pedestrian gets a tight track, and
+    a set for the occluded box stays (anonymous: the one who went in may still hide there)."""
+    model = motion_model()
+    occluder = box(0, -1, 2, 1)
+    region = Sensor("around", box(-20, -20, 20, 20).difference(occluder))
+    path = np.concatenate([straight((-3, 0), (1, 0), 7), np.tile([[1.0, 0.0]], (4, 1)),
+                           straight((1, 0), (-3, 0), 7)])
+    history = run(model, [region], path[:, None, :])
+    assert all(len(tracks) <= 2 for tracks in history)
+    hidden = [k for k, p in enumerate(path) if p[0] > 0 and k < 11]
+    areas = [model.position(history[k][0].estimate).volume() for k in hidden]
+    assert all(len(history[k]) == 1 for k in hidden)
+    assert all(later >= earlier - 1e-9 for earlier, later in pairwise(areas))  # grows hidden
+    final = history[-1]
+    holding = [t for t in final if covered(model, [t.estimate], path[-1])]
+    assert len(holding) == 1
+    assert model.position(holding[0].estimate).volume() < (2 * NOISE) ** 2 * 2
+    for track in final:
+        if track is not holding[0]:  # the occluded box's set, nothing visible
+            assert occluder.buffer(1e-5).covers(_polygon(track.estimate))
+
+
+def test_two_sensors_seeing_the_same_person_start_one_track():
+    model = motion_model()
+    rng = np.random.default_rng(3)
+    found = detections(rng, np.array([[1.0, 1.0]]), [WIDE, Sensor("other", WIDE.region)])
+    result = associate(model, SETTINGS, (), found, {"wide": WIDE.region,
+                                                    "other": WIDE.region}, 0, 0)
+    assert len(result.tracks) == 1 and result.tracks[0].joined == (0, 1)
+    track = result.tracks[0].estimate
+    assert track.volume() < min(model.initial_set(model.path_strips(d.strips), "enclose")
+                                .volume() for d in found)
+
+
+def test_a_new_pedestrian_inside_a_hidden_track_starts_its_own_track():
+    """The old pedestrian hides right of x = 0 while its set grows over the visible side; a
+    new one appears inside that set. Correcting the old track with the new detection would
+    lose the old pedestrian (the test fails on that rule)."""
+    model = motion_model()
+    region = Sensor("left", box(-20, -20, 0, 20))
+    old = np.concatenate([straight((-0.5, 0), (1.0, 0), 4), np.tile([[1.0, 0.0]], (5, 1))])
+    new = np.tile([[-0.4, 0.3]], (9, 1))
+    paths = np.stack([old, new], axis=1)
+    rng = np.random.default_rng(1)
+    node = Node([region], model)
+    for k, path in enumerate(paths):
+        shown = path if k >= 5 else path[:1]  # the new pedestrian appears at step 5
+        node.step(rng, k, shown)
+        for i in node.seen:
+            assert covered(model, [t.estimate for t in node.tracks], shown[i]), (k, i)
+    assert node.seen == {0, 1}
+
+
+def test_a_track_that_certainly_left_ends():
+    model = motion_model()
+    path = straight((0, 0), (1, 0), 4)[:, None, :]
+    rng = np.random.default_rng(0)
+    node = Node([WIDE], model)
+    for k, p in enumerate(path):
+        node.step(rng, k, p)
+    node.step(rng, len(path), np.zeros((0, 2)))  # gone: wholly visible, nothing detected
+    assert node.tracks == ()
+
+
+def test_nodes_fuse_only_certain_pairs():
+    model = motion_model()
+    rng = np.random.default_rng(2)
+    alone, close = np.array([[5.0, 5.0]]), np.array([[0.0, 0.0], [0.3, 0.0]])
+    a, b = Node([WIDE], model), Node([Sensor("b", WIDE.region)], model)
+    for k in range(2):
+        a.step(rng, k, np.vstack([alone, close]))
+        b.step(rng, k, alone)  # b sees only the lone pedestrian ... and not the close pair
+    b.sensors = [Sensor("b", box(3, 3, 7, 7))]
+    b.step(rng, 2, alone)
+    a.step(rng, 2, np.vstack([alone, close]))
+    fused = associate_nodes([NodeTracks("a", {t.track_id: t.estimate for t in a.tracks},
+                                        a.visible),
+                             NodeTracks("b", {t.track_id: t.estimate for t in b.tracks},
+                                        b.visible)], model, fusion)
+    pairs = [f for f in fused if len(f.sources) == 2]
+    assert len(pairs) == 1 and covered(model, [pairs[0].estimate], alone[0])
+    assert all(len(f.sources) == 1 for f in fused if f is not pairs[0])
+    for p in np.vstack([alone, close]):
+        assert covered(model, [f.estimate for f in fused], p)
+
+
+def test_tracks_that_claim_the_same_pedestrian_both_keep_it():
+    """Each track claims one sensor's detection of the same pedestrian and sees the other
+    sensor only in part: if a claimer left out the other's claim, both would lose it."""
+    model = motion_model()
+    left, right = box(-20, -20, 0.5, 20), box(-0.5, -20, 20, 20)
+    tracks = (LocalTrack(0, Zonotope(np.array([-0.3, 0.0]), 0.5 * np.eye(2)), 0, True),
+              LocalTrack(1, Zonotope(np.array([0.3, 0.0]), 0.5 * np.eye(2)), 0, True))
+    found = detections(np.random.default_rng(0), np.zeros((1, 2)),
+                       [Sensor("left", left), Sensor("right", right)])
+    result = associate(model, SETTINGS, tracks, found, {"left": left, "right": right}, 0, 2)
+    assert [t.track_id for t in result.tracks if covered(model, [t.estimate], np.zeros(2))] \
+        == [0, 1]
+
+
+def test_near_duplicate_tracks_merge_into_a_set_that_covers_both():
+    model = motion_model()
+    first = Zonotope(np.array([0.0, 0.0]), 0.5 * np.eye(2))
+    second = Zonotope(np.array([0.01, 0.0]), 0.5 * np.eye(2))
+    tracks = (LocalTrack(0, first, 0, True), LocalTrack(1, second, 0, False))
+    result = associate(model, SETTINGS, tracks, [], {}, 0, 2)
+    assert len(result.tracks) == 1 and result.tracks[0].occupied
+    merged = result.tracks[0].estimate
+    assert merged.contains(np.vstack([first.vertices(), second.vertices()]), tol=1e-9).all()
+
+
+def test_overlapping_tracks_of_pedestrians_the_other_node_cannot_see_are_kept_apart():
+    """a sees only P1, b only P2; their sets meet, each the other's only one: without the
+    visibility test their intersection would hold neither pedestrian."""
+    model = motion_model()
+    p1, p2 = np.array([0.0, 0.0]), np.array([0.6, 0.0])
+    a = NodeTracks("a", {0: Zonotope(np.array([0.25, 0.0]), 0.3 * np.eye(2))},
+                   Point(p1).buffer(0.2))
+    b = NodeTracks("b", {0: Zonotope(np.array([0.35, 0.0]), 0.3 * np.eye(2))},
+                   Point(p2).buffer(0.2))
+    fused = associate_nodes([a, b], model, fusion)
+    assert sorted(f.sources for f in fused) == [(("a", 0),), (("b", 0),)]
+    assert all(covered(model, [f.estimate for f in fused], p) for p in (p1, p2))
+
+
+def test_a_track_is_not_fused_with_a_larger_track_that_holds_someone_else():
+    """b sees P1 and P2 in one set; a sees P1 only: a's track certainly belongs to b's, but
+    b's also holds P2, whom a cannot see (the certain pair must hold both ways)."""
+    model = motion_model()
+    p1, p2 = np.array([0.0, 0.0]), np.array([1.0, 0.0])
+    a = NodeTracks("a", {0: Zonotope(p1, 0.3 * np.eye(2))}, box(-3, -3, 0.7, 3))
+    b = NodeTracks("b", {0: Zonotope(np.array([0.5, 0.0]), np.diag([0.9, 0.5]))},
+                   box(-3, -3, 3, 3))
+    fused = associate_nodes([a, b], model, fusion)
+    assert sorted(f.sources for f in fused) == [(("a", 0),), (("b", 0),)]
+    assert all(covered(model, [f.estimate for f in fused], p) for p in (p1, p2))
+    b_alone = NodeTracks("b", {0: Zonotope(p1, 0.35 * np.eye(2))}, box(-3, -3, 3, 3))
+    assert [f.sources for f in associate_nodes([a, b_alone], model, fusion)] \
+        == [(("a", 0), ("b", 0))]
+
+
+@pytest.mark.parametrize("state_model", ["position", "constant-velocity"])
+def test_anonymous_node_observer_keeps_every_pedestrian(state_model):
+    config = Estimator(state_model=state_model, max_pedestrian_speed_mps=SPEED,
+                       max_velocity_change_mps=2 * SPEED)
+    model = MotionModel.from_config(config, DT)
+    observer = AnonymousNodeObserver("car", model, SETTINGS)
+    rng = np.random.default_rng(4)
+    sensors = [Sensor("front", Point(-1, 0).buffer(3.0)), Sensor("side", box(-1, -20, 20, 20))]
+    paths = crossing_walks(rng, 3, 14)
+    seen: set[int] = set()
+    for k, path in enumerate(paths):
+        seen |= {i for i, p in enumerate(path)
+                 if any(s.region.contains(Point(p)) for s in sensors)}
+        tracks = observer.step(k, NodeScan(tuple(detections(rng, path, sensors)),
+                                           {s.name: s.region for s in sensors}))
+        assert all(key == t.person_id and key.startswith("car:") and t.step == k
+                   for key, t in tracks.items())
+        for i in seen:
+            assert covered(model, [t.estimate for t in tracks.values()], path[i]), (k, i)
+    assert seen == {0, 1, 2}
+
+
+def test_a_track_off_the_walkable_ground_ends():
+    model = motion_model()
+    ground = box(-5, -1, 5, 1)
+    tracks = (LocalTrack(0, Zonotope(np.array([0.0, 0.0]), 0.3 * np.eye(2)), 0, True),
+              LocalTrack(1, Zonotope(np.array([0.0, 4.0]), 0.3 * np.eye(2)), 0, True))
+    result = associate(model, SETTINGS, tracks, [], {}, 1, 2, ground)
+    assert [t.track_id for t in result.tracks] == [0]
+
+
+@settings(max_examples=8, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), people=st.integers(2, 4))
+def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined_region(
+        seed, people):
+    """The vehicle's pipeline on crossing paths with overlapping sets: own and received tracks
+    fused (AnonymousFusionCentre, over a V2X link with latency), refined with the clear regions
+    of each fused track: every pedestrian the vehicle or the sender (by the step of its newest
+    message) has detected is in some fused set and in some refined region (fails if a view is
+    taken as clear for a track that meets one of the viewer's tracks)."""
+    rng = np.random.default_rng(seed)
+    model = motion_model()
+    sensors = {"bus": [random_sensor(rng, "bus_a"), random_sensor(rng, "bus_b")],
+               "rsu": [random_sensor(rng, "rsu_a")]}
+    observers = {node: AnonymousNodeObserver(node, model, SETTINGS) for node in sensors}
+    views = {node: unary_union([s.region for s in mine]) for node, mine in sensors.items()}
+    centre = AnonymousFusionCentre(model, SETTINGS, "enclose", ["bus_a", "bus_b"], DT, "bus")
+    link = V2XLink(V2X(latency_steps=1), np.random.default_rng(0))
+    refined = RefinedRegions(OccupancyTracker(model, DT), history=False)
+    first_seen: dict[str, dict[int, int]] = {node: {} for node in sensors}
+    for k, positions in enumerate(crossing_walks(rng, people, 12)):
+        tracks = {}
+        for node, mine in sensors.items():
+            for i, p in enumerate(positions):
+                if any(s.region.contains(Point(p)) for s in mine):
+                    first_seen[node].setdefault(i, k)
+            scan = NodeScan(tuple(detections(rng, positions, mine)),
+                            {s.name: s.region for s in mine})
+            tracks[node] = observers[node].step(k, scan)
+        link.send(Message("rsu", k, {key: t.estimate for key, t in tracks["rsu"].items()},
+                          views["rsu"]), 0.0)
+        link.deliver(k)
+        shared = link.picture(k, model)
+        estimate, clear = centre.step(tracks, shared, views["bus"])
+        possible = refined.update(k, {}, estimate, clear)
+        rsu_step = k - shared.ages.get("rsu", k + 1)  # the step of its newest message
+        known = set(first_seen["bus"]) | {
+            i for i, first in first_seen["rsu"].items() if first <= rsu_step}
+        for i in known:
+            assert covered(model, estimate.fused.values(), positions[i]), (k, i)
+            assert any(r.distance(Point(positions[i])) <= 1e-7 for r in possible.values()), (k, i)
