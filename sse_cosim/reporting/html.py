@@ -38,7 +38,7 @@ from sse_cosim.reporting.paper import (
     table1,
     write_paper_report,
 )
-from sse_cosim.reporting.replay import REPLAY
+from sse_cosim.reporting.replay import replay_href
 from sse_cosim.reporting.safety_report import SAFETY_PLAN
 from sse_cosim.reporting.sweep_report import (
     PLOTTED,
@@ -188,10 +188,9 @@ def _runs_section(runs: Sequence[RunFolder], out_dir: Path) -> str:
 def _replay_link(folder: Path, out_dir: Path, text: str) -> str:
     """A link to ``folder``'s replay, relative to the report in ``out_dir``; nothing if the run
     kept no replay (a summaries-only sweep)."""
-    if not (folder / REPLAY).is_file():
-        return ""
-    href = Path(os.path.relpath(folder / REPLAY, out_dir)).as_posix()
-    return f'<a class="replay" href="{html.escape(href)}">{html.escape(text)}</a>'
+    href = replay_href(folder, out_dir)
+    return "" if href is None else \
+        f'<a class="replay" href="{html.escape(href)}">{html.escape(text)}</a>'
 
 
 def _sweep_replays(sweep: SweepFolder, out_dir: Path) -> str:

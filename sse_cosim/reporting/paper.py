@@ -17,6 +17,7 @@ import pandas as pd
 from sse_cosim.files import atomic_path, write_text_atomic
 from sse_cosim.reporting import plots
 from sse_cosim.reporting.outputs import SCENARIO, SUMMARY, TRACE
+from sse_cosim.reporting.replay import replay_href
 
 # Paper Table I: average speed of the ego vehicle (nominal 20).
 PAPER_TABLE1 = {
@@ -99,9 +100,7 @@ def table1(runs: Sequence[RunFolder], policy: str = "safe") -> pd.DataFrame:
     """One row per paper scenario run under ``policy``: our average speed beside the
     paper's."""
     rows = []
-    paper_runs = [r for r in runs if (r.name, r.pedestrian) in PAPER_TABLE1 and not r.faults
-                  and r.policy == policy]
-    for run in sorted(paper_runs, key=lambda r: (r.name, not r.pedestrian)):
+    for run in _paper_runs(runs, policy):
         s = run.summary
         nodes = s["nodes"]
         paper = PAPER_TABLE1.get((run.name, run.pedestrian))
@@ -161,6 +160,21 @@ def fault_table(runs: Sequence[RunFolder]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _paper_runs(runs: Sequence[RunFolder], policy: str) -> list[RunFolder]:
+    """The runs of Table I's rows under ``policy``, in its order."""
+    chosen = [r for r in runs if (r.name, r.pedestrian) in PAPER_TABLE1 and not r.faults
+              and r.policy == policy]
+    return sorted(chosen, key=lambda r: (r.name, not r.pedestrian))
+
+
+def replay_links(runs: Sequence[RunFolder], out_dir: Path) -> str:
+    """A Markdown line linking each run's ``replay.html`` (relative to ``out_dir``; runs
+    without one, e.g. summaries only, are left out); empty if none has one."""
+    links = [f"[{run.label}]({href})" for run in runs
+             if (href := replay_href(run.path, out_dir)) is not None]
+    return f"\nEach run in the browser (`replay.html`): {', '.join(links)}.\n" if links else ""
+
+
 def write_paper_report(out_dir: Path, runs: Sequence[RunFolder]) -> list[Path]:
     """``table1.csv``/``.md``, ``fig7_set_sizes.csv``, combined speed and set-size figures."""
     written = []
@@ -169,8 +183,9 @@ def write_paper_report(out_dir: Path, runs: Sequence[RunFolder]) -> list[Path]:
         if table.empty:
             continue
         written.append(_csv(table, out_dir / f"table1{suffix}.csv"))
-        written.append(write_text_atomic(out_dir / f"table1{suffix}.md",
-                                         table1_markdown(table, policy)))
+        written.append(write_text_atomic(
+            out_dir / f"table1{suffix}.md",
+            table1_markdown(table, policy) + replay_links(_paper_runs(runs, policy), out_dir)))
         chosen = [r for r in runs if r.policy == policy]
         written.append(plots.save_figure(_speed_panels(chosen),
                                          out_dir / f"speed_profiles{suffix}.png"))

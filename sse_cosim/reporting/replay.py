@@ -14,9 +14,11 @@ JavaScript and SVG, nothing loaded from the network) with that data.
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from importlib import resources
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -39,6 +41,13 @@ POLYGONS_MARK = "/*REPLAY_POLYGONS*/"  # and the polygons (a JSON array)
 CM = 100.0  # coordinates are stored in integer centimetres
 STRIP_MARGIN_M = 5.0  # a strip is drawn over its sensor's view box widened by this much
 STRIP_SPAN_M = 1000.0  # half-length of the band built before clipping (longer than any view)
+
+def replay_href(folder: Path, out_dir: Path) -> str | None:
+    """The link from a report in ``out_dir`` to ``folder``'s replay (POSIX, relative); None if
+    the run kept none (a summaries-only sweep)."""
+    page = folder / REPLAY
+    return Path(os.path.relpath(page, out_dir)).as_posix() if page.is_file() else None
+
 
 LocalSet = tuple[str, str, Zonotope, bool]  # node, pedestrian, position set, detected now
 Rings = tuple[bytes, ...]  # a polygon's encoded rings, each as int32 bytes (see PolygonPool)

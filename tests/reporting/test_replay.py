@@ -12,10 +12,12 @@ import pytest
 import shapely
 
 from sse_cosim.control.speed import SpeedLevel
+from sse_cosim.reporting.paper import RunFolder, replay_links
 from sse_cosim.reporting.recorder import KeyMoments
 from sse_cosim.reporting.replay import (
     DATA_MARK,
     POLYGONS_MARK,
+    REPLAY,
     PolygonPool,
     ReplayLog,
     _band,
@@ -123,3 +125,18 @@ def test_a_run_that_starts_slow_has_no_slow_down():
     moments = KeyMoments()
     assert moments.due(SpeedLevel.STOP, None, False, False) == ["start", "first stop"]
     assert moments.due(SpeedLevel.SLOW, None, False, False) == []
+
+
+def test_table1_links_each_runs_replay_relative_to_the_table(tmp_path):
+    """The batch's Table I names every run's replay.html by its path from the table's folder;
+    a run that kept none (summaries only) gets no link."""
+    with_page, without = tmp_path / "runs" / "s1_pedestrian", tmp_path / "runs" / "s2_pedestrian"
+    for folder in (with_page, without):
+        folder.mkdir(parents=True)
+    (with_page / REPLAY).write_text("<html></html>", encoding="utf-8")
+    runs = [RunFolder(with_page, {"scenario": "S1", "pedestrian": True}, {}),
+            RunFolder(without, {"scenario": "S2", "pedestrian": True}, {})]
+    text = replay_links(runs, tmp_path)
+    assert "[S1 with pedestrian](runs/s1_pedestrian/replay.html)" in text
+    assert "S2" not in text
+    assert replay_links(runs[1:], tmp_path) == ""
