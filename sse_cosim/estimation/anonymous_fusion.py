@@ -25,7 +25,7 @@ a region clear by rounding.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import shapely
@@ -38,9 +38,8 @@ from sse_cosim.estimation.association import (
 from sse_cosim.estimation.bus_fusion import fuse_sets
 from sse_cosim.estimation.bus_screen import BusScreen
 from sse_cosim.estimation.flags import step_flags
-from sse_cosim.estimation.fusion_centre import BusEstimate
-from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import EstimatorSettings, Track
+from sse_cosim.estimation.fusion_centre import BusEstimate, SecondLevel
+from sse_cosim.estimation.observer import Track
 from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.v2x import SharedPicture
 from sse_cosim.sets import Zonotope, zonotopes_disjoint
@@ -56,17 +55,8 @@ class _Node:
     age: int
 
 
-class AnonymousFusionCentre:
+class AnonymousFusionCentre(SecondLevel):
     """Automated vehicle ``node``'s fusion of anonymous tracks, with their clear regions."""
-
-    def __init__(self, model: MotionModel, settings: EstimatorSettings, fusion_method: str,
-                 sensors: Iterable[str], step_length: float, node: str) -> None:
-        self.node = node
-        self.model = model
-        self.settings = settings
-        self.fusion_method = fusion_method
-        self.sensors = list(sensors)
-        self.step_length = step_length
 
     def step(self, tracks: Mapping[str, Mapping[str, Track]], shared: SharedPicture,
              own_view: shapely.Geometry) -> tuple[BusEstimate, dict[str, list[ClearRegion]]]:

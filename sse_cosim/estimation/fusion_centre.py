@@ -41,9 +41,9 @@ class BusEstimate:
     inputs: dict[str, dict[str, Zonotope]]
 
 
-class FusionCentre:
-    """An automated vehicle's screen, fusion and flags (``node`` its id), with the screen's
-    probation kept across steps."""
+class SecondLevel:
+    """What an automated vehicle's second fusion level is built with (``node`` its id): the
+    motion model, the estimator's settings, the fusion method, the sensors and the step (s)."""
 
     def __init__(self, model: MotionModel, settings: EstimatorSettings, fusion_method: str,
                  sensors: Iterable[str], step_length: float, node: str) -> None:
@@ -52,6 +52,16 @@ class FusionCentre:
         self.settings = settings
         self.fusion_method = fusion_method
         self.sensors = list(sensors)
+        self.step_length = step_length
+
+
+class FusionCentre(SecondLevel):
+    """An automated vehicle's screen, fusion and flags (``node`` its id), with the screen's
+    probation kept across steps."""
+
+    def __init__(self, model: MotionModel, settings: EstimatorSettings, fusion_method: str,
+                 sensors: Iterable[str], step_length: float, node: str) -> None:
+        super().__init__(model, settings, fusion_method, sensors, step_length, node)
         self._screener = BusScreener(model, model.max_speed * step_length, node)
 
     def step(
