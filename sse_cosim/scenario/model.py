@@ -545,10 +545,6 @@ class Scenario(StrictModel):
         may not reuse them)."""
         return [key for table in ACTOR_TABLES for key in getattr(self, table)]
 
-    def sensors_of(self, node: str) -> dict[str, Sensor]:
-        """The sensors carried by ``node``, by name."""
-        return {name: s for name, s in self.sensors.items() if s.node == node}
-
 
 Actor = TypeVar("Actor", AutomatedVehicle, ParkedVehicle, Vehicle, Pedestrian)
 
