@@ -38,7 +38,7 @@ from sse_cosim.estimation.association import (
 from sse_cosim.estimation.bus_fusion import fuse_sets
 from sse_cosim.estimation.bus_screen import BusScreen
 from sse_cosim.estimation.flags import step_flags
-from sse_cosim.estimation.fusion_centre import BusEstimate, SecondLevel
+from sse_cosim.estimation.fusion_centre import BaseFusionCentre, BusEstimate
 from sse_cosim.estimation.observer import Track
 from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.v2x import SharedPicture
@@ -55,7 +55,7 @@ class _Node:
     age: int
 
 
-class AnonymousFusionCentre(SecondLevel):
+class AnonymousFusionCentre(BaseFusionCentre):
     """Automated vehicle ``node``'s fusion of anonymous tracks, with their clear regions."""
 
     def step(self, tracks: Mapping[str, Mapping[str, Track]], shared: SharedPicture,

@@ -41,8 +41,8 @@ class BusEstimate:
     inputs: dict[str, dict[str, Zonotope]]
 
 
-class SecondLevel:
-    """What an automated vehicle's second fusion level is built with (``node`` its id): the
+class BaseFusionCentre:
+    """What either fusion centre of an automated vehicle is built with (``node`` its id): the
     motion model, the estimator's settings, the fusion method, the sensors and the step (s)."""
 
     def __init__(self, model: MotionModel, settings: EstimatorSettings, fusion_method: str,
@@ -55,7 +55,7 @@ class SecondLevel:
         self.step_length = step_length
 
 
-class FusionCentre(SecondLevel):
+class FusionCentre(BaseFusionCentre):
     """An automated vehicle's screen, fusion and flags (``node`` its id), with the screen's
     probation kept across steps."""
 

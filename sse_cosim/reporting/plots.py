@@ -163,7 +163,7 @@ def _view_box(frame: SceneFrame) -> tuple[float, float, float, float]:
         parts.append(frame.unobserved)
     if not parts:
         return (-VIEW_MIN_M[0] / 2, -VIEW_MIN_M[1] / 2, VIEW_MIN_M[0] / 2, VIEW_MIN_M[1] / 2)
-    x0, y0, x1, y1 = shapely.union_all(parts).bounds
+    x0, y0, x1, y1 = shapely.total_bounds(parts)
     (x0, x1), (y0, y1) = (_widen(x0, x1, VIEW_MIN_M[0]), _widen(y0, y1, VIEW_MIN_M[1]))
     return (x0, y0, x1, y1)
 

@@ -147,10 +147,8 @@ class RunRecorder:
     def __call__(self, result: StepResult) -> None:
         t = round(result.snapshot.time, 6)
         truths = {pid: np.asarray(p.position) for pid, p in sorted(result.snapshot.persons.items())}
-        for obs in result.observations.values():
-            seen = self.first_seen.setdefault(obs.node, {})
-            for pid in obs.detections:
-                seen.setdefault(pid, result.step)
+        if self.anonymous:  # (by id, every set names its pedestrian: nothing to remember)
+            self._note_first_seen(result)
         self.truth_rows += [{"t": t, "pedestrian": pid, "x": xy[0], "y": xy[1]}
                             for pid, xy in truths.items()]
         local = self._check_local_sets(t, result, truths)
@@ -242,6 +240,13 @@ class RunRecorder:
             checks[pid].refined = self._check_region(t, pid, list(ego.possible.values()),
                                                      truths[pid])
         return fused, dict(ego.possible)
+
+    def _note_first_seen(self, result: StepResult) -> None:
+        """The step at which each node first detected each pedestrian (anonymous checks)."""
+        for obs in result.observations.values():
+            seen = self.first_seen.setdefault(obs.node, {})
+            for pid in obs.detections:
+                seen.setdefault(pid, result.step)
 
     def _detected_by(self, node: str, step: int) -> set[str]:
         """The pedestrians ``node`` has detected by ``step``."""
