@@ -152,13 +152,16 @@ class ZoneOutlook:
     ``to_start_m``: front bumper to the zone (negative once the front is in it);
     ``to_clear_m``: how far the front must still travel until the rear has cleared it;
     ``arrival_s``: the earliest time any pedestrian, known or not, can be in it;
-    ``index``: the zone's place in ``SceneContext.zones``.
+    ``in_view_arrival_s``: the earliest time a pedestrian in view (some node detects it now)
+    can be in it, infinite if none can; ``index``: the zone's place in
+    ``SceneContext.zones``.
     """
 
     index: int
     to_start_m: float
     to_clear_m: float
     arrival_s: float
+    in_view_arrival_s: float = math.inf
 
 
 @dataclass(frozen=True)
@@ -188,13 +191,15 @@ def assess(
     own_occluded: shapely.Geometry,
     unobserved: shapely.Geometry,
     pedestrian_regions: Iterable[shapely.Geometry],
+    in_view: Iterable[shapely.Geometry] = (),
 ) -> Picture:
     """The picture at one step.
 
     ``front_xy`` (2,) is the bus's front bumper; ``speed`` its actual speed; ``own_occluded``
     what its sensors' shadows hide inside their fields of view; ``unobserved`` the walkable
     area where a pedestrian nobody detected may be (every node's views, shared ones included);
-    ``pedestrian_regions`` where each known pedestrian may be.
+    ``pedestrian_regions`` where each known pedestrian may be; ``in_view`` the regions among
+    them of the pedestrians some node detects now.
     """
     cfg = context.config
     front_s = context.route_line.project(shapely.Point(front_xy))
@@ -210,7 +215,8 @@ def assess(
     near_path = context.path_ahead(front_s, cfg.crossing_horizon_m, cfg.path_margin_m)
     stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0)
     sets = [s for s in pedestrian_regions if not s.is_empty]
-    zones = _outlook(context, front_s, [unobserved, *sets])
+    zones = _outlook(context, front_s, [unobserved, *sets],
+                     [s for s in in_view if not s.is_empty])
     return Picture(
         front_s=float(front_s),
         speed_mps=float(speed),
@@ -227,17 +233,19 @@ def assess(
     )
 
 
-def _outlook(context: SceneContext, front_s: float,
-             sources: Sequence[shapely.Geometry]) -> tuple[ZoneOutlook, ...]:
-    """The zones the bus has not yet cleared, with the earliest arrival from ``sources``."""
+def _outlook(context: SceneContext, front_s: float, sources: Sequence[shapely.Geometry],
+             in_view: Sequence[shapely.Geometry]) -> tuple[ZoneOutlook, ...]:
+    """The zones the bus has not yet cleared, with the earliest arrival from ``sources`` and
+    from the regions ``in_view`` alone."""
+    speed, slack = context.pedestrian_speed, 2.0 * context.jitter
     result = []
     for index, zone in enumerate(context.zones):
         to_clear = zone.end_m + context.bus.length_m - front_s
         if to_clear <= 0.0:
             continue
-        arrival = min(zone.beyond_arrival_s, _arrival(
-            sources, zone.polygon, context.pedestrian_speed, 2.0 * context.jitter))
-        result.append(ZoneOutlook(index, zone.start_m - front_s, to_clear, arrival))
+        arrival = min(zone.beyond_arrival_s, _arrival(sources, zone.polygon, speed, slack))
+        result.append(ZoneOutlook(index, zone.start_m - front_s, to_clear, arrival,
+                                  _arrival(in_view, zone.polygon, speed, slack)))
     return tuple(result)
 
 

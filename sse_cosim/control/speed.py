@@ -153,7 +153,8 @@ class SafePolicy:
       plus ``stopping_margin_m`` fits before it;
     - **stand**: a comfortable stop has the bus standing, one step of margin included, before
       the earliest arrival of any pedestrian in the zone (the bus is stopped before any
-      contact, wherever it stands);
+      contact, wherever it stands), and, if it stands inside the zone, it gives way to every
+      pedestrian in view (:meth:`_gives_way`);
     - **pass**: holding the command, the rear clears the zone a step before that arrival.
 
     The candidates are the levels, fastest first, then creep speeds below very slow in steps
@@ -219,7 +220,7 @@ class SafePolicy:
         start = _StopStart(position, speed, steps * dyn.step)
         plans, passing = [], True
         for zone in picture.zones:
-            plan = self._stop_or_stand(zone, command, start)
+            plan = self._stop_or_stand(zone, command, start, picture.speed_mps)
             if plan is None and passing:
                 plan = self._pass(zone, picture.speed_mps, command)
                 if plan is not None:  # a later stop starts once this zone is cleared
@@ -232,16 +233,36 @@ class SafePolicy:
             plans.append(plan)
         return plans
 
-    def _stop_or_stand(self, zone: ZoneOutlook, command: float, start: _StopStart) -> Plan | None:
+    def _stop_or_stand(self, zone: ZoneOutlook, command: float, start: _StopStart,
+                       speed_now: float) -> Plan | None:
         """A comfortable stop ordered at ``start`` ends before the zone, or has the bus
-        standing (one step of margin) before anyone can arrive there."""
+        standing (one step of margin) before anyone can arrive there, without driving into
+        the zone in front of a pedestrian in view (:meth:`_gives_way`)."""
         dyn = self.dynamics
-        if start.position + dyn.stopping_distance(start.speed) + self.config.stopping_margin_m \
-                <= zone.to_start_m:
+        stop_end = start.position + dyn.stopping_distance(start.speed)
+        if stop_end + self.config.stopping_margin_m <= zone.to_start_m:
             return Plan(zone.index, "stop", command)
-        if start.time + dyn.stopping_time(start.speed) + dyn.step <= zone.arrival_s:
+        if start.time + dyn.stopping_time(start.speed) + dyn.step > zone.arrival_s:
+            return None
+        if stop_end <= zone.to_start_m or self._gives_way(zone, command, speed_now):
             return Plan(zone.index, "stand", command)
         return None
+
+    def _gives_way(self, zone: ZoneOutlook, command: float, speed_now: float) -> bool:
+        """Whether a stand that ends inside the zone leaves the way to every pedestrian in
+        view: the command stops the bus now (nothing better is left), or the front is already
+        in the zone, or holding the command the rear clears the zone a step before any
+        pedestrian in view can arrive.
+
+        A stand keeps the bus from touching anyone while it moves, but a bus standing on a
+        crossing still blocks it, and SUMO's pedestrians walk into it (people do not). So the
+        bus does not creep onto a crossing that someone it sees may be about to use; ground
+        that stays hidden still lets it creep (docs/controller.md, "Giving way").
+        """
+        if command == 0.0 or zone.to_start_m <= 0.0:
+            return True
+        clear_s = self.dynamics.pass_time(zone.to_clear_m, speed_now, command)
+        return clear_s + self.dynamics.step < zone.in_view_arrival_s
 
     def _pass(self, zone: ZoneOutlook, speed_now: float, command: float) -> Plan | None:
         """Holding the command, the rear clears the zone a step before anyone can arrive (or a

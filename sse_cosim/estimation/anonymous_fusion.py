@@ -59,13 +59,15 @@ class AnonymousFusionCentre(BaseFusionCentre):
     """Automated vehicle ``node``'s fusion of anonymous tracks, with their clear regions."""
 
     def step(self, tracks: Mapping[str, Mapping[str, Track]], shared: SharedPicture,
-             own_view: shapely.Geometry) -> tuple[BusEstimate, dict[str, list[ClearRegion]]]:
+             own_view: shapely.Geometry, detected: frozenset[str],
+             ) -> tuple[BusEstimate, dict[str, list[ClearRegion]]]:
         """The fused tracks of this step and, per fused track, the regions seen without its
         pedestrians (module docstring).
 
         ``tracks``: node -> track key -> local track (the vehicle's own among them);
         ``shared``: the senders' newest messages brought to this step; ``own_view``: the
-        union of the vehicle's sensors' visible regions now.
+        union of the vehicle's sensors' visible regions now; ``detected``: the keys of the
+        node tracks some node detects now (a fused track is in view if one of them is in it).
         """
         own = {key: t.estimate for key, t in tracks.get(self.node, {}).items()}
         nodes = [_Node(self.node, own, own_view, 0), *_senders(shared)]
@@ -75,15 +77,18 @@ class AnonymousFusionCentre(BaseFusionCentre):
         every = {key: z for n in nodes for key, z in n.tracks.items()}  # keys: network-wide
         estimates: dict[str, Zonotope] = {}
         inputs: dict[str, dict[str, Zonotope]] = {}
+        in_view: set[str] = set()
         for track in fused:
             keys = [ranked[node][index] for node, index in track.sources]
             name = "+".join(keys)
             estimates[name] = track.estimate
             inputs[name] = {key: every[key] for key in keys}
+            if not detected.isdisjoint(keys):
+                in_view.add(name)
         clear = {name: self._clear(z, nodes) for name, z in estimates.items()}
         screen = BusScreen(node=self.node)  # no vote: it needs to know who is who
         flags = step_flags(self.sensors, tracks, screen, bool(shared.inconsistent), self.node)
-        return BusEstimate(screen, estimates, flags, inputs), clear
+        return BusEstimate(screen, estimates, flags, inputs, frozenset(in_view)), clear
 
     def _node_tracks(self, node: _Node) -> NodeTracks:
         """``node``'s tracks for :func:`associate_nodes` (ids: the keys' ranks), its view

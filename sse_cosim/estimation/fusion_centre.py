@@ -32,13 +32,15 @@ class BusEstimate:
     ``screen``: what it fused and whom it flagged; ``fused``: pedestrian id (or fused track,
     :mod:`~sse_cosim.estimation.anonymous_fusion`) -> fused state set; ``flags``: per sensor
     and node, and whether its picture is inconsistent; ``inputs``: the same keys -> source
-    -> the sets fused into it.
+    -> the sets fused into it; ``in_view``: the keys of ``fused`` whose pedestrian some node
+    detects now (the vehicle itself, or a sender in its newest message).
     """
 
     screen: BusScreen
     fused: dict[str, Zonotope]
     flags: StepFlags
     inputs: dict[str, dict[str, Zonotope]]
+    in_view: frozenset[str] = frozenset()
 
 
 class BaseFusionCentre:
@@ -86,4 +88,4 @@ class FusionCentre(BaseFusionCentre):
         flags = step_flags(self.sensors, tracks, screen, bool(shared.inconsistent), self.node)
         inputs = {pid: screen.inputs(pid, own[pid].estimate if pid in own else None)
                   for pid in fused}
-        return BusEstimate(screen, fused, flags, inputs)
+        return BusEstimate(screen, fused, flags, inputs, frozenset(fused.keys() & detected))

@@ -231,7 +231,9 @@ class AnonymousFusion:
 
     def step(self, tracks: Tracks, shared: SharedPicture,
              views: Sequence[SensorObservation]) -> tuple[BusEstimate, Clear]:
-        return self.centre.step(tracks, shared, union_or_empty(o.visible for o in views))
+        own = tracks.get(self.centre.node, {})
+        return self.centre.step(tracks, shared, union_or_empty(o.visible for o in views),
+                                detected_now(own, shared))
 
 
 def second_level(association: str, model: MotionModel, settings: EstimatorSettings,

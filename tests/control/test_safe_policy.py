@@ -33,8 +33,9 @@ def picture(speed: float, zones: tuple[ZoneOutlook, ...]) -> Picture:
                    pedestrian_in_stopping_distance=False, zones=zones)
 
 
-def zone(to_start: float, arrival: float) -> ZoneOutlook:
-    return ZoneOutlook(0, to_start, to_start + ZONE_LENGTH + BUS.length_m, arrival)
+def zone(to_start: float, arrival: float, in_view_arrival: float = math.inf) -> ZoneOutlook:
+    return ZoneOutlook(0, to_start, to_start + ZONE_LENGTH + BUS.length_m, arrival,
+                       in_view_arrival)
 
 
 def policy() -> SafePolicy:
@@ -136,6 +137,38 @@ def test_beside_hidden_ground_the_bus_creeps_on_at_a_steady_speed():
     assert 0.0 < commands[59] < level_speed(SpeedLevel.VERY_SLOW, BUS.nominal_speed_mps, CONFIG)
     assert len(set(commands[15:60])) == 1  # steady
     assert len(levels) * DT < 10.0  # cleared the 16 m in less than 10 s
+
+
+def creep_from_standstill(to_start: float, arrival: float, in_view_arrival: float,
+                          steps: int = 200) -> list[float]:
+    """The front's position (m past the zone's start) at every step of a bus that starts
+    standing ``to_start`` before the zone, beside ground with these arrivals."""
+    safe = policy()
+    s, v, fronts = 0.0, 0.0, []
+    for _ in range(steps):
+        outlook = zone(to_start - s, arrival, in_view_arrival)
+        s, v = DYN.advance(s, v, safe.decide(picture(v, (outlook,))).command_mps)
+        fronts.append(s - to_start)
+    return fronts
+
+
+def test_the_bus_does_not_creep_onto_a_crossing_in_front_of_a_pedestrian_in_view():
+    """The creep of the previous test, but the pedestrian 2.4 s from the zone is in view
+    (waiting at the curb): the bus stays short of the zone instead of standing on it."""
+    assert max(creep_from_standstill(1.0, 2.39, 2.39)) <= 0.0
+    assert max(creep_from_standstill(1.0, 2.39, math.inf)) > ZONE_LENGTH + BUS.length_m
+
+
+def test_a_pedestrian_in_view_who_cannot_arrive_before_the_bus_clears_lets_it_creep():
+    assert max(creep_from_standstill(1.0, 2.39, 30.0)) > ZONE_LENGTH + BUS.length_m
+
+
+def test_a_pedestrian_coming_into_view_stops_the_bus_without_an_emergency_brake():
+    # moving too fast to stop short: the comfortable stop (on the crossing) is what is left
+    decision = policy().decide(picture(2.0, (zone(0.3, 3.0, 3.0),)))
+    assert decision.level is SpeedLevel.STOP
+    # already on the crossing: it may still creep off it, standing before anyone arrives
+    assert policy().decide(picture(1.0, (zone(-1.0, 2.39, 2.39),))).level is SpeedLevel.CREEP
 
 
 def test_a_bus_that_passes_before_anyone_arrives_keeps_its_speed_and_commits():

@@ -28,7 +28,7 @@ from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import AnonymousNodeObserver, EstimatorSettings, NodeScan
 from sse_cosim.estimation.occupancy import OccupancyTracker
 from sse_cosim.estimation.v2x import Message, V2XLink
-from sse_cosim.pipeline.stages import RefinedRegions
+from sse_cosim.pipeline.stages import RefinedRegions, detected_now
 from sse_cosim.scenario.model import V2X, Estimator
 from sse_cosim.sets import Strips, Zonotope
 
@@ -389,7 +389,8 @@ def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined
     fused (AnonymousFusionCentre, over a V2X link with latency), refined with the clear regions
     of each fused track: every pedestrian the vehicle or the sender (by the step of its newest
     message) has detected is in some fused set and in some refined region (fails if a view is
-    taken as clear for a track that meets one of the viewer's tracks)."""
+    taken as clear for a track that meets one of the viewer's tracks); every pedestrian the
+    vehicle detects now is in a fused set it counts as in view."""
     rng = np.random.default_rng(seed)
     model = motion_model()
     sensors = {"bus": [random_sensor(rng, "bus_a"), random_sensor(rng, "bus_b")],
@@ -413,8 +414,13 @@ def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined
                           views["rsu"]), 0.0)
         link.deliver(k)
         shared = link.picture(k, model)
-        estimate, clear = centre.step(tracks, shared, views["bus"])
+        estimate, clear = centre.step(tracks, shared, views["bus"],
+                                      detected_now(tracks["bus"], shared))
         possible = refined.update(k, {}, estimate, clear)
+        in_view = [estimate.fused[name] for name in estimate.in_view]
+        for i, p in enumerate(positions):  # seen by the bus now: in a fused set in view
+            if any(s.region.contains(Point(p)) for s in sensors["bus"]):
+                assert covered(model, in_view, p), (k, i)
         rsu_step = k - shared.ages.get("rsu", k + 1)  # the step of its newest message
         known = set(first_seen["bus"]) | {
             i for i, first in first_seen["rsu"].items() if first <= rsu_step}

@@ -9,7 +9,7 @@ from sse_cosim.estimation.bus_screen import BusScreen
 from sse_cosim.estimation.flags import StepFlags
 from sse_cosim.estimation.fusion_centre import BusEstimate
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import Track
+from sse_cosim.estimation.observer import EstimatorSettings, Track
 from sse_cosim.estimation.occupancy import OccupancyTracker
 from sse_cosim.estimation.v2x import SharedPicture
 from sse_cosim.pipeline.stages import (
@@ -17,6 +17,7 @@ from sse_cosim.pipeline.stages import (
     clear_regions,
     detected_now,
     detections_by_node,
+    second_level,
     union_or_empty,
     views_of,
 )
@@ -62,6 +63,23 @@ def test_clear_regions_and_detections_join_the_bus_and_the_senders():
         ((5, 5, 6, 6), 0), ((9, 9, 10, 10), 1)]
     assert [(c.region.bounds, c.age) for c in clear["b"]] == [((0, 0, 1, 1), 0), ((5, 5, 6, 6), 0)]
     assert detected_now(own, shared) == {"a", "b"}
+
+
+def test_the_pedestrians_in_view_are_those_some_node_detects_now():
+    """The bus detects "a" now, not "c" (known from earlier); rsu1's newest message reports
+    "b" detected: "a" and "b" are in view, "c" is only known."""
+    model = MotionModel.from_config(Estimator(), DT)
+    fusion = second_level("labelled", model, EstimatorSettings("enclose", "girard", 8), "enclose",
+                          ["front"], DT, BUS)
+    z = Zonotope(np.zeros(2), np.eye(2))
+    own = {"a": Track("a", z, 3, True), "c": Track("c", z + np.array([9.0, 0.0]), 1, False)}
+    shared = SharedPicture({"b": {"rsu1": z + np.array([0.0, 9.0])}},
+                           {"rsu1": shapely.box(-1, 8, 1, 10)}, {"rsu1": 1},
+                           {"rsu1": frozenset({"b"})})
+    estimate, _ = fusion.step({BUS: own, "rsu1": {}}, shared,
+                              [observation("front", BUS, ("a",), (-1, -1, 1, 1))])
+    assert set(estimate.fused) == {"a", "b", "c"}
+    assert estimate.in_view == {"a", "b"}
 
 
 def test_refined_regions_forget_their_history_when_the_picture_turns_inconsistent():
