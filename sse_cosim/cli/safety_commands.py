@@ -27,8 +27,11 @@ QUICK_OUT = Path("results/safety-quick")
 @execution_options("Keep finished runs; redo failed and unfinished ones.")
 @click.option("--quick", is_flag=True,
               help="Only the few runs of the file's [quick] table (a check that it works).")
+@click.option("--scenario", "only", multiple=True, metavar="NAME",
+              help="Only this scenario of the file, by file name without .toml (repeatable; "
+                   "default: every one), e.g. --scenario s1_pedestrian.")
 def safety(campaign_file: Path, out_dir: Path | None, workers: int | None, executor: str,
-           scheduler: str | None, resume: bool, quick: bool) -> None:
+           scheduler: str | None, resume: bool, quick: bool, only: tuple[str, ...]) -> None:
     """Safety campaign: does the bus stay safe and live on the hard cases?
 
     The claim under the model's assumptions: no collision with a pedestrian that steps
@@ -64,13 +67,13 @@ def safety(campaign_file: Path, out_dir: Path | None, workers: int | None, execu
     from sse_cosim.runner.safety import load_campaign, plan_campaign, run_campaign
 
     check_scheduler(executor, scheduler)
-    campaign = load_campaign(campaign_file, quick)
+    campaign = load_campaign(campaign_file, quick, only)
     plan = plan_campaign(campaign)
     out_dir = writable_folder(out_dir or (QUICK_OUT if quick else OUT), "--out")
     click.echo(f"safety: {len(plan.runs) + len(plan.not_feasible)} combinations: "
                f"{len(plan.runs)} runs, {len(plan.not_feasible)} not feasible (not run) "
                f"-> {out_dir}")
-    run_campaign(campaign, plan, out_dir, _command(campaign_file, out_dir, quick),
+    run_campaign(campaign, plan, out_dir, _command(campaign_file, out_dir, quick, only),
                  Execution(workers, executor, scheduler, resume))
     report = write_safety_report(out_dir)
     for target in report.targets:
@@ -91,7 +94,7 @@ def safety(campaign_file: Path, out_dir: Path | None, workers: int | None, execu
                          f"are in {out_dir}/runs/<key>/error.json")
 
 
-def _command(campaign_file: Path, out_dir: Path, quick: bool) -> str:
+def _command(campaign_file: Path, out_dir: Path, quick: bool, only: tuple[str, ...]) -> str:
     """The command as it bears on the results: options that only choose where runs execute
     (workers, executor, scheduler, resume) are left out, so any machine writes the same
     report."""
@@ -100,4 +103,6 @@ def _command(campaign_file: Path, out_dir: Path, quick: bool) -> str:
         args += ["--file", str(campaign_file)]
     if out_dir != (QUICK_OUT if quick else OUT):
         args += ["--out", str(out_dir)]
+    for stem in only:
+        args += ["--scenario", stem]
     return shlex.join([*args, *(["--quick"] if quick else [])])

@@ -146,8 +146,9 @@ class Campaign:
         return by_path[STEP_OUT_PATH], by_path[WALKING_SPEED_PATH]
 
 
-def load_campaign(path: Path, quick: bool = False) -> Campaign:
-    """Read and validate a campaign file (its ``[quick]`` subset with ``quick``)."""
+def load_campaign(path: Path, quick: bool = False, only: Sequence[str] = ()) -> Campaign:
+    """Read and validate a campaign file (its ``[quick]`` subset with ``quick``; with
+    ``only``, just the scenarios whose file stems it names)."""
     model = _read_campaign_file(path)
     names = tuple(model.scenarios)
     files = tuple(scenario_files([path.parent / s for s in names]))
@@ -169,7 +170,21 @@ def load_campaign(path: Path, quick: bool = False) -> Campaign:
     if len(set(columns)) < len(columns) or "seed" in columns:
         raise UserError(str(path), "params", "two axes share a name (or one is named 'seed')",
                         "give every parameter its own name")
+    if only:
+        campaign = _only_scenarios(campaign, only)
     return _quick_subset(campaign, model.quick) if quick else campaign
+
+
+def _only_scenarios(campaign: Campaign, stems: Sequence[str]) -> Campaign:
+    """``campaign`` with only the scenarios whose file stems ``stems`` names."""
+    known = [path.stem for path in campaign.scenarios]
+    for stem in stems:
+        if stem not in known:
+            raise UserError("--scenario", stem, f"is not a scenario of {campaign.source}",
+                            f"choose from {', '.join(known)}")
+    keep = [i for i, stem in enumerate(known) if stem in stems]
+    return replace(campaign, scenarios=tuple(campaign.scenarios[i] for i in keep),
+                   scenario_names=tuple(campaign.scenario_names[i] for i in keep))
 
 
 def _read_campaign_file(path: Path) -> CampaignFile:

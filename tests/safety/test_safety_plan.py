@@ -95,6 +95,14 @@ def test_the_default_campaign_has_at_least_1000_feasible_runs():
     assert max(speeds) == 2.5  # the estimator's bound
 
 
+def test_a_campaign_can_be_limited_to_some_of_its_scenarios():
+    plan = plan_campaign(load_campaign(DEFAULT, only=("s1_pedestrian", "s3_pedestrian")))
+    assert {Path(r.scenario).stem for r in plan.runs} == {"s1_pedestrian", "s3_pedestrian"}
+    with pytest.raises(UserError, match=r"^--scenario: s4: is not a scenario of .*safety.toml "
+                                        r"-- choose from s1_pedestrian, .*crowd$"):
+        load_campaign(DEFAULT, only=("s4",))
+
+
 def test_quick_keeps_a_few_runs_of_the_grid():
     plan = plan_campaign(load_campaign(DEFAULT, quick=True))
     assert len(plan.runs) == 2 and len(plan.not_feasible) == 2
