@@ -23,6 +23,7 @@ in the fused one. ``tests/world`` checks that SUMO's trajectories admit such a p
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -82,7 +83,12 @@ class MotionModel:
         path = self.position_matrix @ estimate
         if self.jitter == 0.0:
             return path
-        return path + Zonotope(np.zeros(2), np.eye(2) * self.jitter)
+        return path + self.jitter_box
+
+    @cached_property
+    def jitter_box(self) -> Zonotope:
+        """box(jitter) = <0, jitter I> (2-D), built once."""
+        return Zonotope(np.zeros(2), np.eye(2) * self.jitter)
 
     def path_strips(self, measured: Strips) -> Strips:
         """Position strips about p turned into strips about the path s (widened by the jitter)."""

@@ -16,6 +16,7 @@ from sse_cosim.sensors import (
     in_sector,
     line_of_sight,
     sector_polygon,
+    shadow_points,
     shadow_polygons,
     sight_masks,
     visibility_regions,
@@ -142,3 +143,16 @@ def test_sight_masks_match_the_per_sensor_tests(feet, sensor_poses, seed):
             pose.position, targets, boxes.subset(others)
         )
         assert np.array_equal(seen[j], want)
+
+
+@SETTINGS
+@given(st.lists(footprints, min_size=1, max_size=5), poses)
+def test_shadow_hulls_are_the_hulls_of_their_points_as_multipoints(feet, origin):
+    # shadow_polygons hands GEOS each box's points as a line string (no Point objects): the
+    # hull must be the one of the same points as a multipoint, coordinate for coordinate.
+    boxes = Boxes.from_footprints(feet)
+    outside = boxes.distances(origin.position) > 0.0
+    points = shadow_points(origin.position, boxes, 30.0)[outside]
+    expected = shapely.convex_hull(shapely.multipoints(points))
+    hulls = shadow_polygons(origin.position, boxes, 30.0)[outside]
+    assert list(shapely.to_wkb(hulls)) == list(shapely.to_wkb(expected))
