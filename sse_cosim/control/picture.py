@@ -207,9 +207,12 @@ def assess(
     relevant = crossing.area.buffer(reach) if crossing is not None and reach > 0 \
         else shapely.Polygon()
     hidden_in_reach = shapely.intersection(own_hidden, relevant)
-    near_path = context.path_ahead(front_s, cfg.crossing_horizon_m, cfg.path_margin_m)
-    stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0)
     sets = [s for s in pedestrian_regions if not s.is_empty]
+    # the corridors ahead only matter to a known pedestrian's region: none, none built
+    near_path = context.path_ahead(front_s, cfg.crossing_horizon_m, cfg.path_margin_m) \
+        if sets else shapely.Polygon()
+    stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0) \
+        if sets else shapely.Polygon()
     zones = _outlook(context, front_s, [unobserved, *sets])
     return Picture(
         front_s=float(front_s),
@@ -229,25 +232,35 @@ def assess(
 
 def _outlook(context: SceneContext, front_s: float,
              sources: Sequence[shapely.Geometry]) -> tuple[ZoneOutlook, ...]:
-    """The zones the bus has not yet cleared, with the earliest arrival from ``sources``."""
-    result = []
-    for index, zone in enumerate(context.zones):
-        to_clear = zone.end_m + context.bus.length_m - front_s
-        if to_clear <= 0.0:
-            continue
-        arrival = min(zone.beyond_arrival_s, _arrival(
-            sources, zone.polygon, context.pedestrian_speed, 2.0 * context.jitter))
-        result.append(ZoneOutlook(index, zone.start_m - front_s, to_clear, arrival))
-    return tuple(result)
+    """The zones the bus has not yet cleared, with the earliest arrival from ``sources``
+    (every source to every such zone in one distance call)."""
+    ahead = [(index, zone, zone.end_m + context.bus.length_m - front_s)
+             for index, zone in enumerate(context.zones)]
+    ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead if to_clear > 0.0]
+    arrivals = _arrivals(sources, [zone.polygon for _, zone, _ in ahead],
+                         context.pedestrian_speed, 2.0 * context.jitter)
+    return tuple(
+        ZoneOutlook(index, zone.start_m - front_s, to_clear,
+                    min(zone.beyond_arrival_s, float(arrival)))
+        for (index, zone, to_clear), arrival in zip(ahead, arrivals, strict=True))
+
+
+def _arrivals(sources: Iterable[shapely.Geometry], zones: Sequence[shapely.Geometry],
+              speed: float, slack: float) -> np.ndarray:
+    """Earliest time (s) a pedestrian somewhere in ``sources`` can be in each of ``zones``,
+    shape (z,) (inf without a source)."""
+    parts = [s for s in sources if not s.is_empty]
+    if not parts or not zones:
+        return np.full(len(zones), math.inf)
+    distances = shapely.distance(np.array(parts, dtype=object)[:, None],
+                                 np.array(zones, dtype=object)[None, :])  # (s, z)
+    return np.maximum(0.0, distances.min(axis=0) - slack) / speed
 
 
 def _arrival(sources: Iterable[shapely.Geometry], zone: shapely.Geometry, speed: float,
              slack: float) -> float:
     """Earliest time (s) a pedestrian somewhere in ``sources`` can be in ``zone``."""
-    distances = [shapely.distance(s, zone) for s in sources if not s.is_empty]
-    if not distances:
-        return math.inf
-    return max(0.0, min(distances) - slack) / speed
+    return float(_arrivals(sources, [zone], speed, slack)[0])
 
 
 def _route_crossings(route_line: shapely.LineString, corridor: shapely.Geometry,

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import shapely
 
-from sse_cosim.control.picture import Picture, SceneContext, assess
+from sse_cosim.control.picture import Picture, SceneContext, _arrivals, assess
 from sse_cosim.control.speed import SpeedLevel, level_speed, paper_level
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.world.network import build_network
@@ -127,3 +127,17 @@ def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
     assert not assess(context, at_zebra, 0.0, empty, empty, [pedestrian]).path_clear
     far = shapely.Point(200.0, south - 40.0).buffer(0.5)
     assert assess(context, at_zebra, 0.0, empty, empty, [far]).path_clear
+
+
+def test_arrivals_in_one_call_are_the_earliest_arrival_of_each_zone():
+    # _arrivals measures every source to every zone in one shapely call: per zone, the same
+    # earliest arrival as the nearest source's distance, minus the slack, over the speed.
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        sources = [shapely.box(x, y, x + w, y + h).buffer(rng.uniform(0.0, 1.0), quad_segs=2)
+                   for x, y, w, h in rng.uniform(0.0, 20.0, size=(rng.integers(1, 4), 4))]
+        zones = [shapely.box(x, y, x + 3.0, y + 2.0) for x, y in rng.uniform(0.0, 30.0, (3, 2))]
+        got = _arrivals([shapely.Polygon(), *sources], zones, 1.5, 0.6)
+        expected = [max(0.0, min(s.distance(z) for s in sources) - 0.6) / 1.5 for z in zones]
+        assert got.tolist() == expected
+    assert _arrivals([shapely.Polygon()], zones, 1.5, 0.6).tolist() == [np.inf] * 3
