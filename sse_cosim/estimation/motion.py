@@ -22,13 +22,16 @@ in the fused one. ``tests/world`` checks that SUMO's trajectories admit such a p
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections import OrderedDict
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips, Zonotope, intersect_strips
+
+POSITION_MEMO = 64  # position sets MotionModel.position keeps
 
 
 @dataclass(frozen=True)
@@ -41,6 +44,9 @@ class MotionModel:
     state_bounds: Strips | None
     max_speed: float
     jitter: float = 0.0
+    # estimate id -> (estimate, its position set): the newest POSITION_MEMO position sets
+    _positions: OrderedDict[int, tuple[Zonotope, Zonotope]] = field(
+        default_factory=OrderedDict, init=False, repr=False, compare=False)
 
     @property
     def dim(self) -> int:
@@ -79,11 +85,21 @@ class MotionModel:
         return estimate
 
     def position(self, estimate: Zonotope) -> Zonotope:
-        """The set of the simulated 2-D position: C Z (+) box(jitter)."""
+        """The set of the simulated 2-D position: C Z (+) box(jitter).
+
+        A step asks for the same estimate's position set several times (screen, fusion,
+        records): the newest ones are kept, by the estimate's identity (zonotopes are
+        read-only), so each is computed once and its cached volume is shared.
+        """
+        kept = self._positions.get(id(estimate))
+        if kept is not None and kept[0] is estimate:
+            return kept[1]
         path = self.position_matrix @ estimate
-        if self.jitter == 0.0:
-            return path
-        return path + self.jitter_box
+        position = path if self.jitter == 0.0 else path + self.jitter_box
+        self._positions[id(estimate)] = (estimate, position)
+        if len(self._positions) > POSITION_MEMO:
+            self._positions.popitem(last=False)
+        return position
 
     @cached_property
     def jitter_box(self) -> Zonotope:
