@@ -21,7 +21,13 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from sse_cosim.sets.kernels import FloatArray, area_2d, nonzero_columns, pairwise_sum
+from sse_cosim.sets.kernels import (
+    FloatArray,
+    area_2d,
+    full_rank_2d,
+    nonzero_columns,
+    pairwise_sum,
+)
 from sse_cosim.sets.zonotope import PARALLEL_RTOL
 
 MARGIN = 1e-10
@@ -394,30 +400,6 @@ holds the polygon is smaller)."""
 FALLBACK, EXACT, ENCLOSED = 0, 1, 2
 """What :func:`enclose_correction` found: no enclosure (the caller keeps its fallback), an
 enclosure within :data:`EXACT_RTOL` of the exact polygon, or one that may be beaten."""
-
-
-@njit(cache=True)
-def full_rank_2d(generators: FloatArray) -> bool:
-    """``zonotope.full_rank`` for G (2, e): s_min > e·eps·s_max from 2×2 minors."""
-    e = generators.shape[1]
-    if e < 2:
-        return False
-    p = q = r = 0.0
-    for j in range(e):
-        a, b = generators[0, j], generators[1, j]
-        p += a * a
-        q += b * b
-        r += a * b
-    if p + q == 0.0:
-        return False
-    s_max2 = 0.5 * (p + q) + np.sqrt(0.25 * (p - q) ** 2 + r * r)
-    cross = np.empty(e * e)
-    for i in range(e):
-        for j in range(e):
-            c = generators[0, i] * generators[1, j] - generators[1, i] * generators[0, j]
-            cross[i * e + j] = c * c
-    s_prod = np.sqrt(0.5 * pairwise_sum(cross, 0, e * e))
-    return s_prod > e * np.finfo(np.float64).eps * s_max2
 
 
 @njit(cache=True)

@@ -7,6 +7,11 @@ against the other on random and degenerate inputs:
   (reference ``generator_volume_reference``): bit for bit, as it sums in numpy's order;
 - :func:`girard_reduce` for the ``girard`` order reduction (reference
   ``girard_reduce_reference`` in :mod:`~sse_cosim.sets.reduction`): bit for bit;
+- :func:`full_rank_2d` for :func:`~sse_cosim.sets.zonotope.full_rank` in 2-D and
+  :func:`contains_2d` for :meth:`~sse_cosim.sets.zonotope.Zonotope.contains` of a full-rank
+  2-D zonotope (reference ``contains_2d_reference``): the same sums in numpy's order, the
+  two-term dot products may round differently from numpy's BLAS calls (a point within a
+  rounding of a facet, beyond the tolerance, is the only place they can disagree);
 - :func:`frobenius_gain` and :func:`intersect_frobenius` for the Frobenius gain of
   Proposition 1 (reference ``frobenius_gain_reference`` in :mod:`~sse_cosim.sets.gains`): the
   same least-squares minimizer by Householder QR instead of LAPACK's SVD solver, so equal up
@@ -112,6 +117,56 @@ def area_2d(generators: FloatArray) -> float:
         for j in range(k):
             cross[i * k + j] = abs(a[i] * b[j] - b[i] * a[j])
     return 2.0 * pairwise_sum(cross, 0, k * k)
+
+
+@njit(cache=True)
+def full_rank_2d(generators: FloatArray) -> bool:
+    """``zonotope.full_rank`` for G (2, e): s_min > e·eps·s_max from 2×2 minors."""
+    e = generators.shape[1]
+    if e < 2:
+        return False
+    p = q = r = 0.0
+    for j in range(e):
+        a, b = generators[0, j], generators[1, j]
+        p += a * a
+        q += b * b
+        r += a * b
+    if p + q == 0.0:
+        return False
+    s_max2 = 0.5 * (p + q) + np.sqrt(0.25 * (p - q) ** 2 + r * r)
+    cross = np.empty(e * e)
+    for i in range(e):
+        for j in range(e):
+            c = generators[0, i] * generators[1, j] - generators[1, i] * generators[0, j]
+            cross[i * e + j] = c * c
+    s_prod = np.sqrt(0.5 * pairwise_sum(cross, 0, e * e))
+    return s_prod > e * np.finfo(np.float64).eps * s_max2
+
+
+@njit(cache=True)
+def contains_2d(center: FloatArray, generators: FloatArray, points: FloatArray,
+                tol: float) -> NDArray[np.bool_]:
+    """Whether each point (k, 2) lies in the full-rank 2-D ⟨c, G⟩ (``center`` (2,), G (2, e)),
+    shape (k,) bool: |nᵀ(x - c)| <= Σ_i |nᵀg_i| + tol for the unit normal n of every
+    nonzero column (the facet normals, parallel repeats only repeating a test)."""
+    e = generators.shape[1]
+    k = points.shape[0]
+    inside = np.ones(k, dtype=np.bool_)
+    terms = np.empty(e)
+    for j in range(e):
+        n0, n1 = -generators[1, j], generators[0, j]
+        norm = np.sqrt(n0 * n0 + n1 * n1)
+        if not norm > 0.0:
+            continue
+        n0, n1 = n0 / norm, n1 / norm
+        for i in range(e):
+            terms[i] = abs(n0 * generators[0, i] + n1 * generators[1, i])
+        bound = pairwise_sum(terms, 0, e) + tol
+        for p in range(k):
+            offset = abs((points[p, 0] - center[0]) * n0 + (points[p, 1] - center[1]) * n1)
+            if not offset <= bound:
+                inside[p] = False
+    return inside
 
 
 @njit(cache=True)

@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
 
 from sse_cosim.sets._registry import lookup
-from sse_cosim.sets.kernels import area_2d
+from sse_cosim.sets.kernels import area_2d, contains_2d, full_rank_2d
 from sse_cosim.sets.reduction import REDUCTION_METHODS
 
 FloatArray = NDArray[np.float64]
@@ -138,6 +138,15 @@ def full_rank(generators: FloatArray) -> bool:
     cross = a[:, None] * b - b[:, None] * a
     s_prod = np.sqrt(0.5 * (cross * cross).sum())  # s_min·s_max = sqrt(det GGᵀ) (Cauchy-Binet)
     return bool(s_prod > e * np.finfo(np.float64).eps * s_max2)
+
+
+def contains_2d_reference(center: FloatArray, generators: FloatArray, points: FloatArray,
+                          tol: float) -> BoolArray:
+    """The NumPy reference of :func:`~sse_cosim.sets.kernels.contains_2d`: whether each point
+    (k, 2) lies in the full-rank 2-D ⟨c, G⟩, shape (k,), by the unit facet normals."""
+    normals = _unit_rows(cofactor_vectors(generators))  # parallel repeats only repeat a test
+    offsets = np.abs((points - center) @ normals.T)
+    return (offsets <= np.abs(normals @ generators).sum(axis=1) + tol).all(axis=1)
 
 
 def _merge_parallel(sorted_generators: FloatArray) -> FloatArray:
@@ -280,10 +289,8 @@ class Zonotope:
         if points.shape[1] != self.dim:
             raise ValueError(f"points must have {self.dim} coordinates; got shape {x.shape}")
         g = self.generators
-        if self.dim == 2 and full_rank(g):
-            normals = _unit_rows(cofactor_vectors(g))  # parallel repeats only repeat a test
-            offsets = np.abs((points - self.center) @ normals.T)
-            inside = (offsets <= np.abs(normals @ g).sum(axis=1) + tol).all(axis=1)
+        if self.dim == 2 and full_rank_2d(g):  # compiled (reference: contains_2d_reference)
+            inside = contains_2d(self.center, g, np.ascontiguousarray(points), tol)
         else:
             inside = np.array([self._contains_lp(p, tol) for p in points], dtype=bool)
         return bool(inside[0]) if x.ndim == 1 else inside
