@@ -12,6 +12,8 @@ against the other on random and degenerate inputs:
   2-D zonotope (reference ``contains_2d_reference``): the same sums in numpy's order, the
   two-term dot products may round differently from numpy's BLAS calls (a point within a
   rounding of a facet, beyond the tolerance, is the only place they can disagree);
+- :func:`vertices_2d` for :meth:`~sse_cosim.sets.zonotope.Zonotope.vertices` (reference
+  ``vertices_2d_reference``): bit for bit;
 - :func:`frobenius_gain` and :func:`intersect_frobenius` for the Frobenius gain of
   Proposition 1 (reference ``frobenius_gain_reference`` in :mod:`~sse_cosim.sets.gains`): the
   same least-squares minimizer by Householder QR instead of LAPACK's SVD solver, so equal up
@@ -29,6 +31,9 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 _BLOCK = 128  # numpy's PW_BLOCKSIZE
+
+PARALLEL_RTOL = 1e-12
+"""Consecutive sorted generators whose cross product is below this (relative) are parallel."""
 
 
 @njit(cache=True)
@@ -167,6 +172,70 @@ def contains_2d(center: FloatArray, generators: FloatArray, points: FloatArray,
             if not offset <= bound:
                 inside[p] = False
     return inside
+
+
+@njit(cache=True)
+def row_sum(values: FloatArray) -> float:
+    """Σ of a 1-D array in numpy's pairwise order."""
+    contiguous = np.ascontiguousarray(values)
+    return pairwise_sum(contiguous, 0, contiguous.shape[0])
+
+
+@njit(cache=True)
+def folded_sorted(generators: FloatArray) -> FloatArray:
+    """The columns (2, e) folded into the upper half-plane and sorted by angle (stable)."""
+    g = generators.copy()
+    for j in range(g.shape[1]):
+        if g[1, j] < 0 or (g[1, j] == 0 and g[0, j] < 0):
+            g[0, j] = -g[0, j]
+            g[1, j] = -g[1, j]
+    angle = np.empty(g.shape[1])
+    for j in range(g.shape[1]):
+        angle[j] = np.arctan2(g[1, j], g[0, j])
+    return np.ascontiguousarray(g[:, np.argsort(angle, kind="mergesort")])
+
+
+@njit(cache=True)
+def vertices_2d(center: FloatArray, generators: FloatArray) -> FloatArray:
+    """``Zonotope.vertices`` of ⟨c, G⟩ (``center`` (2,), G (2, e)), shape (k, 2), with its
+    arithmetic: zero columns dropped, folded, sorted, runs of parallel columns summed in order,
+    then c - Σg followed by the cumulative sum of 2g_i and -2g_i (the centre alone without
+    generators)."""
+    g = folded_sorted(nonzero_columns(generators))
+    e = g.shape[1]
+    if e == 0:
+        return center.reshape(1, 2).copy()
+    merged = np.empty((2, e))
+    count = -1
+    for j in range(e):
+        if j == 0 or _not_parallel(g[:, j - 1], g[:, j]):
+            count += 1
+            merged[0, count], merged[1, count] = g[0, j], g[1, j]
+        else:
+            merged[0, count] += g[0, j]
+            merged[1, count] += g[1, j]
+    g = np.ascontiguousarray(merged[:, :count + 1])
+    k = g.shape[1]
+    start = np.array([center[0] - row_sum(g[0]), center[1] - row_sum(g[1])])
+    vertices = np.empty((2 * k, 2))
+    vertices[0] = start
+    path = np.zeros(2)
+    for step in range(2 * k - 1):
+        sign = 2.0 if step < k else -2.0
+        column = step % k
+        path[0] += sign * g[0, column]
+        path[1] += sign * g[1, column]
+        vertices[step + 1, 0] = start[0] + path[0]
+        vertices[step + 1, 1] = start[1] + path[1]
+    return vertices
+
+
+@njit(cache=True)
+def _not_parallel(a: FloatArray, b: FloatArray) -> bool:
+    """Whether consecutive sorted columns a, b (2,) start a new run (``_merge_parallel``)."""
+    cross = a[0] * b[1] - a[1] * b[0]
+    scale = np.sqrt(a[0] * a[0] + a[1] * a[1]) * np.sqrt(b[0] * b[0] + b[1] * b[1])
+    return abs(cross) > PARALLEL_RTOL * scale
 
 
 @njit(cache=True)

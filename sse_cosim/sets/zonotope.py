@@ -23,13 +23,12 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
 
 from sse_cosim.sets._registry import lookup
-from sse_cosim.sets.kernels import area_2d, contains_2d, full_rank_2d
+from sse_cosim.sets.kernels import PARALLEL_RTOL, area_2d, contains_2d, full_rank_2d, vertices_2d
 from sse_cosim.sets.reduction import REDUCTION_METHODS
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
-PARALLEL_RTOL = 1e-12
 
 
 def _read_only(values: ArrayLike) -> FloatArray:
@@ -158,6 +157,21 @@ def _merge_parallel(sorted_generators: FloatArray) -> FloatArray:
     return np.add.reduceat(sorted_generators, starts, axis=1)
 
 
+def vertices_2d_reference(center: FloatArray, generators: FloatArray) -> FloatArray:
+    """The NumPy reference of :func:`~sse_cosim.sets.kernels.vertices_2d`: the vertices (k, 2)
+    of the 2-D ⟨c, G⟩ (``Zonotope.vertices``)."""
+    g = generators[:, np.any(generators != 0, axis=0)]
+    flip = (g[1] < 0) | ((g[1] == 0) & (g[0] < 0))
+    g = np.where(flip, -g, g)
+    g = g[:, np.argsort(np.arctan2(g[1], g[0]), kind="stable")]
+    if g.shape[1] == 0:
+        return center[None, :].copy()
+    g = _merge_parallel(g)
+    start = center - g.sum(axis=1)
+    path = start + np.cumsum(2.0 * np.hstack([g, -g]).T, axis=0)
+    return np.vstack([start, path[:-1]])
+
+
 @dataclass(frozen=True, eq=False)
 class Zonotope:
     """⟨c, G⟩ (eq. zonoDef): ``center`` (n,), ``generators`` (n, e), e >= 0; read-only float64."""
@@ -263,20 +277,12 @@ class Zonotope:
 
         Generators are folded into the upper half-plane, sorted by angle and parallel ones
         merged; then the boundary is the cumulative sum of 2g_i followed by -2g_i. A point gives
-        one row, a segment two.
+        one row, a segment two. Compiled (:func:`~sse_cosim.sets.kernels.vertices_2d`; its
+        NumPy reference is :func:`vertices_2d_reference`).
         """
         if self.dim != 2:
             raise ValueError(f"vertices() needs a 2-D zonotope; this one is {self.dim}-D")
-        g = self.remove_zero_generators().generators
-        flip = (g[1] < 0) | ((g[1] == 0) & (g[0] < 0))
-        g = np.where(flip, -g, g)
-        g = g[:, np.argsort(np.arctan2(g[1], g[0]), kind="stable")]
-        if g.shape[1] == 0:
-            return self.center[None, :].copy()
-        g = _merge_parallel(g)
-        start = self.center - g.sum(axis=1)
-        path = start + np.cumsum(2.0 * np.hstack([g, -g]).T, axis=0)
-        return np.vstack([start, path[:-1]])
+        return vertices_2d(self.center, self.generators)
 
     def contains(self, point: ArrayLike, tol: float = 1e-9) -> bool | BoolArray:
         """Whether x (n,) lies in Z, or per row of x (k, n), with absolute slack ``tol``.

@@ -12,6 +12,7 @@ from sse_cosim.sets.zonotope import (
     full_rank,
     generator_volume,
     generator_volume_reference,
+    vertices_2d_reference,
 )
 
 KINDS = ("well", "elongated", "near-parallel", "zero-and-parallel")
@@ -108,3 +109,12 @@ def test_compiled_containment_matches_the_reference(zonotope, seed, tol):
     assert np.array_equal(kernels.contains_2d(c, g, points, tol), expected)
     assert np.array_equal(zonotope.contains(points, tol), expected)
     assert expected[:50].all() and not expected[-2 * len(normals):-len(normals)].any()
+
+
+@SETTINGS
+@given(generator_matrices(n=2), st.integers(0, 2**32 - 1))
+def test_compiled_vertices_are_the_reference_bit_for_bit(g, seed):
+    center = np.random.default_rng(seed).uniform(-100.0, 100.0, 2)
+    expected = vertices_2d_reference(center, g)
+    got = Zonotope(center, g).vertices()
+    assert got.shape == expected.shape and got.tobytes() == expected.tobytes()
