@@ -9,8 +9,11 @@ pedestrian reported in the wrong place. Sources a majority outvoted wait on prob
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+
+import shapely
 
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import ARC_SAFETY, QUAD_SEGMENTS, ClearRegion
@@ -44,10 +47,30 @@ def contradicted(
                 and hi[1] <= y1 - slack):
             continue  # the set pokes out of the region's box: it cannot lie in the region
         shape = zonotope_polygon(position) if shape is None else shape
-        inner = item.region.buffer(-ARC_SAFETY * slack, quad_segs=QUAD_SEGMENTS)
+        inner = _eroded(item.region, ARC_SAFETY * slack)
         if not inner.is_empty and inner.covers(shape):
             return True
     return False
+
+
+_ERODED_SIZE = 64
+_ERODED: OrderedDict[tuple[int, float], tuple[shapely.Geometry, shapely.Geometry]] = \
+    OrderedDict()
+
+
+def _eroded(region: shapely.Geometry, distance: float) -> shapely.Geometry:
+    """``region`` shrunk by ``distance`` (inscribed arcs). Every source of every pedestrian
+    is tested against the same views at the same slack: the newest erosions are kept, by the
+    region's identity (geometries are immutable) and the distance."""
+    key = (id(region), distance)
+    hit = _ERODED.get(key)
+    if hit is not None and hit[0] is region:
+        return hit[1]
+    inner = region.buffer(-distance, quad_segs=QUAD_SEGMENTS)
+    _ERODED[key] = (region, inner)
+    if len(_ERODED) > _ERODED_SIZE:
+        _ERODED.popitem(last=False)
+    return inner
 
 
 @dataclass(frozen=True)

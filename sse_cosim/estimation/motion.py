@@ -118,12 +118,12 @@ class MotionModel:
         <H^-1 y, H^-1 diag(r)>; the others are intersected with it by Proposition 1.
         Velocity components (constant-velocity model) start as the box |v| <= v_max.
         """
-        first, second = _independent_pair(strips.normals)
-        pair = strips.select(np.isin(np.arange(len(strips)), [first, second]))
+        chosen = np.zeros(len(strips), dtype=bool)  # the first two independent strips
+        chosen[list(_independent_pair(strips.normals))] = True
+        pair = strips.select(chosen)
         inverse = np.linalg.inv(pair.normals)
         position = Zonotope(inverse @ pair.values, inverse * pair.radii[np.newaxis, :])
-        rest = np.ones(len(strips), dtype=bool)
-        rest[[first, second]] = False
+        rest = ~chosen
         if rest.any():
             position = intersect_strips(position, strips.select(rest), gain_method)
         if self.dim == 2:
