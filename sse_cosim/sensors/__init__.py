@@ -1,6 +1,7 @@
 """Sensor layer: pure geometry of what each sensor sees and measures at one step.
 
 - :mod:`.geometry`: sectors, vectorized in-sector and line-of-sight tests, shadows, regions.
+- :mod:`.kernels`: the compiled shadow points (numba), beside their NumPy reference.
 - :mod:`.kinds`: what each kind of sensor sees and measures (camera, range), by name.
 - :mod:`.spec`: sensor specs from the scenario and their world poses on their carriers.
 - :mod:`.measurement`: y = H p + v as strips (paper eqs. senmodel and strip), noise draws.
@@ -16,7 +17,7 @@ from sse_cosim.sensors.geometry import (
     line_of_sight,
     sector_mask,
     sector_polygon,
-    shadow_points,
+    shadow_points_reference,
     shadow_polygons,
     sight_masks,
     visibility_regions,
@@ -55,7 +56,7 @@ __all__ = [
     "sector_mask",
     "sector_polygon",
     "seen_mask",
-    "shadow_points",
+    "shadow_points_reference",
     "shadow_polygons",
     "sight_masks",
     "specs_from_scenario",

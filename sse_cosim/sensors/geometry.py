@@ -22,12 +22,13 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
+from sse_cosim.sensors import kernels
 from sse_cosim.world.snapshot import Footprint, Pose
 
 FULL_TURN = 2.0 * math.pi
 _FULL_EPS = 1e-9
 _FAR_POINTS = 5  # rays of a shadow's far cap; its spread is < pi, so steps are < pi / 4
-_FAR_STEPS = np.linspace(0.0, 1.0, _FAR_POINTS)  # (f,) the rays' fractions of the spread
+FAR_STEPS = np.linspace(0.0, 1.0, _FAR_POINTS)  # (f,) the rays' fractions of the spread
 
 
 @dataclass(frozen=True, eq=False)
@@ -262,10 +263,13 @@ def cached_sector_polygon(
     return _cached_sector(pose.x, pose.y, pose.heading, fov_rad, range_m, resolution)
 
 
-def shadow_points(origin: np.ndarray, boxes: Boxes, range_m: float) -> np.ndarray:
-    """The points whose convex hull is each box together with its shadow from ``origin``,
-    shape (m, 4 + f, 2): the box's corners, then far points beyond ``range_m`` on the rays
-    between its silhouette bearings (extreme bearings seen from the origin)."""
+def shadow_points_reference(origin: np.ndarray, boxes: Boxes, range_m: float
+                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(points (m, 4 + f, 2), reach (m,), inside (m,))``: the points whose convex hull is
+    each box together with its shadow from ``origin`` (the box's corners, then far points at
+    ``reach`` from the origin, beyond ``range_m``, on the rays between its silhouette
+    bearings, the extreme bearings seen from the origin), and whether the box holds the
+    origin. The NumPy reference of :func:`sse_cosim.sensors.kernels.shadow_points`."""
     o = np.asarray(origin, dtype=float).reshape(2)
     corners = boxes.corners()  # (m, 4, 2)
     rel = corners - o  # (m, 4, 2)
@@ -275,35 +279,29 @@ def shadow_points(origin: np.ndarray, boxes: Boxes, range_m: float) -> np.ndarra
     bearing = np.arctan2(cross, dot)  # (m, 4), relative to the centre's bearing
     base = np.arctan2(to_center[:, 1], to_center[:, 0])  # (m,)
     lo, hi = bearing.min(axis=1), bearing.max(axis=1)
-    rays = base[:, None] + lo[:, None] + (hi - lo)[:, None] * _FAR_STEPS[None, :]  # (m, f)
-    reach = _far_reach(rel, range_m)  # (m,)
+    rays = base[:, None] + lo[:, None] + (hi - lo)[:, None] * FAR_STEPS[None, :]  # (m, f)
+    reach = 2.0 * (range_m + np.sqrt(np.einsum("mkj,mkj->mk", rel, rel)).max(axis=1))  # (m,)
     far = o + reach[:, None, None] * np.stack([np.cos(rays), np.sin(rays)], axis=2)
-    return np.concatenate([corners, far], axis=1)
-
-
-def _far_reach(rel: np.ndarray, range_m: float) -> np.ndarray:
-    """How far from the origin a shadow's far points lie, shape (m,): twice the range plus
-    the farthest corner, from the corners relative to the origin ``rel`` (m, 4, 2)."""
-    return 2.0 * (range_m + np.sqrt(np.einsum("mkj,mkj->mk", rel, rel)).max(axis=1))
+    return np.concatenate([corners, far], axis=1), reach, boxes.distances(o) <= 0.0
 
 
 def shadow_polygons(origin: np.ndarray, boxes: Boxes, range_m: float) -> np.ndarray:
     """Each box together with the shadow it casts from ``origin``, shape (m,) of polygons.
 
     The box's two silhouette corners are extended radially beyond ``range_m``; box ∪ shadow
-    is convex, so it is the convex hull of :func:`shadow_points`. A box containing the origin
-    hides everything: its shadow is a disc beyond the range.
+    is convex, so it is the convex hull of its shadow points (compiled:
+    :func:`sse_cosim.sensors.kernels.shadow_points`). A box containing the origin hides
+    everything: its shadow is a disc beyond the range.
     """
     o = np.asarray(origin, dtype=float).reshape(2)
     if len(boxes) == 0:
         return np.empty(0, dtype=object)
-    points = shadow_points(o, boxes, range_m)  # (m, 4 + f, 2)
+    points, reach, inside = kernels.shadow_points(o, boxes.centers, boxes.axes, boxes.half,
+                                                  float(range_m), FAR_STEPS)
     # one line string per box: the same coordinates as a multipoint (so the same hull),
     # built without a shapely Point per coordinate
     hulls = shapely.convex_hull(shapely.linestrings(points))
-    inside = boxes.distances(o) <= 0.0
     if np.any(inside):
-        reach = _far_reach(boxes.corners() - o, range_m)
         disc = shapely.Point(o).buffer(2.0 * float(reach.max()), quad_segs=8)
         hulls[inside] = disc
     return hulls

@@ -14,13 +14,15 @@ from sensors_scene import SETTINGS
 from sse_cosim.sensors import (
     Boxes,
     in_sector,
+    kernels,
     line_of_sight,
     sector_polygon,
-    shadow_points,
+    shadow_points_reference,
     shadow_polygons,
     sight_masks,
     visibility_regions,
 )
+from sse_cosim.sensors.geometry import FAR_STEPS
 from sse_cosim.world.snapshot import Footprint, Pose
 
 coord = st.floats(-30.0, 30.0)
@@ -152,7 +154,27 @@ def test_shadow_hulls_are_the_hulls_of_their_points_as_multipoints(feet, origin)
     # hull must be the one of the same points as a multipoint, coordinate for coordinate.
     boxes = Boxes.from_footprints(feet)
     outside = boxes.distances(origin.position) > 0.0
-    points = shadow_points(origin.position, boxes, 30.0)[outside]
+    points = shadow_points_reference(origin.position, boxes, 30.0)[0][outside]
     expected = shapely.convex_hull(shapely.multipoints(points))
     hulls = shadow_polygons(origin.position, boxes, 30.0)[outside]
     assert list(shapely.to_wkb(hulls)) == list(shapely.to_wkb(expected))
+
+
+@SETTINGS
+@given(st.lists(footprints, min_size=1, max_size=6), poses, ranges)
+def test_compiled_shadow_points_are_the_reference_bit_for_bit(feet, origin, reach):
+    # Origins anywhere, inside boxes too (the disc case): points, reach and inside agree.
+    boxes = Boxes.from_footprints(feet)
+    o = origin.position
+    got = kernels.shadow_points(o, boxes.centers, boxes.axes, boxes.half, reach, FAR_STEPS)
+    expected = shadow_points_reference(o, boxes, reach)
+    for mine, theirs in zip(got, expected, strict=True):
+        assert mine.shape == theirs.shape and mine.tobytes() == theirs.tobytes()
+
+
+def test_compiled_shadow_points_flag_an_origin_inside_or_on_a_box():
+    boxes = Boxes.from_footprints([Footprint(Pose(10.0, 0.0, 0.0), 4.0, 2.0)])  # x in [6, 10]
+    for x, inside in [(8.0, True), (10.0, True), (6.0, True), (10.5, False), (5.9, False)]:
+        got = kernels.shadow_points(np.array([x, 1.0]), boxes.centers, boxes.axes, boxes.half,
+                                    30.0, FAR_STEPS)[2]
+        assert got.tolist() == [inside]
