@@ -235,13 +235,32 @@ def sector_polygon(
     A sector of ``fov_rad`` >= 2 pi is the disc around the pose.
     """
     full = fov_rad >= FULL_TURN - _FULL_EPS
-    span = FULL_TURN if full else fov_rad
-    n = max(1, math.ceil(span / (0.5 * math.pi) * resolution))
-    angles = pose.heading + np.linspace(-0.5 * span, 0.5 * span, n + 1)
+    ring = kernels.sector_points(pose.x, pose.y, pose.heading, range_m,
+                                 _arc_offsets(FULL_TURN if full else fov_rad, resolution), full)
+    return shapely.polygons(ring)
+
+
+def sector_polygon_reference(
+    pose: Pose, fov_rad: float, range_m: float, resolution: int = 16
+) -> shapely.Polygon:
+    """The NumPy reference of :func:`sector_polygon` (its ring compiled in
+    :func:`sse_cosim.sensors.kernels.sector_points`)."""
+    full = fov_rad >= FULL_TURN - _FULL_EPS
+    angles = pose.heading + _arc_offsets(FULL_TURN if full else fov_rad, resolution)
     arc = pose.position + range_m * np.stack([np.cos(angles), np.sin(angles)], axis=1)
     if full:
         return shapely.Polygon(arc[:-1])
     return shapely.Polygon(np.vstack([pose.position, arc]))
+
+
+@lru_cache(maxsize=64)
+def _arc_offsets(span: float, resolution: int) -> np.ndarray:
+    """The arc's angles about the boresight, (n + 1,) evenly over ``span``: ``resolution``
+    chords per quarter turn (computed once per opening; read-only)."""
+    n = max(1, math.ceil(span / (0.5 * math.pi) * resolution))
+    offsets = np.linspace(-0.5 * span, 0.5 * span, n + 1)
+    offsets.setflags(write=False)
+    return offsets
 
 
 @lru_cache(maxsize=256)

@@ -74,3 +74,21 @@ def shadow_points(origin: FloatArray, centers: FloatArray, axes: FloatArray, hal
         across = dx * axes[b, 1, 0] + dy * axes[b, 1, 1]
         inside[b] = abs(along) - half[b, 0] <= 0.0 and abs(across) - half[b, 1] <= 0.0
     return points, reach, inside
+
+
+@njit(cache=True)
+def sector_points(x: float, y: float, heading: float, range_m: float, offsets: FloatArray,
+                  full: bool) -> FloatArray:
+    """The ring of a sector polygon, shape (k, 2): the apex (x, y), then the arc's points at
+    the angles ``heading + offsets`` (n + 1,) and ``range_m`` from it; a full turn (a disc) is
+    the arc alone, its last point (the first again) left out."""
+    n = offsets.shape[0]
+    first = 0 if full else 1
+    ring = np.empty((n - 1 if full else n + 1, 2))
+    if not full:
+        ring[0, 0], ring[0, 1] = x, y
+    for i in range(n - 1 if full else n):
+        angle = heading + offsets[i]
+        ring[first + i, 0] = x + range_m * np.cos(angle)
+        ring[first + i, 1] = y + range_m * np.sin(angle)
+    return ring

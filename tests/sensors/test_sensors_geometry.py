@@ -22,7 +22,7 @@ from sse_cosim.sensors import (
     sight_masks,
     visibility_regions,
 )
-from sse_cosim.sensors.geometry import FAR_STEPS
+from sse_cosim.sensors.geometry import FAR_STEPS, sector_polygon_reference
 from sse_cosim.world.snapshot import Footprint, Pose
 
 coord = st.floats(-30.0, 30.0)
@@ -178,3 +178,11 @@ def test_compiled_shadow_points_flag_an_origin_inside_or_on_a_box():
         got = kernels.shadow_points(np.array([x, 1.0]), boxes.centers, boxes.axes, boxes.half,
                                     30.0, FAR_STEPS)[2]
         assert got.tolist() == [inside]
+
+
+@SETTINGS
+@given(poses, fovs, ranges, st.integers(1, 32))
+def test_compiled_sector_is_the_reference_bit_for_bit(pose, fov, reach, resolution):
+    got = sector_polygon(pose, fov, reach, resolution)
+    expected = sector_polygon_reference(pose, fov, reach, resolution)
+    assert shapely.to_wkb(got) == shapely.to_wkb(expected)
