@@ -33,10 +33,11 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from functools import cached_property
+from itertools import pairwise
 
 import numpy as np
 import shapely
-from shapely.ops import substring
 
 from sse_cosim.control.kinematics import BusDynamics
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
@@ -130,8 +131,14 @@ class SceneContext:
         end = min(front_s + max(length, 0.0), self.route_line.length)
         if end <= start:
             return shapely.Polygon()
-        centre = substring(self.route_line, start, end)
+        centre = route_piece(self.route_line, self.route_stations, start, end)
         return centre.buffer(0.5 * self.bus.width_m + margin, cap_style="flat")
+
+    @cached_property
+    def route_stations(self) -> np.ndarray:
+        """How far along the route each vertex of ``route_line`` but the last lies (m), shape
+        (n - 1,): see :func:`route_piece` (computed once)."""
+        return route_stations(self.route_line)
 
     def stopping_distance(self, speed: float) -> float:
         """Reaction distance plus comfortable braking distance plus the stopping margin (m)."""
@@ -261,6 +268,27 @@ def _arrival(sources: Iterable[shapely.Geometry], zone: shapely.Geometry, speed:
              slack: float) -> float:
     """Earliest time (s) a pedestrian somewhere in ``sources`` can be in ``zone``."""
     return float(_arrivals(sources, [zone], speed, slack)[0])
+
+
+def route_stations(line: shapely.LineString) -> np.ndarray:
+    """How far along ``line`` each of its vertices but the last lies, shape (n - 1,), summed
+    segment by segment as ``shapely.ops.substring`` sums them."""
+    stations, current = [], 0.0
+    for p1, p2 in pairwise(line.coords):
+        stations.append(current)
+        current += ((p2[0] - p1[0]) ** 2 + (p2[1] - p1[1]) ** 2) ** 0.5
+    return np.array(stations)
+
+
+def route_piece(line: shapely.LineString, stations: np.ndarray, start: float,
+                end: float) -> shapely.LineString:
+    """``shapely.ops.substring(line, start, end)`` for 0 <= start < end <= length, the same
+    line string: the points at ``start`` and ``end`` with the vertices strictly between, found
+    from the ``stations`` of :func:`route_stations` instead of a walk along the line."""
+    ends = shapely.get_coordinates(shapely.line_interpolate_point(line, [start, end]))  # (2, 2)
+    between = np.flatnonzero((stations > start) & (stations < end))
+    inner = shapely.get_coordinates(line)[between]  # (k, 2)
+    return shapely.linestrings(np.vstack([ends[:1], inner, ends[1:]]))
 
 
 def _route_crossings(route_line: shapely.LineString, corridor: shapely.Geometry,

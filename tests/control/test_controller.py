@@ -8,8 +8,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
+from shapely.ops import substring
 
-from sse_cosim.control.picture import Picture, SceneContext, _arrivals, assess
+from sse_cosim.control.picture import (
+    Picture,
+    SceneContext,
+    _arrivals,
+    assess,
+    route_piece,
+    route_stations,
+)
 from sse_cosim.control.speed import SpeedLevel, level_speed, paper_level
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.world.network import build_network
@@ -141,3 +149,21 @@ def test_arrivals_in_one_call_are_the_earliest_arrival_of_each_zone():
         expected = [max(0.0, min(s.distance(z) for s in sources) - 0.6) / 1.5 for z in zones]
         assert got.tolist() == expected
     assert _arrivals([shapely.Polygon()], zones, 1.5, 0.6).tolist() == [np.inf] * 3
+
+
+def test_route_pieces_are_shapelys_substrings(context):
+    # route_piece finds the vertices between two distances from stations computed once: the
+    # same line string as shapely.ops.substring, on the real route and on random polylines
+    # (distances on vertices too).
+    rng = np.random.default_rng(8)
+    lines = [context.route_line] + [
+        shapely.LineString(np.cumsum(rng.normal(size=(rng.integers(2, 30), 2)), axis=0))
+        for _ in range(20)]
+    for line in lines:
+        stations = route_stations(line)
+        cuts = np.concatenate([rng.uniform(0.0, line.length, 20), stations, [line.length]])
+        for start, end in rng.choice(cuts, size=(40, 2)):
+            start, end = min(start, end), max(start, end)
+            if start < end:
+                got = route_piece(line, stations, start, end)
+                assert shapely.to_wkb(got) == shapely.to_wkb(substring(line, start, end))
