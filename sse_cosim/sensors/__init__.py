@@ -20,6 +20,7 @@ from sse_cosim.sensors.geometry import (
     shadow_points_reference,
     shadow_polygons,
     sight_masks,
+    sight_masks_reference,
     visibility_regions,
 )
 from sse_cosim.sensors.kinds import Camera, RangeBearing, SensorKind
@@ -59,6 +60,7 @@ __all__ = [
     "shadow_points_reference",
     "shadow_polygons",
     "sight_masks",
+    "sight_masks_reference",
     "specs_from_scenario",
     "visibility_regions",
 ]

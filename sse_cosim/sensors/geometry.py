@@ -177,7 +177,36 @@ def sight_masks(
     Sensor j (``origins`` (s, 2), ``headings``/``fovs_rad``/``ranges_m`` (s,)) sees target i
     iff it is in the sector and its segment misses every occluder of j: the boxes within
     ``ranges_m[j]`` of the sensor except its carrier ``carriers[j]`` (box index, -1: none).
-    One vectorized pass; what :func:`in_sector` and :func:`line_of_sight` compute per sensor.
+    Compiled (:func:`sse_cosim.sensors.kernels.sight_masks`); what :func:`in_sector` and
+    :func:`line_of_sight` compute per sensor, and :func:`sight_masks_reference` in NumPy.
+    """
+    return kernels.sight_masks(
+        _floats(origins, (-1, 2)), _floats(headings, (-1,)), _floats(fovs_rad, (-1,)),
+        _floats(ranges_m, (-1,)), np.ascontiguousarray(carriers, dtype=np.int64).reshape(-1),
+        _floats(targets, (-1, 2)), boxes.centers, boxes.axes, boxes.half,
+        0.5 * FULL_TURN - _FULL_EPS)
+
+
+def _floats(values: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """``values`` as a contiguous float64 array of ``shape`` (for the compiled kernels)."""
+    return np.ascontiguousarray(values, dtype=float).reshape(shape)
+
+
+def sight_masks_reference(
+    origins: np.ndarray,
+    headings: np.ndarray,
+    fovs_rad: np.ndarray,
+    ranges_m: np.ndarray,
+    carriers: np.ndarray,
+    targets: np.ndarray,
+    boxes: Boxes,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(seen (s, k), occluders (s, m))`` for ``s`` sensors, ``k`` targets, ``m`` boxes.
+
+    Sensor j (``origins`` (s, 2), ``headings``/``fovs_rad``/``ranges_m`` (s,)) sees target i
+    iff it is in the sector and its segment misses every occluder of j: the boxes within
+    ``ranges_m[j]`` of the sensor except its carrier ``carriers[j]`` (box index, -1: none).
+    The NumPy reference of :func:`sight_masks`: one vectorized pass.
     """
     o = np.asarray(origins, dtype=float).reshape(-1, 2)
     t = np.asarray(targets, dtype=float).reshape(-1, 2)

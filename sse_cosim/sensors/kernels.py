@@ -92,3 +92,75 @@ def sector_points(x: float, y: float, heading: float, range_m: float, offsets: F
         ring[first + i, 0] = x + range_m * np.cos(angle)
         ring[first + i, 1] = y + range_m * np.sin(angle)
     return ring
+
+
+@njit(cache=True)
+def _box_frame(x: float, y: float, centers: FloatArray, axes: FloatArray, b: int
+               ) -> tuple[float, float]:
+    """``geometry._local``: the forward and left coordinates of (x, y) in box ``b``'s frame."""
+    dx, dy = x - centers[b, 0], y - centers[b, 1]
+    return dx * axes[b, 0, 0] + dy * axes[b, 0, 1], dx * axes[b, 1, 0] + dy * axes[b, 1, 1]
+
+
+@njit(cache=True)
+def sight_masks(origins: FloatArray, headings: FloatArray, fovs_rad: FloatArray,
+                ranges_m: FloatArray, carriers: NDArray[np.int64], targets: FloatArray,
+                centers: FloatArray, axes: FloatArray, half: FloatArray, full_half: float
+                ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """``geometry.sight_masks_reference`` on arrays: ``(seen (s, k), occluders (s, m))`` for
+    sensors ``origins`` (s, 2), ``headings``/``fovs_rad``/``ranges_m`` (s,), ``carriers`` (s,)
+    (box index, -1: none), targets (k, 2) and boxes ``centers`` (m, 2), ``axes`` (m, 2, 2),
+    ``half`` (m, 2); a half-opening >= ``full_half`` is a disc. The reference's elementwise
+    arithmetic, test by test (a segment is clear when every active box is separated from it
+    along the box's axes or the segment's normal)."""
+    s, k, m = origins.shape[0], targets.shape[0], centers.shape[0]
+    seen = np.zeros((s, k), dtype=np.bool_)
+    occluders = np.zeros((s, m), dtype=np.bool_)
+    target_f = np.empty((k, m))
+    target_l = np.empty((k, m))
+    for i in range(k):
+        for b in range(m):
+            target_f[i, b], target_l[i, b] = _box_frame(targets[i, 0], targets[i, 1],
+                                                        centers, axes, b)
+    origin_f = np.empty(m)
+    origin_l = np.empty(m)
+    for j in range(s):
+        ox, oy = origins[j, 0], origins[j, 1]
+        reach = ranges_m[j]
+        for b in range(m):
+            origin_f[b], origin_l[b] = _box_frame(ox, oy, centers, axes, b)
+            ef = max(abs(origin_f[b]) - half[b, 0], 0.0)
+            el = max(abs(origin_l[b]) - half[b, 1], 0.0)
+            occluders[j, b] = ef * ef + el * el <= reach * reach and b != carriers[j]
+        cos_h, sin_h = np.cos(headings[j]), np.sin(headings[j])
+        half_fov = 0.5 * fovs_rad[j]
+        full = half_fov >= full_half
+        cos_half = np.cos(half_fov)
+        for i in range(k):
+            dx, dy = targets[i, 0] - ox, targets[i, 1] - oy
+            dist2 = dx * dx + dy * dy
+            along = dx * cos_h + dy * sin_h
+            if not (dist2 <= reach * reach and (full or along >= np.sqrt(dist2) * cos_half)):
+                continue
+            seen[j, i] = _clear(origin_f, origin_l, target_f[i], target_l[i], half,
+                                occluders[j])
+    return seen, occluders
+
+
+@njit(cache=True)
+def _clear(of: FloatArray, ol: FloatArray, tf: FloatArray, tl: FloatArray, half: FloatArray,
+           active: NDArray[np.bool_]) -> bool:
+    """``geometry._clear`` for one segment: whether it misses every active box, from both
+    ends' box-frame coordinates (m,) each."""
+    for b in range(half.shape[0]):
+        if not active[b]:
+            continue
+        hf, hl = half[b, 0], half[b, 1]
+        if min(of[b], tf[b]) > hf or max(of[b], tf[b]) < -hf:
+            continue
+        if min(ol[b], tl[b]) > hl or max(ol[b], tl[b]) < -hl:
+            continue
+        if abs(of[b] * tl[b] - tf[b] * ol[b]) > abs(tl[b] - ol[b]) * hf + abs(tf[b] - of[b]) * hl:
+            continue
+        return False
+    return True

@@ -20,6 +20,7 @@ from sse_cosim.sensors import (
     shadow_points_reference,
     shadow_polygons,
     sight_masks,
+    sight_masks_reference,
     visibility_regions,
 )
 from sse_cosim.sensors.geometry import FAR_STEPS, sector_polygon_reference
@@ -186,3 +187,25 @@ def test_compiled_sector_is_the_reference_bit_for_bit(pose, fov, reach, resoluti
     got = sector_polygon(pose, fov, reach, resolution)
     expected = sector_polygon_reference(pose, fov, reach, resolution)
     assert shapely.to_wkb(got) == shapely.to_wkb(expected)
+
+
+@SETTINGS
+@given(st.lists(footprints, min_size=0, max_size=6), st.lists(poses, min_size=1, max_size=4),
+       seeds)
+def test_compiled_sight_masks_are_the_reference(feet, sensor_poses, seed):
+    # Targets scattered, on box corners and on sector edges; full discs among the fields.
+    rng = np.random.default_rng(seed)
+    boxes = Boxes.from_footprints(feet)
+    s, m = len(sensor_poses), len(feet)
+    fov = np.where(rng.random(s) < 0.3, 2 * np.pi, rng.uniform(0.2, 2 * np.pi, size=s))
+    reach = rng.uniform(5.0, 50.0, size=s)
+    carriers = rng.integers(-1, max(m, 1), size=s) if m else np.full(s, -1)
+    origins = np.array([p.position for p in sensor_poses])
+    headings = np.array([p.heading for p in sensor_poses])
+    edges = origins + reach[:, None] * np.stack([np.cos(headings + fov / 2),
+                                                  np.sin(headings + fov / 2)], axis=1)
+    targets = np.vstack([rng.uniform(-40.0, 40.0, size=(30, 2)),
+                         boxes.corners().reshape(-1, 2), edges])
+    args = (origins, headings, fov, reach, carriers, targets, boxes)
+    for got, expected in zip(sight_masks(*args), sight_masks_reference(*args), strict=True):
+        assert got.shape == expected.shape and np.array_equal(got, expected)
