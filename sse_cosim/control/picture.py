@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from itertools import pairwise
 
 import numpy as np
@@ -211,7 +211,7 @@ def assess(
                       and crossing.start_m - front_s <= cfg.crossing_horizon_m)
     own_hidden = shapely.intersection(own_occluded, unobserved)
     reach = context.reach_radius(front_s)
-    relevant = crossing.area.buffer(reach) if crossing is not None and reach > 0 \
+    relevant = _around(crossing.area, reach) if crossing is not None and reach > 0 \
         else shapely.Polygon()
     hidden_in_reach = shapely.intersection(own_hidden, relevant)
     sets = [s for s in pedestrian_regions if not s.is_empty]
@@ -235,6 +235,13 @@ def assess(
         zones=zones,
         path_clear=all(z.arrival_s > context.standstill_clear_time(z.to_clear_m) for z in zones),
     )
+
+
+@lru_cache(maxsize=32)
+def _around(area: shapely.Geometry, radius: float) -> shapely.Geometry:
+    """``area`` widened by ``radius``; kept, since the reach radius stays at its cap while the
+    bus is far from the crossing, and at one value while the bus stands."""
+    return area.buffer(radius)
 
 
 def _outlook(context: SceneContext, front_s: float,

@@ -13,6 +13,7 @@ from shapely.ops import substring
 from sse_cosim.control.picture import (
     Picture,
     SceneContext,
+    _around,
     _arrivals,
     assess,
     route_piece,
@@ -167,3 +168,11 @@ def test_route_pieces_are_shapelys_substrings(context):
             if start < end:
                 got = route_piece(line, stations, start, end)
                 assert shapely.to_wkb(got) == shapely.to_wkb(substring(line, start, end))
+
+
+def test_the_kept_widening_of_a_crossing_is_its_buffer(context):
+    area = context.crossings[0].area
+    for radius in (0.5, 3.0, 0.5):
+        assert _around(area, radius).equals_exact(area.buffer(radius), 0.0)
+    assert _around(shapely.box(0, 0, 1, 1), 3.0).equals_exact(
+        shapely.box(0, 0, 1, 1).buffer(3.0), 0.0)
