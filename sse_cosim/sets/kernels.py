@@ -12,6 +12,8 @@ against the other on random and degenerate inputs:
   2-D zonotope (reference ``contains_2d_reference``): the same sums in numpy's order, the
   two-term dot products may round differently from numpy's BLAS calls (a point within a
   rounding of a facet, beyond the tolerance, is the only place they can disagree);
+- :func:`volume_gain_2d` for ``gains.volume_gain_vertices`` (reference
+  ``volume_gain_vertices_reference``): bit for bit;
 - :func:`vertices_2d` for :meth:`~sse_cosim.sets.zonotope.Zonotope.vertices` (reference
   ``vertices_2d_reference``): bit for bit;
 - :func:`frobenius_gain` and :func:`intersect_frobenius` for the Frobenius gain of
@@ -236,6 +238,44 @@ def _not_parallel(a: FloatArray, b: FloatArray) -> bool:
     cross = a[0] * b[1] - a[1] * b[0]
     scale = np.sqrt(a[0] * a[0] + a[1] * a[1]) * np.sqrt(b[0] * b[0] + b[1] * b[1])
     return abs(cross) > PARALLEL_RTOL * scale
+
+
+@njit(cache=True)
+def volume_gain_2d(generators: FloatArray, normal: FloatArray, radius: float) -> FloatArray:
+    """``gains.volume_gain_vertices`` for G (2, e), h (2,) and r: every candidate λ = 0 or
+    g_i / (hᵀg_i) scored in closed form, the best (first of the least) returned, shape (2,);
+    the reference's arithmetic, its sums in numpy's pairwise order."""
+    e = generators.shape[1]
+    cand0 = np.zeros(e + 1)
+    cand1 = np.zeros(e + 1)
+    c = 1
+    a = np.empty(e)
+    b = np.empty(e)
+    k = 0
+    for i in range(e):
+        g0, g1 = generators[0, i], generators[1, i]
+        hg = normal[0] * g0 + normal[1] * g1
+        if abs(hg) > 1e-12 * np.sqrt(g0 * g0 + g1 * g1):
+            cand0[c], cand1[c] = g0 / hg, g1 / hg
+            c += 1
+        if g0 != 0 or g1 != 0:
+            a[k], b[k] = g0, g1
+            k += 1
+    cross = np.empty(k * k)
+    for i in range(k):
+        for j in range(k):
+            cross[i * k + j] = abs(a[i] * b[j] - b[i] * a[j])
+    base = 0.5 * pairwise_sum(cross, 0, k * k)
+    cuts = np.empty(e)
+    best, best_value = 0, 0.0
+    for n in range(c):
+        for i in range(e):
+            cuts[i] = abs(cand1[n] * generators[0, i] - cand0[n] * generators[1, i])
+        value = base * abs(1.0 - (cand0[n] * normal[0] + cand1[n] * normal[1])) \
+            + radius * pairwise_sum(cuts, 0, e)
+        if n == 0 or value < best_value or (np.isnan(value) and not np.isnan(best_value)):
+            best, best_value = n, value
+    return np.array([cand0[best], cand1[best]])
 
 
 @njit(cache=True)

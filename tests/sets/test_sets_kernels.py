@@ -118,3 +118,18 @@ def test_compiled_vertices_are_the_reference_bit_for_bit(g, seed):
     expected = vertices_2d_reference(center, g)
     got = Zonotope(center, g).vertices()
     assert got.shape == expected.shape and got.tobytes() == expected.tobytes()
+
+
+@SETTINGS
+@given(generator_matrices(n=2, max_generators=12), st.integers(0, 2**32 - 1),
+       st.sampled_from([1e-3, 0.5, 20.0]))
+def test_compiled_vertex_gain_is_the_reference_bit_for_bit(g, seed, radius):
+    # Normals random, along a generator and across one (hᵀg = 0 for it: not a candidate).
+    rng = np.random.default_rng(seed)
+    normals = [rng.normal(size=2)]
+    if g.shape[1] and np.any(g[:, 0]):
+        normals += [g[:, 0] / np.linalg.norm(g[:, 0]), np.array([-g[1, 0], g[0, 0]])]
+    for h in normals:
+        got = gains.volume_gain_vertices(g, h, radius)
+        expected = gains.volume_gain_vertices_reference(g, h, radius)
+        assert got.tobytes() == expected.tobytes()
