@@ -11,6 +11,7 @@
 from sse_cosim.sensors.geometry import (
     Boxes,
     box_distances,
+    box_distances_reference,
     cached_sector_polygon,
     clear_mask,
     in_sector,
@@ -44,6 +45,7 @@ __all__ = [
     "SensorObservation",
     "SensorSpec",
     "box_distances",
+    "box_distances_reference",
     "cached_sector_polygon",
     "clear_mask",
     "draw_noise",

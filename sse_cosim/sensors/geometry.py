@@ -236,7 +236,14 @@ def _local(points: np.ndarray, boxes: Boxes) -> tuple[np.ndarray, np.ndarray]:
 
 
 def box_distances(origins: np.ndarray, boxes: Boxes) -> np.ndarray:
-    """Euclidean distance from each origin (s, 2) to each closed box, shape (s, m)."""
+    """Euclidean distance from each origin (s, 2) to each closed box, shape (s, m) (compiled:
+    :func:`sse_cosim.sensors.kernels.box_distances`)."""
+    return kernels.box_distances(_floats(origins, (-1, 2)), boxes.centers, boxes.axes,
+                                 boxes.half)
+
+
+def box_distances_reference(origins: np.ndarray, boxes: Boxes) -> np.ndarray:
+    """The NumPy reference of :func:`box_distances`."""
     f, l_ = _local(np.asarray(origins, dtype=float).reshape(-1, 2), boxes)
     ef = np.maximum(np.abs(f) - boxes.half[:, 0], 0.0)
     el = np.maximum(np.abs(l_) - boxes.half[:, 1], 0.0)
@@ -330,7 +337,8 @@ def shadow_points_reference(origin: np.ndarray, boxes: Boxes, range_m: float
     rays = base[:, None] + lo[:, None] + (hi - lo)[:, None] * FAR_STEPS[None, :]  # (m, f)
     reach = 2.0 * (range_m + np.sqrt(np.einsum("mkj,mkj->mk", rel, rel)).max(axis=1))  # (m,)
     far = o + reach[:, None, None] * np.stack([np.cos(rays), np.sin(rays)], axis=2)
-    return np.concatenate([corners, far], axis=1), reach, boxes.distances(o) <= 0.0
+    inside = box_distances_reference(o.reshape(1, 2), boxes)[0] <= 0.0
+    return np.concatenate([corners, far], axis=1), reach, inside
 
 
 def shadow_polygons(origin: np.ndarray, boxes: Boxes, range_m: float) -> np.ndarray:

@@ -164,3 +164,18 @@ def _clear(of: FloatArray, ol: FloatArray, tf: FloatArray, tl: FloatArray, half:
             continue
         return False
     return True
+
+
+@njit(cache=True)
+def box_distances(origins: FloatArray, centers: FloatArray, axes: FloatArray,
+                  half: FloatArray) -> FloatArray:
+    """``geometry.box_distances_reference``: the distance from each origin (s, 2) to each
+    closed box (``centers`` (m, 2), ``axes`` (m, 2, 2), ``half`` (m, 2)), shape (s, m)."""
+    s, m = origins.shape[0], centers.shape[0]
+    distances = np.empty((s, m))
+    for j in range(s):
+        for b in range(m):
+            along, across = _box_frame(origins[j, 0], origins[j, 1], centers, axes, b)
+            distances[j, b] = np.hypot(max(abs(along) - half[b, 0], 0.0),
+                                       max(abs(across) - half[b, 1], 0.0))
+    return distances

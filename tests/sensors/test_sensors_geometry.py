@@ -13,6 +13,8 @@ from sensors_scene import SETTINGS
 
 from sse_cosim.sensors import (
     Boxes,
+    box_distances,
+    box_distances_reference,
     in_sector,
     kernels,
     line_of_sight,
@@ -209,3 +211,12 @@ def test_compiled_sight_masks_are_the_reference(feet, sensor_poses, seed):
     args = (origins, headings, fov, reach, carriers, targets, boxes)
     for got, expected in zip(sight_masks(*args), sight_masks_reference(*args), strict=True):
         assert got.shape == expected.shape and np.array_equal(got, expected)
+
+
+@SETTINGS
+@given(st.lists(footprints, min_size=0, max_size=6), st.lists(poses, min_size=1, max_size=4))
+def test_compiled_box_distances_are_the_reference_bit_for_bit(feet, points):
+    boxes = Boxes.from_footprints(feet)
+    origins = np.vstack([[p.position for p in points], boxes.corners().reshape(-1, 2)])
+    got, expected = box_distances(origins, boxes), box_distances_reference(origins, boxes)
+    assert got.shape == expected.shape and got.tobytes() == expected.tobytes()
