@@ -170,7 +170,7 @@ class BusScreener:
                          self.node)
 
     def _contradicted(self, estimate: Zonotope, clear: Sequence[ClearRegion]) -> bool:
-        return contradicted(self.model.position_matrix @ estimate, clear, self.model.jitter,
+        return contradicted(self.model.path_set(estimate), clear, self.model.jitter,
                             self.reach, self.tol)
 
     def _vote(self, person_id: str, sets: Sequence[Zonotope],
@@ -178,7 +178,7 @@ class BusScreener:
         """(sources to fuse, suspects of a conflict): a majority minus those on probation."""
         probation = self._probation.get(person_id, Probation())
         proven = frozenset(i for i, name in enumerate(names) if name in probation.proven)
-        result = vote([self.model.position_matrix @ z for z in sets], self.tol, proven)
+        result = vote([self.model.path_set(z) for z in sets], self.tol, proven)
         if result.conflict:
             suspects = frozenset(names[i] for i in result.suspects)
             self._probation[person_id] = probation.suspect(suspects)

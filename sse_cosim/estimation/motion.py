@@ -81,8 +81,12 @@ class MotionModel:
     def predict(self, estimate: Zonotope, steps: int = 1) -> Zonotope:
         """Predicted state set after ``steps`` steps: F Z (+) Q, repeated (Definition 1)."""
         for _ in range(steps):
-            estimate = self.transition @ estimate + self.process_noise
+            estimate = _linear_map(self.transition, estimate) + self.process_noise
         return estimate
+
+    def path_set(self, estimate: Zonotope) -> Zonotope:
+        """C Z: the set of the path's 2-D position (no jitter; see :meth:`position`)."""
+        return _linear_map(self.position_matrix, estimate)
 
     def position(self, estimate: Zonotope) -> Zonotope:
         """The set of the simulated 2-D position: C Z (+) box(jitter).
@@ -94,7 +98,7 @@ class MotionModel:
         kept = self._positions.get(id(estimate))
         if kept is not None and kept[0] is estimate:
             return kept[1]
-        path = self.position_matrix @ estimate
+        path = self.path_set(estimate)
         position = path if self.jitter == 0.0 else path + self.jitter_box
         self._positions[id(estimate)] = (estimate, position)
         if len(self._positions) > POSITION_MEMO:
@@ -137,6 +141,12 @@ class MotionModel:
             ]
         )
         return Zonotope(center, generators)
+
+
+def _linear_map(matrix: np.ndarray, estimate: Zonotope) -> Zonotope:
+    """M Z = ⟨Mc, MG⟩ (eq. linmap) for a model matrix M (m, n), as ``M @ Z`` computes it, without
+    its per-call checks: the model's matrices are finite and shaped for its states."""
+    return Zonotope.unchecked(matrix @ estimate.center, matrix @ estimate.generators)
 
 
 def _independent_pair(normals: np.ndarray, tol: float = 1e-6) -> tuple[int, int]:

@@ -116,7 +116,7 @@ class OccupancyTracker:
         paths: dict[str, shapely.Geometry] = {}
         regions: dict[str, shapely.Geometry] = {}
         for person_id, estimate in fused.items():
-            path = zonotope_polygon(self.model.position_matrix @ estimate)
+            path = zonotope_polygon(self.model.path_set(estimate))
             previous = self._paths.get(person_id)
             if previous is not None:
                 path = shapely.intersection(dilate(previous, self.reach * elapsed), path)
