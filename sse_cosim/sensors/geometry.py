@@ -3,7 +3,9 @@
 Conventions: points are network metres, angles radians CCW from east. Vehicle footprints are
 oriented rectangles, handled in bulk as :class:`Boxes` (arrays, no shapely) by the cheap
 vectorized tests (:func:`in_sector`, :func:`line_of_sight`); shapely is only used to build the
-sector and shadow polygons when a caller asks for regions.
+sector and shadow polygons when a caller asks for regions. The per-step work (sight masks, box
+distances, shadow points, sector rings) runs compiled (:mod:`sse_cosim.sensors.kernels`), each
+kernel bit for bit with its NumPy reference here (``*_reference``).
 
 Boundary semantics (closed sets): a segment that merely touches a footprint is blocked, a
 point on the sector's edge or arc is inside the sector. Polygons are inscribed approximations
