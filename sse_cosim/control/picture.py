@@ -33,10 +33,11 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from functools import cached_property, lru_cache
+from itertools import pairwise
 
 import numpy as np
 import shapely
-from shapely.ops import substring
 
 from sse_cosim.control.kinematics import BusDynamics
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
@@ -130,8 +131,14 @@ class SceneContext:
         end = min(front_s + max(length, 0.0), self.route_line.length)
         if end <= start:
             return shapely.Polygon()
-        centre = substring(self.route_line, start, end)
+        centre = route_piece(self.route_line, self.route_stations, start, end)
         return centre.buffer(0.5 * self.bus.width_m + margin, cap_style="flat")
+
+    @cached_property
+    def route_stations(self) -> np.ndarray:
+        """How far along the route each vertex of ``route_line`` but the last lies (m), shape
+        (n - 1,): see :func:`route_piece` (computed once)."""
+        return route_stations(self.route_line)
 
     def stopping_distance(self, speed: float) -> float:
         """Reaction distance plus comfortable braking distance plus the stopping margin (m)."""
@@ -209,12 +216,15 @@ def assess(
                       and crossing.start_m - front_s <= cfg.crossing_horizon_m)
     own_hidden = shapely.intersection(own_occluded, unobserved)
     reach = context.reach_radius(front_s)
-    relevant = crossing.area.buffer(reach) if crossing is not None and reach > 0 \
+    relevant = _around(crossing.area, reach) if crossing is not None and reach > 0 \
         else shapely.Polygon()
     hidden_in_reach = shapely.intersection(own_hidden, relevant)
-    near_path = context.path_ahead(front_s, cfg.crossing_horizon_m, cfg.path_margin_m)
-    stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0)
     sets = [s for s in pedestrian_regions if not s.is_empty]
+    # the corridors ahead only matter to a known pedestrian's region: none, none built
+    near_path = context.path_ahead(front_s, cfg.crossing_horizon_m, cfg.path_margin_m) \
+        if sets else shapely.Polygon()
+    stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0) \
+        if sets else shapely.Polygon()
     zones = _outlook(context, front_s, [unobserved, *sets],
                      [s for s in in_view if not s.is_empty])
     return Picture(
@@ -233,29 +243,69 @@ def assess(
     )
 
 
+@lru_cache(maxsize=32)
+def _around(area: shapely.Geometry, radius: float) -> shapely.Geometry:
+    """``area`` widened by ``radius``; kept, since the reach radius stays at its cap while the
+    bus is far from the crossing, and at one value while the bus stands."""
+    return area.buffer(radius)
+
+
 def _outlook(context: SceneContext, front_s: float, sources: Sequence[shapely.Geometry],
              in_view: Sequence[shapely.Geometry]) -> tuple[ZoneOutlook, ...]:
     """The zones the bus has not yet cleared, with the earliest arrival from ``sources`` and
-    from the regions ``in_view`` alone."""
+    from the regions ``in_view`` alone (every source to every such zone in one distance
+    call)."""
+    ahead = [(index, zone, zone.end_m + context.bus.length_m - front_s)
+             for index, zone in enumerate(context.zones)]
+    ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead if to_clear > 0.0]
+    polygons = [zone.polygon for _, zone, _ in ahead]
     speed, slack = context.pedestrian_speed, 2.0 * context.jitter
-    result = []
-    for index, zone in enumerate(context.zones):
-        to_clear = zone.end_m + context.bus.length_m - front_s
-        if to_clear <= 0.0:
-            continue
-        arrival = min(zone.beyond_arrival_s, _arrival(sources, zone.polygon, speed, slack))
-        result.append(ZoneOutlook(index, zone.start_m - front_s, to_clear, arrival,
-                                  _arrival(in_view, zone.polygon, speed, slack)))
-    return tuple(result)
+    arrivals = _arrivals(sources, polygons, speed, slack)
+    in_view_arrivals = _arrivals(in_view, polygons, speed, slack)
+    return tuple(
+        ZoneOutlook(index, zone.start_m - front_s, to_clear,
+                    min(zone.beyond_arrival_s, float(arrival)), float(in_view_arrival))
+        for (index, zone, to_clear), arrival, in_view_arrival
+        in zip(ahead, arrivals, in_view_arrivals, strict=True))
+
+
+def _arrivals(sources: Iterable[shapely.Geometry], zones: Sequence[shapely.Geometry],
+              speed: float, slack: float) -> np.ndarray:
+    """Earliest time (s) a pedestrian somewhere in ``sources`` can be in each of ``zones``,
+    shape (z,) (inf without a source)."""
+    parts = [s for s in sources if not s.is_empty]
+    if not parts or not zones:
+        return np.full(len(zones), math.inf)
+    distances = shapely.distance(np.array(parts, dtype=object)[:, None],
+                                 np.array(zones, dtype=object)[None, :])  # (s, z)
+    return np.maximum(0.0, distances.min(axis=0) - slack) / speed
 
 
 def _arrival(sources: Iterable[shapely.Geometry], zone: shapely.Geometry, speed: float,
              slack: float) -> float:
     """Earliest time (s) a pedestrian somewhere in ``sources`` can be in ``zone``."""
-    distances = [shapely.distance(s, zone) for s in sources if not s.is_empty]
-    if not distances:
-        return math.inf
-    return max(0.0, min(distances) - slack) / speed
+    return float(_arrivals(sources, [zone], speed, slack)[0])
+
+
+def route_stations(line: shapely.LineString) -> np.ndarray:
+    """How far along ``line`` each of its vertices but the last lies, shape (n - 1,), summed
+    segment by segment as ``shapely.ops.substring`` sums them."""
+    stations, current = [], 0.0
+    for p1, p2 in pairwise(line.coords):
+        stations.append(current)
+        current += ((p2[0] - p1[0]) ** 2 + (p2[1] - p1[1]) ** 2) ** 0.5
+    return np.array(stations)
+
+
+def route_piece(line: shapely.LineString, stations: np.ndarray, start: float,
+                end: float) -> shapely.LineString:
+    """``shapely.ops.substring(line, start, end)`` for 0 <= start < end <= length, the same
+    line string: the points at ``start`` and ``end`` with the vertices strictly between, found
+    from the ``stations`` of :func:`route_stations` instead of a walk along the line."""
+    ends = shapely.get_coordinates(shapely.line_interpolate_point(line, [start, end]))  # (2, 2)
+    between = np.flatnonzero((stations > start) & (stations < end))
+    inner = shapely.get_coordinates(line)[between]  # (k, 2)
+    return shapely.linestrings(np.vstack([ends[:1], inner, ends[1:]]))
 
 
 def _route_crossings(route_line: shapely.LineString, corridor: shapely.Geometry,

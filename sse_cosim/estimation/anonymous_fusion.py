@@ -103,14 +103,14 @@ class AnonymousFusionCentre(BaseFusionCentre):
 
     def _clear(self, fused: Zonotope, nodes: Sequence[_Node]) -> list[ClearRegion]:
         """The views of the nodes none of whose tracks meets ``fused`` (module docstring)."""
-        path = self.model.position_matrix @ fused
+        path = self.model.path_set(fused)
         return [ClearRegion(n.view, n.age) for n in nodes if not n.view.is_empty
                 and not any(self._meet(path, z) for z in n.tracks.values())]
 
     def _meet(self, path: Zonotope, estimate: Zonotope) -> bool:
         """Whether the path set ``path`` meets ``estimate``'s (boxes first, then exactly; both
         err towards "meets" by :data:`MEET_TOL`)."""
-        other = self.model.position_matrix @ estimate
+        other = self.model.path_set(estimate)
         (lo, hi), (other_lo, other_hi) = path.interval_hull(), other.interval_hull()
         if (lo > other_hi + MEET_TOL).any() or (other_lo > hi + MEET_TOL).any():
             return False

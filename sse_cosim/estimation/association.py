@@ -242,7 +242,7 @@ class _View:
 def _candidates(scene: _Scene, estimate: Zonotope, skip: str | None = None) -> _View:
     """R1 for one prediction ``estimate``: its candidates per sensor (sensor ``skip`` left out)
     and which sensors see it wholly or in part."""
-    path = scene.model.position_matrix @ estimate
+    path = scene.model.path_set(estimate)
     lo, hi = path.interval_hull()
     found = scene.detections
     near = np.flatnonzero((found.lo <= hi + MEET_TOL).all(axis=1)
@@ -342,7 +342,7 @@ def _hidden(scene: _Scene, estimate: Zonotope, predicted: Zonotope, sensor: str)
     """The possibility "hidden from ``sensor``" (R3): ``estimate`` cut to an enclosure of the
     prediction's path set minus the sensor's eroded region (a pedestrian whose position
     p = s + e, |e| <= jitter, is outside the region has its s there)."""
-    path = scene.model.position_matrix @ predicted
+    path = scene.model.path_set(predicted)
     hidden = _polygon(path).difference(scene.eroded[sensor])
     corners = shapely.get_coordinates(hidden.convex_hull)
     enclosure = _enclose(corners, path.generators)
@@ -531,11 +531,11 @@ def _sole_meeting(estimate: Zonotope, position: BaseGeometry, other: NodeTracks,
         return None  # the grown set pokes out of the region's box
     if not other.visible.covers(_buffer(position, grow)):
         return None
-    path = model.position_matrix @ estimate
+    path = model.path_set(estimate)
     box = path.interval_hull()
     meeting = []
     for tid, z in sorted(other.tracks.items()):
-        other_path = model.position_matrix @ z
+        other_path = model.path_set(z)
         if _boxes_meet(box, other_path.interval_hull(), MEET_TOL) and \
                 not zonotopes_disjoint(path, other_path, MEET_TOL):
             meeting.append(tid)

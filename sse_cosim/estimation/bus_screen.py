@@ -9,8 +9,11 @@ pedestrian reported in the wrong place. Sources a majority outvoted wait on prob
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+
+import shapely
 
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import ARC_SAFETY, QUAD_SEGMENTS, ClearRegion
@@ -44,10 +47,30 @@ def contradicted(
                 and hi[1] <= y1 - slack):
             continue  # the set pokes out of the region's box: it cannot lie in the region
         shape = zonotope_polygon(position) if shape is None else shape
-        inner = item.region.buffer(-ARC_SAFETY * slack, quad_segs=QUAD_SEGMENTS)
+        inner = _eroded(item.region, ARC_SAFETY * slack)
         if not inner.is_empty and inner.covers(shape):
             return True
     return False
+
+
+_ERODED_SIZE = 64
+_ERODED: OrderedDict[tuple[int, float], tuple[shapely.Geometry, shapely.Geometry]] = \
+    OrderedDict()
+
+
+def _eroded(region: shapely.Geometry, distance: float) -> shapely.Geometry:
+    """``region`` shrunk by ``distance`` (inscribed arcs). Every source of every pedestrian
+    is tested against the same views at the same slack: the newest erosions are kept, by the
+    region's identity (geometries are immutable) and the distance."""
+    key = (id(region), distance)
+    hit = _ERODED.get(key)
+    if hit is not None and hit[0] is region:
+        return hit[1]
+    inner = region.buffer(-distance, quad_segs=QUAD_SEGMENTS)
+    _ERODED[key] = (region, inner)
+    if len(_ERODED) > _ERODED_SIZE:
+        _ERODED.popitem(last=False)
+    return inner
 
 
 @dataclass(frozen=True)
@@ -147,7 +170,7 @@ class BusScreener:
                          self.node)
 
     def _contradicted(self, estimate: Zonotope, clear: Sequence[ClearRegion]) -> bool:
-        return contradicted(self.model.position_matrix @ estimate, clear, self.model.jitter,
+        return contradicted(self.model.path_set(estimate), clear, self.model.jitter,
                             self.reach, self.tol)
 
     def _vote(self, person_id: str, sets: Sequence[Zonotope],
@@ -155,7 +178,7 @@ class BusScreener:
         """(sources to fuse, suspects of a conflict): a majority minus those on probation."""
         probation = self._probation.get(person_id, Probation())
         proven = frozenset(i for i, name in enumerate(names) if name in probation.proven)
-        result = vote([self.model.position_matrix @ z for z in sets], self.tol, proven)
+        result = vote([self.model.path_set(z) for z in sets], self.tol, proven)
         if result.conflict:
             suspects = frozenset(names[i] for i in result.suspects)
             self._probation[person_id] = probation.suspect(suspects)

@@ -22,12 +22,16 @@ in the fused one. ``tests/world`` checks that SUMO's trajectories admit such a p
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips, Zonotope, intersect_strips
+
+POSITION_MEMO = 64  # position sets MotionModel.position keeps
 
 
 @dataclass(frozen=True)
@@ -40,6 +44,9 @@ class MotionModel:
     state_bounds: Strips | None
     max_speed: float
     jitter: float = 0.0
+    # estimate id -> (estimate, its position set): the newest POSITION_MEMO position sets
+    _positions: OrderedDict[int, tuple[Zonotope, Zonotope]] = field(
+        default_factory=OrderedDict, init=False, repr=False, compare=False)
 
     @property
     def dim(self) -> int:
@@ -74,15 +81,34 @@ class MotionModel:
     def predict(self, estimate: Zonotope, steps: int = 1) -> Zonotope:
         """Predicted state set after ``steps`` steps: F Z (+) Q, repeated (Definition 1)."""
         for _ in range(steps):
-            estimate = self.transition @ estimate + self.process_noise
+            estimate = _linear_map(self.transition, estimate) + self.process_noise
         return estimate
 
+    def path_set(self, estimate: Zonotope) -> Zonotope:
+        """C Z: the set of the path's 2-D position (no jitter; see :meth:`position`)."""
+        return _linear_map(self.position_matrix, estimate)
+
     def position(self, estimate: Zonotope) -> Zonotope:
-        """The set of the simulated 2-D position: C Z (+) box(jitter)."""
-        path = self.position_matrix @ estimate
-        if self.jitter == 0.0:
-            return path
-        return path + Zonotope(np.zeros(2), np.eye(2) * self.jitter)
+        """The set of the simulated 2-D position: C Z (+) box(jitter).
+
+        A step asks for the same estimate's position set several times (screen, fusion,
+        records): the newest ones are kept, by the estimate's identity (zonotopes are
+        read-only), so each is computed once and its cached volume is shared.
+        """
+        kept = self._positions.get(id(estimate))
+        if kept is not None and kept[0] is estimate:
+            return kept[1]
+        path = self.path_set(estimate)
+        position = path if self.jitter == 0.0 else path + self.jitter_box
+        self._positions[id(estimate)] = (estimate, position)
+        if len(self._positions) > POSITION_MEMO:
+            self._positions.popitem(last=False)
+        return position
+
+    @cached_property
+    def jitter_box(self) -> Zonotope:
+        """box(jitter) = <0, jitter I> (2-D), built once."""
+        return Zonotope(np.zeros(2), np.eye(2) * self.jitter)
 
     def path_strips(self, measured: Strips) -> Strips:
         """Position strips about p turned into strips about the path s (widened by the jitter)."""
@@ -96,12 +122,12 @@ class MotionModel:
         <H^-1 y, H^-1 diag(r)>; the others are intersected with it by Proposition 1.
         Velocity components (constant-velocity model) start as the box |v| <= v_max.
         """
-        first, second = _independent_pair(strips.normals)
-        pair = strips.select(np.isin(np.arange(len(strips)), [first, second]))
+        chosen = np.zeros(len(strips), dtype=bool)  # the first two independent strips
+        chosen[list(_independent_pair(strips.normals))] = True
+        pair = strips.select(chosen)
         inverse = np.linalg.inv(pair.normals)
         position = Zonotope(inverse @ pair.values, inverse * pair.radii[np.newaxis, :])
-        rest = np.ones(len(strips), dtype=bool)
-        rest[[first, second]] = False
+        rest = ~chosen
         if rest.any():
             position = intersect_strips(position, strips.select(rest), gain_method)
         if self.dim == 2:
@@ -115,6 +141,12 @@ class MotionModel:
             ]
         )
         return Zonotope(center, generators)
+
+
+def _linear_map(matrix: np.ndarray, estimate: Zonotope) -> Zonotope:
+    """M Z = ⟨Mc, MG⟩ (eq. linmap) for a model matrix M (m, n), as ``M @ Z`` computes it, without
+    its per-call checks: the model's matrices are finite and shaped for its states."""
+    return Zonotope.unchecked(matrix @ estimate.center, matrix @ estimate.generators)
 
 
 def _independent_pair(normals: np.ndarray, tol: float = 1e-6) -> tuple[int, int]:

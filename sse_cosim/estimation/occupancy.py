@@ -116,7 +116,7 @@ class OccupancyTracker:
         paths: dict[str, shapely.Geometry] = {}
         regions: dict[str, shapely.Geometry] = {}
         for person_id, estimate in fused.items():
-            path = zonotope_polygon(self.model.position_matrix @ estimate)
+            path = zonotope_polygon(self.model.path_set(estimate))
             previous = self._paths.get(person_id)
             if previous is not None:
                 path = shapely.intersection(dilate(previous, self.reach * elapsed), path)
@@ -160,6 +160,7 @@ class UnobservedArea:
         self._base = self._clip(dilate(walkable, eps))  # path region at step self._base_step
         self._base_step: int | None = None
         self._own: dict[int, shapely.Geometry] = {}  # the bus's views not yet in the base
+        self._base_moved: tuple[shapely.Geometry, shapely.Geometry] | None = None  # (base, moved)
 
     def update(
         self, step: int, own_view: shapely.Geometry, shared_views: Sequence[shapely.Geometry]
@@ -193,8 +194,21 @@ class UnobservedArea:
         seen = [v for v in views if not v.is_empty]
         unseen = shapely.difference(self.walkable, shapely.union_all(seen)) if seen \
             else self.walkable
-        moved = shapely.union(dilate(path, self.reach), self._inflow)
+        moved = self._moved(path)
         return coarsen(self._clip(shapely.intersection(moved, dilate(unseen, self.model.jitter))))
+
+    def _moved(self, path: shapely.Geometry) -> shapely.Geometry:
+        """The path region one step later before any view: moved by ``reach``, plus the inflow.
+
+        The base's is kept: with a latency, one step carries the base forward with the bus's
+        newest view and the next advances the base itself, from the same region.
+        """
+        if self._base_moved is not None and self._base_moved[0] is path:
+            return self._base_moved[1]
+        moved = shapely.union(dilate(path, self.reach), self._inflow)
+        if path is self._base:
+            self._base_moved = (path, moved)
+        return moved
 
     def _clip(self, region: shapely.Geometry) -> shapely.Geometry:
         return region if self._bounds is None else shapely.intersection(region, self._bounds)

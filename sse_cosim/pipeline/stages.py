@@ -7,6 +7,7 @@ in network coordinates (m).
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Generic, Protocol
@@ -103,9 +104,29 @@ def views_of(node: str, observations: Observations) -> list[SensorObservation]:
 
 def union_or_empty(geometries: Iterable[shapely.Geometry | None]) -> shapely.Geometry:
     """The union of the geometries given, None and empty ones left out (an empty polygon if
-    nothing is left)."""
-    parts = [g for g in geometries if g is not None and not g.is_empty]
-    return shapely.union_all(parts) if parts else shapely.Polygon()
+    nothing is left).
+
+    A step asks for the union of the same views more than once (a node's message, the
+    vehicle's own unobserved area): the newest unions are kept, by the parts' identities
+    (geometries are immutable).
+    """
+    parts = tuple(g for g in geometries if g is not None and not g.is_empty)
+    if not parts:
+        return shapely.Polygon()
+    key = tuple(map(id, parts))
+    hit = _UNIONS.get(key)
+    if hit is not None and all(a is b for a, b in zip(hit[0], parts, strict=True)):
+        return hit[1]
+    union = shapely.union_all(parts)
+    _UNIONS[key] = (parts, union)
+    if len(_UNIONS) > _UNIONS_SIZE:
+        _UNIONS.popitem(last=False)
+    return union
+
+
+_UNIONS_SIZE = 16
+_UNIONS: OrderedDict[tuple[int, ...], tuple[tuple[shapely.Geometry, ...], shapely.Geometry]] = \
+    OrderedDict()
 
 
 @dataclass(frozen=True)

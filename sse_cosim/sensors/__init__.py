@@ -1,6 +1,7 @@
 """Sensor layer: pure geometry of what each sensor sees and measures at one step.
 
 - :mod:`.geometry`: sectors, vectorized in-sector and line-of-sight tests, shadows, regions.
+- :mod:`.kernels`: the compiled shadow points (numba), beside their NumPy reference.
 - :mod:`.kinds`: what each kind of sensor sees and measures (camera, range), by name.
 - :mod:`.spec`: sensor specs from the scenario and their world poses on their carriers.
 - :mod:`.measurement`: y = H p + v as strips (paper eqs. senmodel and strip), noise draws.
@@ -10,14 +11,17 @@
 from sse_cosim.sensors.geometry import (
     Boxes,
     box_distances,
+    box_distances_reference,
     cached_sector_polygon,
     clear_mask,
     in_sector,
     line_of_sight,
     sector_mask,
     sector_polygon,
+    shadow_points_reference,
     shadow_polygons,
     sight_masks,
+    sight_masks_reference,
     visibility_regions,
 )
 from sse_cosim.sensors.kinds import Camera, RangeBearing, SensorKind
@@ -41,6 +45,7 @@ __all__ = [
     "SensorObservation",
     "SensorSpec",
     "box_distances",
+    "box_distances_reference",
     "cached_sector_polygon",
     "clear_mask",
     "draw_noise",
@@ -54,8 +59,10 @@ __all__ = [
     "sector_mask",
     "sector_polygon",
     "seen_mask",
+    "shadow_points_reference",
     "shadow_polygons",
     "sight_masks",
+    "sight_masks_reference",
     "specs_from_scenario",
     "visibility_regions",
 ]

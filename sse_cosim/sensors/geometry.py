@@ -3,7 +3,9 @@
 Conventions: points are network metres, angles radians CCW from east. Vehicle footprints are
 oriented rectangles, handled in bulk as :class:`Boxes` (arrays, no shapely) by the cheap
 vectorized tests (:func:`in_sector`, :func:`line_of_sight`); shapely is only used to build the
-sector and shadow polygons when a caller asks for regions.
+sector and shadow polygons when a caller asks for regions. The per-step work (sight masks, box
+distances, shadow points, sector rings) runs compiled (:mod:`sse_cosim.sensors.kernels`), each
+kernel bit for bit with its NumPy reference here (``*_reference``).
 
 Boundary semantics (closed sets): a segment that merely touches a footprint is blocked, a
 point on the sector's edge or arc is inside the sector. Polygons are inscribed approximations
@@ -22,11 +24,13 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
+from sse_cosim.sensors import kernels
 from sse_cosim.world.snapshot import Footprint, Pose
 
 FULL_TURN = 2.0 * math.pi
 _FULL_EPS = 1e-9
 _FAR_POINTS = 5  # rays of a shadow's far cap; its spread is < pi, so steps are < pi / 4
+FAR_STEPS = np.linspace(0.0, 1.0, _FAR_POINTS)  # (f,) the rays' fractions of the spread
 
 
 @dataclass(frozen=True, eq=False)
@@ -175,7 +179,36 @@ def sight_masks(
     Sensor j (``origins`` (s, 2), ``headings``/``fovs_rad``/``ranges_m`` (s,)) sees target i
     iff it is in the sector and its segment misses every occluder of j: the boxes within
     ``ranges_m[j]`` of the sensor except its carrier ``carriers[j]`` (box index, -1: none).
-    One vectorized pass; what :func:`in_sector` and :func:`line_of_sight` compute per sensor.
+    Compiled (:func:`sse_cosim.sensors.kernels.sight_masks`); what :func:`in_sector` and
+    :func:`line_of_sight` compute per sensor, and :func:`sight_masks_reference` in NumPy.
+    """
+    return kernels.sight_masks(
+        _floats(origins, (-1, 2)), _floats(headings, (-1,)), _floats(fovs_rad, (-1,)),
+        _floats(ranges_m, (-1,)), np.ascontiguousarray(carriers, dtype=np.int64).reshape(-1),
+        _floats(targets, (-1, 2)), boxes.centers, boxes.axes, boxes.half,
+        0.5 * FULL_TURN - _FULL_EPS)
+
+
+def _floats(values: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """``values`` as a contiguous float64 array of ``shape`` (for the compiled kernels)."""
+    return np.ascontiguousarray(values, dtype=float).reshape(shape)
+
+
+def sight_masks_reference(
+    origins: np.ndarray,
+    headings: np.ndarray,
+    fovs_rad: np.ndarray,
+    ranges_m: np.ndarray,
+    carriers: np.ndarray,
+    targets: np.ndarray,
+    boxes: Boxes,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(seen (s, k), occluders (s, m))`` for ``s`` sensors, ``k`` targets, ``m`` boxes.
+
+    Sensor j (``origins`` (s, 2), ``headings``/``fovs_rad``/``ranges_m`` (s,)) sees target i
+    iff it is in the sector and its segment misses every occluder of j: the boxes within
+    ``ranges_m[j]`` of the sensor except its carrier ``carriers[j]`` (box index, -1: none).
+    The NumPy reference of :func:`sight_masks`: one vectorized pass.
     """
     o = np.asarray(origins, dtype=float).reshape(-1, 2)
     t = np.asarray(targets, dtype=float).reshape(-1, 2)
@@ -205,7 +238,14 @@ def _local(points: np.ndarray, boxes: Boxes) -> tuple[np.ndarray, np.ndarray]:
 
 
 def box_distances(origins: np.ndarray, boxes: Boxes) -> np.ndarray:
-    """Euclidean distance from each origin (s, 2) to each closed box, shape (s, m)."""
+    """Euclidean distance from each origin (s, 2) to each closed box, shape (s, m) (compiled:
+    :func:`sse_cosim.sensors.kernels.box_distances`)."""
+    return kernels.box_distances(_floats(origins, (-1, 2)), boxes.centers, boxes.axes,
+                                 boxes.half)
+
+
+def box_distances_reference(origins: np.ndarray, boxes: Boxes) -> np.ndarray:
+    """The NumPy reference of :func:`box_distances`."""
     f, l_ = _local(np.asarray(origins, dtype=float).reshape(-1, 2), boxes)
     ef = np.maximum(np.abs(f) - boxes.half[:, 0], 0.0)
     el = np.maximum(np.abs(l_) - boxes.half[:, 1], 0.0)
@@ -233,13 +273,32 @@ def sector_polygon(
     A sector of ``fov_rad`` >= 2 pi is the disc around the pose.
     """
     full = fov_rad >= FULL_TURN - _FULL_EPS
-    span = FULL_TURN if full else fov_rad
-    n = max(1, math.ceil(span / (0.5 * math.pi) * resolution))
-    angles = pose.heading + np.linspace(-0.5 * span, 0.5 * span, n + 1)
+    ring = kernels.sector_points(pose.x, pose.y, pose.heading, range_m,
+                                 _arc_offsets(FULL_TURN if full else fov_rad, resolution), full)
+    return shapely.polygons(ring)
+
+
+def sector_polygon_reference(
+    pose: Pose, fov_rad: float, range_m: float, resolution: int = 16
+) -> shapely.Polygon:
+    """The NumPy reference of :func:`sector_polygon` (its ring compiled in
+    :func:`sse_cosim.sensors.kernels.sector_points`)."""
+    full = fov_rad >= FULL_TURN - _FULL_EPS
+    angles = pose.heading + _arc_offsets(FULL_TURN if full else fov_rad, resolution)
     arc = pose.position + range_m * np.stack([np.cos(angles), np.sin(angles)], axis=1)
     if full:
         return shapely.Polygon(arc[:-1])
     return shapely.Polygon(np.vstack([pose.position, arc]))
+
+
+@lru_cache(maxsize=64)
+def _arc_offsets(span: float, resolution: int) -> np.ndarray:
+    """The arc's angles about the boresight, (n + 1,) evenly over ``span``: ``resolution``
+    chords per quarter turn (computed once per opening; read-only)."""
+    n = max(1, math.ceil(span / (0.5 * math.pi) * resolution))
+    offsets = np.linspace(-0.5 * span, 0.5 * span, n + 1)
+    offsets.setflags(write=False)
+    return offsets
 
 
 @lru_cache(maxsize=256)
@@ -261,18 +320,14 @@ def cached_sector_polygon(
     return _cached_sector(pose.x, pose.y, pose.heading, fov_rad, range_m, resolution)
 
 
-def shadow_polygons(origin: np.ndarray, boxes: Boxes, range_m: float) -> np.ndarray:
-    """Each box together with the shadow it casts from ``origin``, shape (m,) of polygons.
-
-    The box's two silhouette corners (extreme bearings seen from the origin) are extended
-    radially beyond ``range_m``; box ∪ shadow is convex, so it is the convex hull of the
-    corners and far points on the rays between the silhouette bearings. A box containing
-    the origin hides everything: its shadow is a disc beyond the range.
-    """
+def shadow_points_reference(origin: np.ndarray, boxes: Boxes, range_m: float
+                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(points (m, 4 + f, 2), reach (m,), inside (m,))``: the points whose convex hull is
+    each box together with its shadow from ``origin`` (the box's corners, then far points at
+    ``reach`` from the origin, beyond ``range_m``, on the rays between its silhouette
+    bearings, the extreme bearings seen from the origin), and whether the box holds the
+    origin. The NumPy reference of :func:`sse_cosim.sensors.kernels.shadow_points`."""
     o = np.asarray(origin, dtype=float).reshape(2)
-    m = len(boxes)
-    if m == 0:
-        return np.empty(0, dtype=object)
     corners = boxes.corners()  # (m, 4, 2)
     rel = corners - o  # (m, 4, 2)
     to_center = boxes.centers - o  # (m, 2)
@@ -280,13 +335,30 @@ def shadow_polygons(origin: np.ndarray, boxes: Boxes, range_m: float) -> np.ndar
     dot = np.einsum("mj,mkj->mk", to_center, rel)
     bearing = np.arctan2(cross, dot)  # (m, 4), relative to the centre's bearing
     base = np.arctan2(to_center[:, 1], to_center[:, 0])  # (m,)
-    steps = np.linspace(0.0, 1.0, _FAR_POINTS)  # (f,)
     lo, hi = bearing.min(axis=1), bearing.max(axis=1)
-    rays = base[:, None] + lo[:, None] + (hi - lo)[:, None] * steps[None, :]  # (m, f)
+    rays = base[:, None] + lo[:, None] + (hi - lo)[:, None] * FAR_STEPS[None, :]  # (m, f)
     reach = 2.0 * (range_m + np.sqrt(np.einsum("mkj,mkj->mk", rel, rel)).max(axis=1))  # (m,)
     far = o + reach[:, None, None] * np.stack([np.cos(rays), np.sin(rays)], axis=2)
-    hulls = shapely.convex_hull(shapely.multipoints(np.concatenate([corners, far], axis=1)))
-    inside = boxes.distances(o) <= 0.0
+    inside = box_distances_reference(o.reshape(1, 2), boxes)[0] <= 0.0
+    return np.concatenate([corners, far], axis=1), reach, inside
+
+
+def shadow_polygons(origin: np.ndarray, boxes: Boxes, range_m: float) -> np.ndarray:
+    """Each box together with the shadow it casts from ``origin``, shape (m,) of polygons.
+
+    The box's two silhouette corners are extended radially beyond ``range_m``; box ∪ shadow
+    is convex, so it is the convex hull of its shadow points (compiled:
+    :func:`sse_cosim.sensors.kernels.shadow_points`). A box containing the origin hides
+    everything: its shadow is a disc beyond the range.
+    """
+    o = np.asarray(origin, dtype=float).reshape(2)
+    if len(boxes) == 0:
+        return np.empty(0, dtype=object)
+    points, reach, inside = kernels.shadow_points(o, boxes.centers, boxes.axes, boxes.half,
+                                                  float(range_m), FAR_STEPS)
+    # one line string per box: the same coordinates as a multipoint (so the same hull),
+    # built without a shapely Point per coordinate
+    hulls = shapely.convex_hull(shapely.linestrings(points))
     if np.any(inside):
         disc = shapely.Point(o).buffer(2.0 * float(reach.max()), quad_segs=8)
         hulls[inside] = disc

@@ -21,8 +21,15 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from sse_cosim.sets.kernels import FloatArray, area_2d, nonzero_columns, pairwise_sum
-from sse_cosim.sets.zonotope import PARALLEL_RTOL
+from sse_cosim.sets.kernels import (
+    FloatArray,
+    area_2d,
+    folded_sorted,
+    full_rank_2d,
+    pairwise_sum,
+    row_sum,
+    vertices_2d,
+)
 
 MARGIN = 1e-10
 """Safety margin of the containment test, relative to the size of the input set: covers the
@@ -36,60 +43,10 @@ REFINE_STEPS = 1
 
 
 @njit(cache=True)
-def _row_sum(values: FloatArray) -> float:
-    """Σ of a 1-D array in numpy's pairwise order."""
-    contiguous = np.ascontiguousarray(values)
-    return pairwise_sum(contiguous, 0, contiguous.shape[0])
-
-
-@njit(cache=True)
-def _folded_sorted(generators: FloatArray) -> FloatArray:
-    """The columns (2, e) folded into the upper half-plane and sorted by angle (stable)."""
-    g = generators.copy()
-    for j in range(g.shape[1]):
-        if g[1, j] < 0 or (g[1, j] == 0 and g[0, j] < 0):
-            g[0, j] = -g[0, j]
-            g[1, j] = -g[1, j]
-    angle = np.empty(g.shape[1])
-    for j in range(g.shape[1]):
-        angle[j] = np.arctan2(g[1, j], g[0, j])
-    return np.ascontiguousarray(g[:, np.argsort(angle, kind="mergesort")])
-
-
-@njit(cache=True)
 def zonotope_vertices(generators: FloatArray) -> FloatArray:
     """Vertices (k, 2) of ⟨0, G⟩, G (2, e), counter-clockwise from the lowest
-    (``Zonotope.vertices``): zero columns dropped, folded, sorted, runs of parallel columns
-    summed, then the boundary as the cumulative sum of 2g_i and -2g_i."""
-    g = _folded_sorted(nonzero_columns(generators))
-    e = g.shape[1]
-    if e == 0:
-        return np.zeros((1, 2))
-    merged = np.zeros((2, e))
-    count = 0
-    for j in range(e):
-        if j > 0:
-            cross = g[0, j - 1] * g[1, j] - g[1, j - 1] * g[0, j]
-            scale = (np.sqrt(g[0, j - 1] ** 2 + g[1, j - 1] ** 2)
-                     * np.sqrt(g[0, j] ** 2 + g[1, j] ** 2))
-            if abs(cross) > PARALLEL_RTOL * scale:
-                count += 1
-        merged[0, count] += g[0, j]
-        merged[1, count] += g[1, j]
-    g = np.ascontiguousarray(merged[:, :count + 1])
-    k = g.shape[1]
-    start = np.array([-_row_sum(g[0]), -_row_sum(g[1])])
-    vertices = np.empty((2 * k, 2))
-    vertices[0] = start
-    path = np.zeros(2)
-    for step in range(2 * k - 1):
-        sign = 2.0 if step < k else -2.0
-        column = step % k
-        path[0] += sign * g[0, column]
-        path[1] += sign * g[1, column]
-        vertices[step + 1, 0] = start[0] + path[0]
-        vertices[step + 1, 1] = start[1] + path[1]
-    return vertices
+    (:func:`vertices_2d` about the origin)."""
+    return vertices_2d(np.zeros(2), generators)
 
 
 @njit(cache=True)
@@ -155,7 +112,7 @@ def unit_directions(generators: FloatArray) -> FloatArray:
     for j in range(g.shape[1]):
         g[0, j] /= kept_norms[j]
         g[1, j] /= kept_norms[j]
-    g = _folded_sorted(g)
+    g = folded_sorted(g)
     chosen = np.empty(g.shape[1], dtype=np.int64)
     chosen[0] = 0
     count = 1
@@ -287,7 +244,7 @@ def _product(widths: FloatArray, alpha: FloatArray) -> FloatArray:
 @njit(cache=True)
 def _quadratic(widths: FloatArray, alpha: FloatArray) -> float:
     """αᵀAα (half the zonotope's area)."""
-    return _row_sum(_product(widths, alpha) * alpha)
+    return row_sum(_product(widths, alpha) * alpha)
 
 
 @njit(cache=True)
@@ -305,11 +262,11 @@ def _contain(alpha: FloatArray, widths: FloatArray, middle: FloatArray, upper: F
             return True, alpha
         reach = np.zeros(k)
         for i in range(k):
-            reach[i] = _row_sum(widths[i][used])
+            reach[i] = row_sum(widths[i][used])
         if (reach[short] <= 0).any():
             used = np.ones(k, dtype=np.bool_)
             for i in range(k):
-                reach[i] = _row_sum(widths[i])
+                reach[i] = row_sum(widths[i])
         step = ((deficit[short] + margin) / reach[short]).max()
         alpha = alpha.copy()  # one margin more than needed: rounding cannot undo the step
         for i in range(k):
@@ -394,30 +351,6 @@ holds the polygon is smaller)."""
 FALLBACK, EXACT, ENCLOSED = 0, 1, 2
 """What :func:`enclose_correction` found: no enclosure (the caller keeps its fallback), an
 enclosure within :data:`EXACT_RTOL` of the exact polygon, or one that may be beaten."""
-
-
-@njit(cache=True)
-def full_rank_2d(generators: FloatArray) -> bool:
-    """``zonotope.full_rank`` for G (2, e): s_min > e·eps·s_max from 2×2 minors."""
-    e = generators.shape[1]
-    if e < 2:
-        return False
-    p = q = r = 0.0
-    for j in range(e):
-        a, b = generators[0, j], generators[1, j]
-        p += a * a
-        q += b * b
-        r += a * b
-    if p + q == 0.0:
-        return False
-    s_max2 = 0.5 * (p + q) + np.sqrt(0.25 * (p - q) ** 2 + r * r)
-    cross = np.empty(e * e)
-    for i in range(e):
-        for j in range(e):
-            c = generators[0, i] * generators[1, j] - generators[1, i] * generators[0, j]
-            cross[i * e + j] = c * c
-    s_prod = np.sqrt(0.5 * pairwise_sum(cross, 0, e * e))
-    return s_prod > e * np.finfo(np.float64).eps * s_max2
 
 
 @njit(cache=True)

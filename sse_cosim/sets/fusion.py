@@ -18,8 +18,8 @@ from numpy.typing import ArrayLike
 from sse_cosim.sets import enclosure_kernels
 from sse_cosim.sets._registry import lookup
 from sse_cosim.sets.enclosure import enclose_intersection_reference
-from sse_cosim.sets.enclosure_kernels import full_rank_2d
 from sse_cosim.sets.gains import intersect_strips
+from sse_cosim.sets.kernels import full_rank_2d
 from sse_cosim.sets.overlap import projection_interval, strip_covers
 from sse_cosim.sets.strips import Strips, zonotope_facet_strips
 from sse_cosim.sets.zonotope import FloatArray, Zonotope, full_rank

@@ -182,8 +182,17 @@ def volume_gain_vertices(generators: FloatArray, normal: FloatArray, radius: flo
     the lines hᵀλ = 1 and d_iᵀλ = 0, i.e. λ = 0 or λ = g_i / (hᵀg_i).
 
     All candidates are scored at once in closed form: d_iᵀλ = g_i × λ (2-D cross product) and
-    V = Σ_{i<j} |g_i × g_j|; the same values as :func:`strip_gain_volume`.
+    V = Σ_{i<j} |g_i × g_j|; the same values as :func:`strip_gain_volume`. Compiled
+    (:func:`~sse_cosim.sets.kernels.volume_gain_2d`; NumPy reference
+    :func:`volume_gain_vertices_reference`).
     """
+    return kernels.volume_gain_2d(np.ascontiguousarray(generators, dtype=np.float64),
+                                  np.ascontiguousarray(normal, dtype=np.float64), float(radius))
+
+
+def volume_gain_vertices_reference(generators: FloatArray, normal: FloatArray,
+                                   radius: float) -> FloatArray:
+    """The NumPy reference of :func:`volume_gain_vertices`."""
     g0, g1 = generators[0], generators[1]
     hg = normal[0] * g0 + normal[1] * g1
     usable = np.abs(hg) > 1e-12 * np.sqrt(g0 * g0 + g1 * g1)

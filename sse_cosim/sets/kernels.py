@@ -7,6 +7,15 @@ against the other on random and degenerate inputs:
   (reference ``generator_volume_reference``): bit for bit, as it sums in numpy's order;
 - :func:`girard_reduce` for the ``girard`` order reduction (reference
   ``girard_reduce_reference`` in :mod:`~sse_cosim.sets.reduction`): bit for bit;
+- :func:`full_rank_2d` for :func:`~sse_cosim.sets.zonotope.full_rank` in 2-D and
+  :func:`contains_2d` for :meth:`~sse_cosim.sets.zonotope.Zonotope.contains` of a full-rank
+  2-D zonotope (reference ``contains_2d_reference``): the same sums in numpy's order, the
+  two-term dot products may round differently from numpy's BLAS calls (a point within a
+  rounding of a facet, beyond the tolerance, is the only place they can disagree);
+- :func:`volume_gain_2d` for ``gains.volume_gain_vertices`` (reference
+  ``volume_gain_vertices_reference``): bit for bit;
+- :func:`vertices_2d` for :meth:`~sse_cosim.sets.zonotope.Zonotope.vertices` (reference
+  ``vertices_2d_reference``): bit for bit;
 - :func:`frobenius_gain` and :func:`intersect_frobenius` for the Frobenius gain of
   Proposition 1 (reference ``frobenius_gain_reference`` in :mod:`~sse_cosim.sets.gains`): the
   same least-squares minimizer by Householder QR instead of LAPACK's SVD solver, so equal up
@@ -24,6 +33,9 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 _BLOCK = 128  # numpy's PW_BLOCKSIZE
+
+PARALLEL_RTOL = 1e-12
+"""Consecutive sorted generators whose cross product is below this (relative) are parallel."""
 
 
 @njit(cache=True)
@@ -112,6 +124,158 @@ def area_2d(generators: FloatArray) -> float:
         for j in range(k):
             cross[i * k + j] = abs(a[i] * b[j] - b[i] * a[j])
     return 2.0 * pairwise_sum(cross, 0, k * k)
+
+
+@njit(cache=True)
+def full_rank_2d(generators: FloatArray) -> bool:
+    """``zonotope.full_rank`` for G (2, e): s_min > e·eps·s_max from 2×2 minors."""
+    e = generators.shape[1]
+    if e < 2:
+        return False
+    p = q = r = 0.0
+    for j in range(e):
+        a, b = generators[0, j], generators[1, j]
+        p += a * a
+        q += b * b
+        r += a * b
+    if p + q == 0.0:
+        return False
+    s_max2 = 0.5 * (p + q) + np.sqrt(0.25 * (p - q) ** 2 + r * r)
+    cross = np.empty(e * e)
+    for i in range(e):
+        for j in range(e):
+            c = generators[0, i] * generators[1, j] - generators[1, i] * generators[0, j]
+            cross[i * e + j] = c * c
+    s_prod = np.sqrt(0.5 * pairwise_sum(cross, 0, e * e))
+    return s_prod > e * np.finfo(np.float64).eps * s_max2
+
+
+@njit(cache=True)
+def contains_2d(center: FloatArray, generators: FloatArray, points: FloatArray,
+                tol: float) -> NDArray[np.bool_]:
+    """Whether each point (k, 2) lies in the full-rank 2-D ⟨c, G⟩ (``center`` (2,), G (2, e)),
+    shape (k,) bool: |nᵀ(x - c)| <= Σ_i |nᵀg_i| + tol for the unit normal n of every
+    nonzero column (the facet normals, parallel repeats only repeating a test)."""
+    e = generators.shape[1]
+    k = points.shape[0]
+    inside = np.ones(k, dtype=np.bool_)
+    terms = np.empty(e)
+    for j in range(e):
+        n0, n1 = -generators[1, j], generators[0, j]
+        norm = np.sqrt(n0 * n0 + n1 * n1)
+        if not norm > 0.0:
+            continue
+        n0, n1 = n0 / norm, n1 / norm
+        for i in range(e):
+            terms[i] = abs(n0 * generators[0, i] + n1 * generators[1, i])
+        bound = pairwise_sum(terms, 0, e) + tol
+        for p in range(k):
+            offset = abs((points[p, 0] - center[0]) * n0 + (points[p, 1] - center[1]) * n1)
+            if not offset <= bound:
+                inside[p] = False
+    return inside
+
+
+@njit(cache=True)
+def row_sum(values: FloatArray) -> float:
+    """Σ of a 1-D array in numpy's pairwise order."""
+    contiguous = np.ascontiguousarray(values)
+    return pairwise_sum(contiguous, 0, contiguous.shape[0])
+
+
+@njit(cache=True)
+def folded_sorted(generators: FloatArray) -> FloatArray:
+    """The columns (2, e) folded into the upper half-plane and sorted by angle (stable)."""
+    g = generators.copy()
+    for j in range(g.shape[1]):
+        if g[1, j] < 0 or (g[1, j] == 0 and g[0, j] < 0):
+            g[0, j] = -g[0, j]
+            g[1, j] = -g[1, j]
+    angle = np.empty(g.shape[1])
+    for j in range(g.shape[1]):
+        angle[j] = np.arctan2(g[1, j], g[0, j])
+    return np.ascontiguousarray(g[:, np.argsort(angle, kind="mergesort")])
+
+
+@njit(cache=True)
+def vertices_2d(center: FloatArray, generators: FloatArray) -> FloatArray:
+    """``Zonotope.vertices`` of ⟨c, G⟩ (``center`` (2,), G (2, e)), shape (k, 2), with its
+    arithmetic: zero columns dropped, folded, sorted, runs of parallel columns summed in order,
+    then c - Σg followed by the cumulative sum of 2g_i and -2g_i (the centre alone without
+    generators)."""
+    g = folded_sorted(nonzero_columns(generators))
+    e = g.shape[1]
+    if e == 0:
+        return center.reshape(1, 2).copy()
+    merged = np.empty((2, e))
+    count = -1
+    for j in range(e):
+        if j == 0 or _not_parallel(g[:, j - 1], g[:, j]):
+            count += 1
+            merged[0, count], merged[1, count] = g[0, j], g[1, j]
+        else:
+            merged[0, count] += g[0, j]
+            merged[1, count] += g[1, j]
+    g = np.ascontiguousarray(merged[:, :count + 1])
+    k = g.shape[1]
+    start = np.array([center[0] - row_sum(g[0]), center[1] - row_sum(g[1])])
+    vertices = np.empty((2 * k, 2))
+    vertices[0] = start
+    path = np.zeros(2)
+    for step in range(2 * k - 1):
+        sign = 2.0 if step < k else -2.0
+        column = step % k
+        path[0] += sign * g[0, column]
+        path[1] += sign * g[1, column]
+        vertices[step + 1, 0] = start[0] + path[0]
+        vertices[step + 1, 1] = start[1] + path[1]
+    return vertices
+
+
+@njit(cache=True)
+def _not_parallel(a: FloatArray, b: FloatArray) -> bool:
+    """Whether consecutive sorted columns a, b (2,) start a new run (``_merge_parallel``)."""
+    cross = a[0] * b[1] - a[1] * b[0]
+    scale = np.sqrt(a[0] * a[0] + a[1] * a[1]) * np.sqrt(b[0] * b[0] + b[1] * b[1])
+    return abs(cross) > PARALLEL_RTOL * scale
+
+
+@njit(cache=True)
+def volume_gain_2d(generators: FloatArray, normal: FloatArray, radius: float) -> FloatArray:
+    """``gains.volume_gain_vertices`` for G (2, e), h (2,) and r: every candidate λ = 0 or
+    g_i / (hᵀg_i) scored in closed form, the best (first of the least) returned, shape (2,);
+    the reference's arithmetic, its sums in numpy's pairwise order."""
+    e = generators.shape[1]
+    cand0 = np.zeros(e + 1)
+    cand1 = np.zeros(e + 1)
+    c = 1
+    a = np.empty(e)
+    b = np.empty(e)
+    k = 0
+    for i in range(e):
+        g0, g1 = generators[0, i], generators[1, i]
+        hg = normal[0] * g0 + normal[1] * g1
+        if abs(hg) > 1e-12 * np.sqrt(g0 * g0 + g1 * g1):
+            cand0[c], cand1[c] = g0 / hg, g1 / hg
+            c += 1
+        if g0 != 0 or g1 != 0:
+            a[k], b[k] = g0, g1
+            k += 1
+    cross = np.empty(k * k)
+    for i in range(k):
+        for j in range(k):
+            cross[i * k + j] = abs(a[i] * b[j] - b[i] * a[j])
+    base = 0.5 * pairwise_sum(cross, 0, k * k)
+    cuts = np.empty(e)
+    best, best_value = 0, 0.0
+    for n in range(c):
+        for i in range(e):
+            cuts[i] = abs(cand1[n] * generators[0, i] - cand0[n] * generators[1, i])
+        value = base * abs(1.0 - (cand0[n] * normal[0] + cand1[n] * normal[1])) \
+            + radius * pairwise_sum(cuts, 0, e)
+        if n == 0 or value < best_value or (np.isnan(value) and not np.isnan(best_value)):
+            best, best_value = n, value
+    return np.array([cand0[best], cand1[best]])
 
 
 @njit(cache=True)

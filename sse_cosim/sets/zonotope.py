@@ -23,13 +23,12 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
 
 from sse_cosim.sets._registry import lookup
-from sse_cosim.sets.kernels import area_2d
+from sse_cosim.sets.kernels import PARALLEL_RTOL, area_2d, contains_2d, full_rank_2d, vertices_2d
 from sse_cosim.sets.reduction import REDUCTION_METHODS
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
-PARALLEL_RTOL = 1e-12
 
 
 def _read_only(values: ArrayLike) -> FloatArray:
@@ -140,6 +139,15 @@ def full_rank(generators: FloatArray) -> bool:
     return bool(s_prod > e * np.finfo(np.float64).eps * s_max2)
 
 
+def contains_2d_reference(center: FloatArray, generators: FloatArray, points: FloatArray,
+                          tol: float) -> BoolArray:
+    """The NumPy reference of :func:`~sse_cosim.sets.kernels.contains_2d`: whether each point
+    (k, 2) lies in the full-rank 2-D ⟨c, G⟩, shape (k,), by the unit facet normals."""
+    normals = _unit_rows(cofactor_vectors(generators))  # parallel repeats only repeat a test
+    offsets = np.abs((points - center) @ normals.T)
+    return (offsets <= np.abs(normals @ generators).sum(axis=1) + tol).all(axis=1)
+
+
 def _merge_parallel(sorted_generators: FloatArray) -> FloatArray:
     """Sum runs of consecutive parallel columns of angle-sorted, same-half-plane generators."""
     a, b = sorted_generators[:, :-1], sorted_generators[:, 1:]
@@ -147,6 +155,21 @@ def _merge_parallel(sorted_generators: FloatArray) -> FloatArray:
     scale = np.linalg.norm(a, axis=0) * np.linalg.norm(b, axis=0)
     starts = np.flatnonzero(np.concatenate([[True], np.abs(cross) > PARALLEL_RTOL * scale]))
     return np.add.reduceat(sorted_generators, starts, axis=1)
+
+
+def vertices_2d_reference(center: FloatArray, generators: FloatArray) -> FloatArray:
+    """The NumPy reference of :func:`~sse_cosim.sets.kernels.vertices_2d`: the vertices (k, 2)
+    of the 2-D ⟨c, G⟩ (``Zonotope.vertices``)."""
+    g = generators[:, np.any(generators != 0, axis=0)]
+    flip = (g[1] < 0) | ((g[1] == 0) & (g[0] < 0))
+    g = np.where(flip, -g, g)
+    g = g[:, np.argsort(np.arctan2(g[1], g[0]), kind="stable")]
+    if g.shape[1] == 0:
+        return center[None, :].copy()
+    g = _merge_parallel(g)
+    start = center - g.sum(axis=1)
+    path = start + np.cumsum(2.0 * np.hstack([g, -g]).T, axis=0)
+    return np.vstack([start, path[:-1]])
 
 
 @dataclass(frozen=True, eq=False)
@@ -254,20 +277,12 @@ class Zonotope:
 
         Generators are folded into the upper half-plane, sorted by angle and parallel ones
         merged; then the boundary is the cumulative sum of 2g_i followed by -2g_i. A point gives
-        one row, a segment two.
+        one row, a segment two. Compiled (:func:`~sse_cosim.sets.kernels.vertices_2d`; its
+        NumPy reference is :func:`vertices_2d_reference`).
         """
         if self.dim != 2:
             raise ValueError(f"vertices() needs a 2-D zonotope; this one is {self.dim}-D")
-        g = self.remove_zero_generators().generators
-        flip = (g[1] < 0) | ((g[1] == 0) & (g[0] < 0))
-        g = np.where(flip, -g, g)
-        g = g[:, np.argsort(np.arctan2(g[1], g[0]), kind="stable")]
-        if g.shape[1] == 0:
-            return self.center[None, :].copy()
-        g = _merge_parallel(g)
-        start = self.center - g.sum(axis=1)
-        path = start + np.cumsum(2.0 * np.hstack([g, -g]).T, axis=0)
-        return np.vstack([start, path[:-1]])
+        return vertices_2d(self.center, self.generators)
 
     def contains(self, point: ArrayLike, tol: float = 1e-9) -> bool | BoolArray:
         """Whether x (n,) lies in Z, or per row of x (k, n), with absolute slack ``tol``.
@@ -280,10 +295,8 @@ class Zonotope:
         if points.shape[1] != self.dim:
             raise ValueError(f"points must have {self.dim} coordinates; got shape {x.shape}")
         g = self.generators
-        if self.dim == 2 and full_rank(g):
-            normals = _unit_rows(cofactor_vectors(g))  # parallel repeats only repeat a test
-            offsets = np.abs((points - self.center) @ normals.T)
-            inside = (offsets <= np.abs(normals @ g).sum(axis=1) + tol).all(axis=1)
+        if self.dim == 2 and full_rank_2d(g):  # compiled (reference: contains_2d_reference)
+            inside = contains_2d(self.center, g, np.ascontiguousarray(points), tol)
         else:
             inside = np.array([self._contains_lp(p, tol) for p in points], dtype=bool)
         return bool(inside[0]) if x.ndim == 1 else inside

@@ -8,8 +8,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
+from shapely.ops import substring
 
-from sse_cosim.control.picture import Picture, SceneContext, assess
+from sse_cosim.control.picture import (
+    Picture,
+    SceneContext,
+    _around,
+    _arrivals,
+    assess,
+    route_piece,
+    route_stations,
+)
 from sse_cosim.control.speed import SpeedLevel, level_speed, paper_level
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.world.network import build_network
@@ -127,3 +136,43 @@ def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
     assert not assess(context, at_zebra, 0.0, empty, empty, [pedestrian]).path_clear
     far = shapely.Point(200.0, south - 40.0).buffer(0.5)
     assert assess(context, at_zebra, 0.0, empty, empty, [far]).path_clear
+
+
+def test_arrivals_in_one_call_are_the_earliest_arrival_of_each_zone():
+    # _arrivals measures every source to every zone in one shapely call: per zone, the same
+    # earliest arrival as the nearest source's distance, minus the slack, over the speed.
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        sources = [shapely.box(x, y, x + w, y + h).buffer(rng.uniform(0.0, 1.0), quad_segs=2)
+                   for x, y, w, h in rng.uniform(0.0, 20.0, size=(rng.integers(1, 4), 4))]
+        zones = [shapely.box(x, y, x + 3.0, y + 2.0) for x, y in rng.uniform(0.0, 30.0, (3, 2))]
+        got = _arrivals([shapely.Polygon(), *sources], zones, 1.5, 0.6)
+        expected = [max(0.0, min(s.distance(z) for s in sources) - 0.6) / 1.5 for z in zones]
+        assert got.tolist() == expected
+    assert _arrivals([shapely.Polygon()], zones, 1.5, 0.6).tolist() == [np.inf] * 3
+
+
+def test_route_pieces_are_shapelys_substrings(context):
+    # route_piece finds the vertices between two distances from stations computed once: the
+    # same line string as shapely.ops.substring, on the real route and on random polylines
+    # (distances on vertices too).
+    rng = np.random.default_rng(8)
+    lines = [context.route_line] + [
+        shapely.LineString(np.cumsum(rng.normal(size=(rng.integers(2, 30), 2)), axis=0))
+        for _ in range(20)]
+    for line in lines:
+        stations = route_stations(line)
+        cuts = np.concatenate([rng.uniform(0.0, line.length, 20), stations, [line.length]])
+        for start, end in rng.choice(cuts, size=(40, 2)):
+            start, end = min(start, end), max(start, end)
+            if start < end:
+                got = route_piece(line, stations, start, end)
+                assert shapely.to_wkb(got) == shapely.to_wkb(substring(line, start, end))
+
+
+def test_the_kept_widening_of_a_crossing_is_its_buffer(context):
+    area = context.crossings[0].area
+    for radius in (0.5, 3.0, 0.5):
+        assert _around(area, radius).equals_exact(area.buffer(radius), 0.0)
+    assert _around(shapely.box(0, 0, 1, 1), 3.0).equals_exact(
+        shapely.box(0, 0, 1, 1).buffer(3.0), 0.0)

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from sse_cosim.estimation.bus_fusion import fuse_at_bus
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import POSITION_MEMO, MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver
 from sse_cosim.scenario.model import Estimator
-from sse_cosim.sets import Strips
+from sse_cosim.sets import Strips, Zonotope
 
 DT = 0.1
 
@@ -97,3 +97,20 @@ def test_initial_set_is_the_parallelogram_of_two_strips():
     start = model.initial_set(strips, "frobenius")
     np.testing.assert_allclose(start.center, [3.0, -1.0])
     assert start.volume() == pytest.approx(1.0 * 0.5)
+
+
+@pytest.mark.parametrize("state_model", ["position", "constant-velocity"])
+def test_position_sets_are_kept_per_estimate_and_equal_the_projection(state_model):
+    model = MotionModel.from_config(Estimator(state_model=state_model, position_jitter_m=0.3), DT)
+    rng = np.random.default_rng(5)
+    estimates = [Zonotope(rng.normal(size=model.dim), rng.normal(size=(model.dim, 3)))
+                 for _ in range(POSITION_MEMO + 5)]
+    first = model.position(estimates[0])
+    assert model.position(estimates[0]) is first  # kept: computed once
+    for estimate in estimates:  # the first is evicted, then computed again
+        position = model.position(estimate)
+        expected = model.position_matrix @ estimate + Zonotope(np.zeros(2), 0.3 * np.eye(2))
+        assert np.array_equal(position.center, expected.center)
+        assert np.array_equal(position.generators, expected.generators)
+    again = model.position(estimates[0])
+    assert again is not first and np.array_equal(again.generators, first.generators)

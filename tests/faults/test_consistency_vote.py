@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import shapely
 
-from sse_cosim.estimation.bus_screen import contradicted
-from sse_cosim.estimation.occupancy import ClearRegion
+from sse_cosim.estimation.bus_screen import _eroded, contradicted
+from sse_cosim.estimation.occupancy import QUAD_SEGMENTS, ClearRegion
 from sse_cosim.estimation.vote import (
     READMIT_STEPS,
     Probation,
@@ -92,3 +92,17 @@ def test_a_set_inside_a_clear_view_is_contradicted():
     assert contradicted(box(0, 0), [ClearRegion(view, 0)], 0.3, 0.25)
     assert not contradicted(box(9.5, 0), [ClearRegion(view, 0)], 0.3, 0.25)
     assert not contradicted(box(0, 0), [ClearRegion(view, 40)], 0.3, 0.25)  # seen long ago
+
+
+def test_kept_erosions_are_the_erosion_of_that_region_at_that_distance():
+    # _eroded keeps the newest erosions by region identity and distance: a kept one is the
+    # buffer computed afresh, and an equal region that is another object, or another
+    # distance, is not served a kept one.
+    view = shapely.box(-10, -10, 10, 10).union(shapely.box(5, 5, 20, 8))
+    first = _eroded(view, 0.7)
+    assert _eroded(view, 0.7) is first
+    assert first.equals_exact(view.buffer(-0.7, quad_segs=QUAD_SEGMENTS), 0.0)
+    other = _eroded(view, 1.2)
+    assert other.equals_exact(view.buffer(-1.2, quad_segs=QUAD_SEGMENTS), 0.0)
+    twin = shapely.box(-10, -10, 10, 10).union(shapely.box(5, 5, 20, 8))
+    assert _eroded(twin, 0.7) is not first

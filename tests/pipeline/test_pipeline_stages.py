@@ -41,6 +41,19 @@ def test_union_or_empty_skips_missing_and_empty_parts():
     assert union_or_empty([shapely.box(0, 0, 1, 1), None, shapely.box(1, 0, 2, 1)]).area == 2.0
 
 
+def test_union_or_empty_keeps_the_union_of_the_same_parts():
+    # The union of the same geometry objects is computed once; equal parts that are other
+    # objects, or the same parts in another order, get their own union, equal to a fresh one.
+    a, b = shapely.box(0, 0, 2, 1), shapely.box(1, 0, 3, 2)
+    first = union_or_empty([a, None, b])
+    assert union_or_empty([a, b]) is first
+    assert first.equals_exact(shapely.union_all([a, b]), 0.0)
+    again = union_or_empty([shapely.box(0, 0, 2, 1), b])
+    assert again is not first and again.equals_exact(first, 0.0)
+    swapped = union_or_empty([b, a])
+    assert swapped is not first and swapped.equals_exact(shapely.union_all([b, a]), 0.0)
+
+
 def test_detections_are_grouped_by_node_pedestrian_and_sensor():
     observations = {"front": observation("front", BUS, ("a",), (0, 0, 1, 1)),
                     "near": observation("near", BUS, ("a", "b"), (0, 0, 1, 1)),

@@ -13,13 +13,19 @@ from sensors_scene import SETTINGS
 
 from sse_cosim.sensors import (
     Boxes,
+    box_distances,
+    box_distances_reference,
     in_sector,
+    kernels,
     line_of_sight,
     sector_polygon,
+    shadow_points_reference,
     shadow_polygons,
     sight_masks,
+    sight_masks_reference,
     visibility_regions,
 )
+from sse_cosim.sensors.geometry import FAR_STEPS, sector_polygon_reference
 from sse_cosim.world.snapshot import Footprint, Pose
 
 coord = st.floats(-30.0, 30.0)
@@ -142,3 +148,75 @@ def test_sight_masks_match_the_per_sensor_tests(feet, sensor_poses, seed):
             pose.position, targets, boxes.subset(others)
         )
         assert np.array_equal(seen[j], want)
+
+
+@SETTINGS
+@given(st.lists(footprints, min_size=1, max_size=5), poses)
+def test_shadow_hulls_are_the_hulls_of_their_points_as_multipoints(feet, origin):
+    # shadow_polygons hands GEOS each box's points as a line string (no Point objects): the
+    # hull must be the one of the same points as a multipoint, coordinate for coordinate.
+    boxes = Boxes.from_footprints(feet)
+    outside = boxes.distances(origin.position) > 0.0
+    points = shadow_points_reference(origin.position, boxes, 30.0)[0][outside]
+    expected = shapely.convex_hull(shapely.multipoints(points))
+    hulls = shadow_polygons(origin.position, boxes, 30.0)[outside]
+    assert list(shapely.to_wkb(hulls)) == list(shapely.to_wkb(expected))
+
+
+@SETTINGS
+@given(st.lists(footprints, min_size=1, max_size=6), poses, ranges)
+def test_compiled_shadow_points_are_the_reference_bit_for_bit(feet, origin, reach):
+    # Origins anywhere, inside boxes too (the disc case): points, reach and inside agree.
+    boxes = Boxes.from_footprints(feet)
+    o = origin.position
+    got = kernels.shadow_points(o, boxes.centers, boxes.axes, boxes.half, reach, FAR_STEPS)
+    expected = shadow_points_reference(o, boxes, reach)
+    for mine, theirs in zip(got, expected, strict=True):
+        assert mine.shape == theirs.shape and mine.tobytes() == theirs.tobytes()
+
+
+def test_compiled_shadow_points_flag_an_origin_inside_or_on_a_box():
+    boxes = Boxes.from_footprints([Footprint(Pose(10.0, 0.0, 0.0), 4.0, 2.0)])  # x in [6, 10]
+    for x, inside in [(8.0, True), (10.0, True), (6.0, True), (10.5, False), (5.9, False)]:
+        got = kernels.shadow_points(np.array([x, 1.0]), boxes.centers, boxes.axes, boxes.half,
+                                    30.0, FAR_STEPS)[2]
+        assert got.tolist() == [inside]
+
+
+@SETTINGS
+@given(poses, fovs, ranges, st.integers(1, 32))
+def test_compiled_sector_is_the_reference_bit_for_bit(pose, fov, reach, resolution):
+    got = sector_polygon(pose, fov, reach, resolution)
+    expected = sector_polygon_reference(pose, fov, reach, resolution)
+    assert shapely.to_wkb(got) == shapely.to_wkb(expected)
+
+
+@SETTINGS
+@given(st.lists(footprints, min_size=0, max_size=6), st.lists(poses, min_size=1, max_size=4),
+       seeds)
+def test_compiled_sight_masks_are_the_reference(feet, sensor_poses, seed):
+    # Targets scattered, on box corners and on sector edges; full discs among the fields.
+    rng = np.random.default_rng(seed)
+    boxes = Boxes.from_footprints(feet)
+    s, m = len(sensor_poses), len(feet)
+    fov = np.where(rng.random(s) < 0.3, 2 * np.pi, rng.uniform(0.2, 2 * np.pi, size=s))
+    reach = rng.uniform(5.0, 50.0, size=s)
+    carriers = rng.integers(-1, max(m, 1), size=s) if m else np.full(s, -1)
+    origins = np.array([p.position for p in sensor_poses])
+    headings = np.array([p.heading for p in sensor_poses])
+    edges = origins + reach[:, None] * np.stack([np.cos(headings + fov / 2),
+                                                  np.sin(headings + fov / 2)], axis=1)
+    targets = np.vstack([rng.uniform(-40.0, 40.0, size=(30, 2)),
+                         boxes.corners().reshape(-1, 2), edges])
+    args = (origins, headings, fov, reach, carriers, targets, boxes)
+    for got, expected in zip(sight_masks(*args), sight_masks_reference(*args), strict=True):
+        assert got.shape == expected.shape and np.array_equal(got, expected)
+
+
+@SETTINGS
+@given(st.lists(footprints, min_size=0, max_size=6), st.lists(poses, min_size=1, max_size=4))
+def test_compiled_box_distances_are_the_reference_bit_for_bit(feet, points):
+    boxes = Boxes.from_footprints(feet)
+    origins = np.vstack([[p.position for p in points], boxes.corners().reshape(-1, 2)])
+    got, expected = box_distances(origins, boxes), box_distances_reference(origins, boxes)
+    assert got.shape == expected.shape and got.tobytes() == expected.tobytes()

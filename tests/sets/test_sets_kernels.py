@@ -3,11 +3,17 @@
 import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
-from sets_strategies import SETTINGS, point_in, random_generators, zonotope_with_strips
+from sets_strategies import SETTINGS, point_in, random_generators, zonotope_with_strips, zonotopes
 
 from sse_cosim.sets import Strips, Zonotope, gains, intersect_strips, kernels
 from sse_cosim.sets.reduction import girard_reduce, girard_reduce_reference
-from sse_cosim.sets.zonotope import generator_volume, generator_volume_reference
+from sse_cosim.sets.zonotope import (
+    contains_2d_reference,
+    full_rank,
+    generator_volume,
+    generator_volume_reference,
+    vertices_2d_reference,
+)
 
 KINDS = ("well", "elongated", "near-parallel", "zero-and-parallel")
 
@@ -77,3 +83,53 @@ def test_compiled_frobenius_intersection_matches_the_reference_and_is_sound(case
     points = np.array([point_in(zonotope, rng) for _ in range(200)])
     inside = np.abs(points @ unit.normals.T - unit.values) <= unit.radii
     assert compiled.contains(points[inside.all(axis=1)], tol=1e-9 * scale).all()
+
+
+@SETTINGS
+@given(zonotopes(2, max_generators=12), st.integers(0, 2**32 - 1),
+       st.sampled_from([0.0, 1e-9, 1e-7, 1e-6]))
+def test_compiled_containment_matches_the_reference(zonotope, seed, tol):
+    # Points inside, outside, and on the boundary shifted by ±(tol or a hair) along a facet
+    # normal: the compiled test gives the reference's answer for each of them.
+    rng = np.random.default_rng(seed)
+    c, g = zonotope.center, zonotope.generators
+    assert kernels.full_rank_2d(g) == full_rank(g)
+    scale = np.abs(g).sum()
+    normals = np.stack([-g[1], g[0]], axis=1)[np.any(g != 0, axis=0)]
+    normals = normals / np.linalg.norm(normals, axis=1)[:, None]
+    support = np.abs(normals @ g).sum(axis=1)
+    edge = c + normals * support[:, None]  # a point on each facet
+    shift = normals * (tol + 1e-6 * scale)[..., None] if tol else normals * 1e-6 * scale
+    points = np.vstack([
+        [point_in(zonotope, rng) for _ in range(50)],
+        c + scale * rng.normal(size=(50, 2)),
+        edge + shift, edge - shift,
+    ])
+    expected = contains_2d_reference(c, g, points, tol)
+    assert np.array_equal(kernels.contains_2d(c, g, points, tol), expected)
+    assert np.array_equal(zonotope.contains(points, tol), expected)
+    assert expected[:50].all() and not expected[-2 * len(normals):-len(normals)].any()
+
+
+@SETTINGS
+@given(generator_matrices(n=2), st.integers(0, 2**32 - 1))
+def test_compiled_vertices_are_the_reference_bit_for_bit(g, seed):
+    center = np.random.default_rng(seed).uniform(-100.0, 100.0, 2)
+    expected = vertices_2d_reference(center, g)
+    got = Zonotope(center, g).vertices()
+    assert got.shape == expected.shape and got.tobytes() == expected.tobytes()
+
+
+@SETTINGS
+@given(generator_matrices(n=2, max_generators=12), st.integers(0, 2**32 - 1),
+       st.sampled_from([1e-3, 0.5, 20.0]))
+def test_compiled_vertex_gain_is_the_reference_bit_for_bit(g, seed, radius):
+    # Normals random, along a generator and across one (hᵀg = 0 for it: not a candidate).
+    rng = np.random.default_rng(seed)
+    normals = [rng.normal(size=2)]
+    if g.shape[1] and np.any(g[:, 0]):
+        normals += [g[:, 0] / np.linalg.norm(g[:, 0]), np.array([-g[1, 0], g[0, 0]])]
+    for h in normals:
+        got = gains.volume_gain_vertices(g, h, radius)
+        expected = gains.volume_gain_vertices_reference(g, h, radius)
+        assert got.tobytes() == expected.tobytes()
