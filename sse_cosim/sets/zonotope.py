@@ -149,12 +149,16 @@ def contains_2d_reference(center: FloatArray, generators: FloatArray, points: Fl
 
 
 def _merge_parallel(sorted_generators: FloatArray) -> FloatArray:
-    """Sum runs of consecutive parallel columns of angle-sorted, same-half-plane generators."""
+    """Sum runs of consecutive parallel columns of angle-sorted, same-half-plane generators,
+    each run column by column from the left (the compiled kernel's order; ``np.add.reduceat``
+    groups the terms otherwise)."""
     a, b = sorted_generators[:, :-1], sorted_generators[:, 1:]
     cross = a[0] * b[1] - a[1] * b[0]
     scale = np.linalg.norm(a, axis=0) * np.linalg.norm(b, axis=0)
     starts = np.flatnonzero(np.concatenate([[True], np.abs(cross) > PARALLEL_RTOL * scale]))
-    return np.add.reduceat(sorted_generators, starts, axis=1)
+    ends = np.append(starts[1:], sorted_generators.shape[1])
+    return np.stack([np.cumsum(sorted_generators[:, start:end], axis=1)[:, -1]
+                     for start, end in zip(starts, ends, strict=True)], axis=1)
 
 
 def vertices_2d_reference(center: FloatArray, generators: FloatArray) -> FloatArray:

@@ -114,10 +114,14 @@ def test_compiled_containment_matches_the_reference(zonotope, seed, tol):
 @SETTINGS
 @given(generator_matrices(n=2), st.integers(0, 2**32 - 1))
 def test_compiled_vertices_are_the_reference_bit_for_bit(g, seed):
-    center = np.random.default_rng(seed).uniform(-100.0, 100.0, 2)
-    expected = vertices_2d_reference(center, g)
-    got = Zonotope(center, g).vertices()
-    assert got.shape == expected.shape and got.tobytes() == expected.tobytes()
+    rng = np.random.default_rng(seed)
+    center = rng.uniform(-100.0, 100.0, 2)
+    # and with runs of parallel columns (multiples of the first), merged before the walk
+    parallel = np.hstack([g, np.outer(g[:, 0], rng.uniform(-2.0, 2.0, 5))]) if g.shape[1] else g
+    for generators in (g, parallel):
+        expected = vertices_2d_reference(center, generators)
+        got = Zonotope(center, generators).vertices()
+        assert got.shape == expected.shape and got.tobytes() == expected.tobytes()
 
 
 @SETTINGS
