@@ -13,6 +13,8 @@ TAG_MARK = "="  # a union tag ("kind=range") holds it; field names never do (see
 
 
 class StrictModel(BaseModel):
-    """Base model: unknown keys are errors, values are checked on assignment too."""
+    """Base model: unknown keys are errors, so are infinite and NaN numbers (TOML has them:
+    ``inf``, ``nan``; no field means one), and values are checked on assignment too."""
 
-    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False)
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False,
+                              allow_inf_nan=False)
