@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 from sse_cosim.sets.kernels import (
     FloatArray,
     area_2d,
+    facet_normal,
     folded_sorted,
     full_rank_2d,
     pairwise_sum,
@@ -422,11 +423,9 @@ def facet_strips(center: FloatArray, generators: FloatArray
     keys = np.empty((e, 2))
     count = 0
     for j in range(e):
-        v0, v1 = -generators[1, j], generators[0, j]
-        norm = np.sqrt(v0 * v0 + v1 * v1)
-        if not norm > 0:
+        u0, u1, nonzero = facet_normal(generators, j)
+        if not nonzero:
             continue
-        u0, u1 = v0 / norm, v1 / norm
         r0, r1 = np.round(u0, 12) + 0.0, np.round(u1, 12) + 0.0
         sign = np.sign(r0) if r0 != 0 else np.sign(r1)
         k0, k1 = r0 * sign + 0.0, r1 * sign + 0.0

@@ -151,6 +151,17 @@ def full_rank_2d(generators: FloatArray) -> bool:
 
 
 @njit(cache=True)
+def facet_normal(generators: FloatArray, j: int) -> tuple[float, float, bool]:
+    """The unit normal (n0, n1) of column j of G (2, e), g_j turned by +90°, and whether
+    g_j is nonzero (without one, (0, 0, False))."""
+    v0, v1 = -generators[1, j], generators[0, j]
+    norm = np.sqrt(v0 * v0 + v1 * v1)
+    if not norm > 0.0:
+        return 0.0, 0.0, False
+    return v0 / norm, v1 / norm, True
+
+
+@njit(cache=True)
 def contains_2d(center: FloatArray, generators: FloatArray, points: FloatArray,
                 tol: float) -> NDArray[np.bool_]:
     """Whether each point (k, 2) lies in the full-rank 2-D ⟨c, G⟩ (``center`` (2,), G (2, e)),
@@ -161,11 +172,9 @@ def contains_2d(center: FloatArray, generators: FloatArray, points: FloatArray,
     inside = np.ones(k, dtype=np.bool_)
     terms = np.empty(e)
     for j in range(e):
-        n0, n1 = -generators[1, j], generators[0, j]
-        norm = np.sqrt(n0 * n0 + n1 * n1)
-        if not norm > 0.0:
+        n0, n1, nonzero = facet_normal(generators, j)
+        if not nonzero:
             continue
-        n0, n1 = n0 / norm, n1 / norm
         for i in range(e):
             terms[i] = abs(n0 * generators[0, i] + n1 * generators[1, i])
         bound = pairwise_sum(terms, 0, e) + tol
