@@ -9,7 +9,6 @@ pedestrian reported in the wrong place. Sources a majority outvoted wait on prob
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -18,6 +17,7 @@ import shapely
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import ARC_SAFETY, QUAD_SEGMENTS, ClearRegion
 from sse_cosim.estimation.vote import CONSISTENCY_TOL, Probation, interval_hull, vote
+from sse_cosim.memo import IdentityMemo
 from sse_cosim.sets import Zonotope
 from sse_cosim.sets.exact import zonotope_polygon
 
@@ -53,24 +53,15 @@ def contradicted(
     return False
 
 
-_ERODED_SIZE = 64
-_ERODED: OrderedDict[tuple[int, float], tuple[shapely.Geometry, shapely.Geometry]] = \
-    OrderedDict()
+_ERODED: IdentityMemo[shapely.Geometry] = IdentityMemo(64)
 
 
 def _eroded(region: shapely.Geometry, distance: float) -> shapely.Geometry:
     """``region`` shrunk by ``distance`` (inscribed arcs). Every source of every pedestrian
     is tested against the same views at the same slack: the newest erosions are kept, by the
     region's identity (geometries are immutable) and the distance."""
-    key = (id(region), distance)
-    hit = _ERODED.get(key)
-    if hit is not None and hit[0] is region:
-        return hit[1]
-    inner = region.buffer(-distance, quad_segs=QUAD_SEGMENTS)
-    _ERODED[key] = (region, inner)
-    if len(_ERODED) > _ERODED_SIZE:
-        _ERODED.popitem(last=False)
-    return inner
+    return _ERODED.get((id(region), distance), (region,),
+                       lambda: region.buffer(-distance, quad_segs=QUAD_SEGMENTS))
 
 
 @dataclass(frozen=True)

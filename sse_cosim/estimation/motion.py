@@ -22,12 +22,12 @@ in the fused one. ``tests/world`` checks that SUMO's trajectories admit such a p
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
+from sse_cosim.memo import IdentityMemo
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips, Zonotope, intersect_strips
 
@@ -44,9 +44,10 @@ class MotionModel:
     state_bounds: Strips | None
     max_speed: float
     jitter: float = 0.0
-    # estimate id -> (estimate, its position set): the newest POSITION_MEMO position sets
-    _positions: OrderedDict[int, tuple[Zonotope, Zonotope]] = field(
-        default_factory=OrderedDict, init=False, repr=False, compare=False)
+    # the newest POSITION_MEMO position sets, by their estimates' identities
+    _positions: IdentityMemo[Zonotope] = field(
+        default_factory=lambda: IdentityMemo(POSITION_MEMO), init=False, repr=False,
+        compare=False)
 
     @property
     def dim(self) -> int:
@@ -95,15 +96,12 @@ class MotionModel:
         records): the newest ones are kept, by the estimate's identity (zonotopes are
         read-only), so each is computed once and its cached volume is shared.
         """
-        kept = self._positions.get(id(estimate))
-        if kept is not None and kept[0] is estimate:
-            return kept[1]
+        return self._positions.get(id(estimate), (estimate,),
+                                   lambda: self._position(estimate))
+
+    def _position(self, estimate: Zonotope) -> Zonotope:
         path = self.path_set(estimate)
-        position = path if self.jitter == 0.0 else path + self.jitter_box
-        self._positions[id(estimate)] = (estimate, position)
-        if len(self._positions) > POSITION_MEMO:
-            self._positions.popitem(last=False)
-        return position
+        return path if self.jitter == 0.0 else path + self.jitter_box
 
     @cached_property
     def jitter_box(self) -> Zonotope:

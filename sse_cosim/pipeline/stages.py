@@ -7,7 +7,6 @@ in network coordinates (m).
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Generic, Protocol
@@ -30,6 +29,7 @@ from sse_cosim.estimation.observer import (
 )
 from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker
 from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
+from sse_cosim.memo import IdentityMemo
 from sse_cosim.sensors import SensorObservation, SensorSpec, observe
 from sse_cosim.sensors.faults import FaultInjector
 from sse_cosim.sets import Strips
@@ -113,20 +113,10 @@ def union_or_empty(geometries: Iterable[shapely.Geometry | None]) -> shapely.Geo
     parts = tuple(g for g in geometries if g is not None and not g.is_empty)
     if not parts:
         return shapely.Polygon()
-    key = tuple(map(id, parts))
-    hit = _UNIONS.get(key)
-    if hit is not None and all(a is b for a, b in zip(hit[0], parts, strict=True)):
-        return hit[1]
-    union = shapely.union_all(parts)
-    _UNIONS[key] = (parts, union)
-    if len(_UNIONS) > _UNIONS_SIZE:
-        _UNIONS.popitem(last=False)
-    return union
+    return _UNIONS.get(tuple(map(id, parts)), parts, lambda: shapely.union_all(parts))
 
 
-_UNIONS_SIZE = 16
-_UNIONS: OrderedDict[tuple[int, ...], tuple[tuple[shapely.Geometry, ...], shapely.Geometry]] = \
-    OrderedDict()
+_UNIONS: IdentityMemo[shapely.Geometry] = IdentityMemo(16)
 
 
 @dataclass(frozen=True)

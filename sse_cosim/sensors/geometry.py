@@ -15,7 +15,6 @@ of the arc (sagitta ``range * (1 - cos(pi / (4 * resolution)))``).
 from __future__ import annotations
 
 import math
-from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -24,6 +23,7 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
+from sse_cosim.memo import IdentityMemo
 from sse_cosim.sensors import kernels
 from sse_cosim.world.snapshot import Footprint, Pose
 
@@ -390,22 +390,16 @@ def visibility_regions(
     near = boxes.subset(boxes.distances(pose.position) <= range_m) if len(boxes) else boxes
     if len(near) == 0:
         return sector, shapely.Polygon()
-    key = None
-    if given:
-        key = (pose.x, pose.y, pose.heading, fov_rad, range_m, id(sector),
-               near.centers.tobytes(), near.axes.tobytes(), near.half.tobytes())
-        hit = _REGION_CACHE.get(key)
-        if hit is not None and hit[0] is sector:
-            _REGION_CACHE.move_to_end(key)
-            return hit[1], hit[2]
-    shadow = shapely.union_all(shadow_polygons(pose.position, near, range_m))
-    visible, occluded = shapely.difference(sector, shadow), shapely.intersection(sector, shadow)
-    if key is not None:
-        _REGION_CACHE[key] = (sector, visible, occluded)
-        if len(_REGION_CACHE) > _REGION_CACHE_SIZE:
-            _REGION_CACHE.popitem(last=False)
-    return visible, occluded
+
+    def regions() -> tuple[BaseGeometry, BaseGeometry]:
+        shadow = shapely.union_all(shadow_polygons(pose.position, near, range_m))
+        return shapely.difference(sector, shadow), shapely.intersection(sector, shadow)
+
+    if not given:
+        return regions()
+    key = (pose.x, pose.y, pose.heading, fov_rad, range_m, id(sector),
+           near.centers.tobytes(), near.axes.tobytes(), near.half.tobytes())
+    return _REGIONS.get(key, (sector,), regions)
 
 
-_REGION_CACHE_SIZE = 64
-_REGION_CACHE: OrderedDict[tuple, tuple] = OrderedDict()
+_REGIONS: IdentityMemo[tuple[BaseGeometry, BaseGeometry]] = IdentityMemo(64)
