@@ -109,7 +109,7 @@ class Ego:
         picture = assess(
             self.context, me.footprint.front.position, me.speed,
             union_or_empty(o.occluded for o in views), unknown, list(possible.values()),
-            [possible[key] for key in sorted(estimate.in_view) if key in possible],
+            [region for key, region in possible.items() if key in estimate.in_view],
         )
         decision = self.policy.decide(
             picture, fallback_floor(estimate.flags.inconsistent, self.controller))
