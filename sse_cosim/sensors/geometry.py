@@ -203,13 +203,8 @@ def sight_masks_reference(
     targets: np.ndarray,
     boxes: Boxes,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``(seen (s, k), occluders (s, m))`` for ``s`` sensors, ``k`` targets, ``m`` boxes.
-
-    Sensor j (``origins`` (s, 2), ``headings``/``fovs_rad``/``ranges_m`` (s,)) sees target i
-    iff it is in the sector and its segment misses every occluder of j: the boxes within
-    ``ranges_m[j]`` of the sensor except its carrier ``carriers[j]`` (box index, -1: none).
-    The NumPy reference of :func:`sight_masks`: one vectorized pass.
-    """
+    """The NumPy reference of :func:`sight_masks` (the same arguments and result): one
+    vectorized pass."""
     o = np.asarray(origins, dtype=float).reshape(-1, 2)
     t = np.asarray(targets, dtype=float).reshape(-1, 2)
     s, m = o.shape[0], len(boxes)
