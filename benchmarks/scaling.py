@@ -69,7 +69,7 @@ def measure(pedestrians: int, sensors: int, steps: int, warmup: int, roadmap) ->
     observers = {n: PlainObserver(model, config.gain_method) for n in nodes}
     context = SceneContext.build(roadmap, ["WC", "CE"], AutomatedVehicle(), Controller(),
                                  model.max_speed, model.jitter, 0.3, DT)
-    occupancy = OccupancyTracker(model, DT, context.walkable)  # as in the loop
+    occupancy = OccupancyTracker(model, DT, context.walkable, context.window)  # as in the loop
     unobserved = UnobservedArea(context.walkable, model, DT, 1, window=context.window)
     people, velocity = _pedestrians(pedestrians, rng)
     inbox: dict[str, tuple[int, dict, shapely.Geometry]] = {}

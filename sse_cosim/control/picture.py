@@ -199,14 +199,16 @@ def assess(
     unobserved: shapely.Geometry,
     pedestrian_regions: Iterable[shapely.Geometry],
     in_view: Iterable[shapely.Geometry] = (),
+    in_view_beyond: bool = False,
 ) -> Picture:
     """The picture at one step.
 
     ``front_xy`` (2,) is the bus's front bumper; ``speed`` its actual speed; ``own_occluded``
     what its sensors' shadows hide inside their fields of view; ``unobserved`` the walkable
     area where a pedestrian nobody detected may be (every node's views, shared ones included);
-    ``pedestrian_regions`` where each known pedestrian may be; ``in_view`` the regions among
-    them of the pedestrians some node detects now.
+    ``pedestrian_regions`` where each known pedestrian may be, unless outside the window;
+    ``in_view`` the regions among them of the pedestrians some node detects now;
+    ``in_view_beyond``: whether one of those may be outside the window instead.
     """
     cfg = context.config
     front_s = context.route_line.project(shapely.Point(front_xy))
@@ -226,7 +228,7 @@ def assess(
     stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0) \
         if sets else shapely.Polygon()
     zones = _outlook(context, front_s, [unobserved, *sets],
-                     [s for s in in_view if not s.is_empty])
+                     [s for s in in_view if not s.is_empty], in_view_beyond)
     return Picture(
         front_s=float(front_s),
         speed_mps=float(speed),
@@ -251,10 +253,12 @@ def _around(area: shapely.Geometry, radius: float) -> shapely.Geometry:
 
 
 def _outlook(context: SceneContext, front_s: float, sources: Sequence[shapely.Geometry],
-             in_view: Sequence[shapely.Geometry]) -> tuple[ZoneOutlook, ...]:
-    """The zones the bus has not yet cleared, with the earliest arrival from ``sources`` and
-    from the regions ``in_view`` alone (every source to every such zone in one distance
-    call)."""
+             in_view: Sequence[shapely.Geometry],
+             in_view_beyond: bool) -> tuple[ZoneOutlook, ...]:
+    """The zones the bus has not yet cleared, with the earliest arrival from ``sources`` (and
+    from beyond the window) and from the pedestrians in view alone: their regions
+    ``in_view``, and beyond the window if ``in_view_beyond`` (every source to every such zone
+    in one distance call)."""
     ahead = [(index, zone, zone.end_m + context.bus.length_m - front_s)
              for index, zone in enumerate(context.zones)]
     ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead if to_clear > 0.0]
@@ -264,7 +268,9 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[shapely.Ge
     in_view_arrivals = _arrivals(in_view, polygons, speed, slack)
     return tuple(
         ZoneOutlook(index, zone.start_m - front_s, to_clear,
-                    min(zone.beyond_arrival_s, float(arrival)), float(in_view_arrival))
+                    min(zone.beyond_arrival_s, float(arrival)),
+                    min(zone.beyond_arrival_s if in_view_beyond else math.inf,
+                        float(in_view_arrival)))
         for (index, zone, to_clear), arrival, in_view_arrival
         in zip(ahead, arrivals, in_view_arrivals, strict=True))
 

@@ -27,6 +27,13 @@ occupied at every step: with O = (walkable (+) disc(eps)) minus B,
 contains U_k ∩ B whenever Ũ_{k-1} contains U_{k-1} ∩ B, since U_{k-1} ⊆ (U_{k-1} ∩ B) ∪ O.
 Only O's rim within v dt of B matters, and it moves the same way every step (its dilation is
 computed once), so the per-step polygons stay the size of the window, not of the whole road.
+
+A known pedestrian's path region is kept in B the same way (:class:`TrackedWindow`): once its
+region has been cut by B's edge the pedestrian may be outside B, and from then on the path
+region also takes in O's rim moved one step, until its fused set lies inside B. So
+either the pedestrian is in its region or it is outside the window; there, as for hidden
+ground, every walkable place counts as possibly occupied. Without this a pedestrian who has
+left every view keeps a region that grows without bound.
 """
 
 from __future__ import annotations
@@ -86,23 +93,35 @@ class OccupancyTracker:
     With ``walkable`` ground given, each path region is also kept within walkable (+)
     disc(eps): pedestrians stay on walkable ground (an assumption, docs/controller.md), so a
     pedestrian who has left every view stays confined to the walkable ground it can have
-    reached since it was last seen, instead of spreading over the road.
+    reached since it was last seen, instead of spreading over the road. With a ``window`` as
+    well, each is kept within B (:class:`TrackedWindow`): a pedestrian is then in its region or
+    outside the window, and ``beyond`` names those who may be outside B. By induction over the
+    steps: a path s outside B is in ``beyond`` (it left B from its region, or was already
+    outside, and its fused set, which holds s, is not inside B), and a path inside B is in its
+    region (it was there a step before, or it came in from outside through the inflow).
     """
 
     def __init__(self, model: MotionModel, step_length: float,
-                 walkable: shapely.Geometry | None = None) -> None:
+                 walkable: shapely.Geometry | None = None,
+                 window: shapely.Geometry | None = None) -> None:
+        if window is not None and walkable is None:
+            raise ValueError("a tracked window needs the walkable ground")
         self.model = model
         self.reach = model.max_speed * step_length
         self._ground = None if walkable is None else dilate(walkable, model.jitter)
         if self._ground is not None:
             shapely.prepare(self._ground)
+        self._window = None if window is None else TrackedWindow(window, walkable, model,
+                                                                 step_length)
         self._paths: dict[str, shapely.Geometry] = {}
         self._step: int | None = None
+        self.beyond: frozenset[str] = frozenset()  # pedestrians who may be outside B now
 
     def forget(self) -> None:
         """Drop every pedestrian's history: the next update starts from its sets alone."""
         self._paths = {}
         self._step = None
+        self.beyond = frozenset()
 
     def update(
         self,
@@ -115,13 +134,22 @@ class OccupancyTracker:
         eps = self.model.jitter
         paths: dict[str, shapely.Geometry] = {}
         regions: dict[str, shapely.Geometry] = {}
+        beyond: set[str] = set()
         for person_id, estimate in fused.items():
             path = zonotope_polygon(self.model.path_set(estimate))
+            # it may still be outside B unless its whole set is inside (the set holds it)
+            outside = person_id in self.beyond and not self._window.bounds.contains(path)
             previous = self._paths.get(person_id)
             if previous is not None:
-                path = shapely.intersection(dilate(previous, self.reach * elapsed), path)
+                moved = dilate(previous, self.reach * elapsed)
+                if outside:
+                    moved = shapely.union(moved, self._window.inflow(elapsed))
+                path = shapely.intersection(moved, path)
             if self._ground is not None and not self._ground.contains(path):
                 path = shapely.intersection(path, self._ground)
+            if self._window is not None and (outside or not self._window.bounds.contains(path)):
+                beyond.add(person_id)
+                path = self._window.clip(path)
             now_clear = [c.region for c in clear.get(person_id, ()) if c.age == 0]
             for item in clear.get(person_id, ()):
                 # p was outside item.region ``age`` steps ago, within eps + reach*age of s now.
@@ -136,7 +164,37 @@ class OccupancyTracker:
                 if now_clear else region
         self._paths = paths
         self._step = step
+        self.beyond = frozenset(beyond)
         return regions
+
+
+class TrackedWindow:
+    """The bounded area B ⊇ window (+) disc(eps) in which path regions are tracked, and the
+    inflow: where a path outside B at one step can be inside B some steps later (O's rim moved,
+    O = (walkable (+) disc(eps)) minus B)."""
+
+    def __init__(self, window: shapely.Geometry, walkable: shapely.Geometry, model: MotionModel,
+                 step_length: float) -> None:
+        self.reach = model.max_speed * step_length  # how far a path moves in one step
+        self.jitter = model.jitter
+        self.walkable = walkable
+        self.bounds = dilate(window, self.jitter)  # B
+        shapely.prepare(self.bounds)
+        self._inflows: dict[int, shapely.Geometry] = {}
+
+    def inflow(self, steps: int = 1) -> shapely.Geometry:
+        """Where a path outside B now can be inside B or near it ``steps`` steps later
+        (computed once per number of steps)."""
+        if steps not in self._inflows:
+            reach, eps = self.reach * steps, self.jitter
+            near = shapely.intersection(self.walkable, dilate(self.bounds, reach + eps))
+            rim = shapely.difference(dilate(near, eps), self.bounds)
+            self._inflows[steps] = dilate(rim, reach) if reach > 0 else EMPTY
+        return self._inflows[steps]
+
+    def clip(self, region: shapely.Geometry) -> shapely.Geometry:
+        """``region`` ∩ B."""
+        return shapely.intersection(region, self.bounds)
 
 
 class UnobservedArea:
@@ -148,16 +206,14 @@ class UnobservedArea:
         self.model = model
         self.reach = model.max_speed * step_length  # how far a path moves in one step
         self.latency = latency_steps
-        eps = model.jitter
-        self._bounds = None if window is None else dilate(window, eps)  # B
-        self._inflow = EMPTY  # O's rim moved one step: paths entering B from outside
-        if self._bounds is not None:
-            near = shapely.intersection(walkable, dilate(self._bounds, self.reach + eps))
-            rim = shapely.difference(dilate(near, eps), self._bounds)
-            self._inflow = dilate(rim, self.reach)
-            walkable = shapely.intersection(walkable, dilate(self._bounds, eps))
+        self._window = None if window is None else TrackedWindow(window, walkable, model,
+                                                                 step_length)
+        # O's rim moved one step: paths entering B from outside
+        self._inflow = EMPTY if self._window is None else self._window.inflow()
+        if self._window is not None:
+            walkable = shapely.intersection(walkable, dilate(self._window.bounds, model.jitter))
         self.walkable = walkable  # the walkable ground whose views matter
-        self._base = self._clip(dilate(walkable, eps))  # path region at step self._base_step
+        self._base = self._clip(dilate(walkable, model.jitter))  # path region at self._base_step
         self._base_step: int | None = None
         self._own: dict[int, shapely.Geometry] = {}  # the bus's views not yet in the base
         self._base_moved: tuple[shapely.Geometry, shapely.Geometry] | None = None  # (base, moved)
@@ -211,7 +267,7 @@ class UnobservedArea:
         return moved
 
     def _clip(self, region: shapely.Geometry) -> shapely.Geometry:
-        return region if self._bounds is None else shapely.intersection(region, self._bounds)
+        return region if self._window is None else self._window.clip(region)
 
 
 def _apart(first: shapely.Geometry, second: shapely.Geometry, margin: float) -> bool:

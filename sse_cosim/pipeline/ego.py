@@ -85,7 +85,7 @@ class Ego:
         )
         self.policy = make_policy(self.context)
         self.known = known_regions(config.filter, model, dt, self.context.walkable,
-                                   history=config.association == "labelled")
+                                   self.context.window, history=config.association == "labelled")
         # hidden ground is tracked near the crossings on its route; outside it counts as occupied
         self.unobserved = UnobservedArea(
             self.context.walkable, model, dt, scenario.v2x.latency_steps,
@@ -110,6 +110,7 @@ class Ego:
             self.context, me.footprint.front.position, me.speed,
             union_or_empty(o.occluded for o in views), unknown, list(possible.values()),
             [region for key, region in possible.items() if key in estimate.in_view],
+            in_view_beyond=not self.known.beyond.isdisjoint(estimate.in_view),
         )
         decision = self.policy.decide(
             picture, fallback_floor(estimate.flags.inconsistent, self.controller))

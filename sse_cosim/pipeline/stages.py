@@ -259,7 +259,10 @@ def second_level(association: str, model: MotionModel, settings: EstimatorSettin
 
 
 class KnownRegions(Protocol):
-    """Where each known pedestrian can be (pedestrian id -> region), for the controller."""
+    """Where each known pedestrian can be (pedestrian id -> region), for the controller;
+    ``beyond``: the keys whose pedestrian may instead be outside the tracked window."""
+
+    beyond: frozenset[str]
 
     def update(self, step: int, observations: Observations, estimate: BusEstimate,
                clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, shapely.Geometry]: ...
@@ -286,10 +289,16 @@ class RefinedRegions:
         self._was_inconsistent = inconsistent
         return self.tracker.update(step, estimate.fused, clear)
 
+    @property
+    def beyond(self) -> frozenset[str]:
+        return self.tracker.beyond
+
 
 class KalmanRegions:
     """The baseline: each pedestrian's 3-sigma ellipse of a Kalman filter over every node's
     detections (:mod:`sse_cosim.estimation.kalman`), in place of the refined sets."""
+
+    beyond: frozenset[str] = frozenset()  # its ellipses are not kept in a window
 
     def __init__(self, tracker: KalmanTracker) -> None:
         self.tracker = tracker
@@ -301,10 +310,11 @@ class KalmanRegions:
 
 
 def known_regions(filter_name: str, model: MotionModel, step_length: float,
-                  walkable: shapely.Geometry, history: bool = True) -> KnownRegions:
-    """The region stage of ``estimator.filter``: ``zonotope`` or ``kalman``; ``history``:
-    whether the refined regions carry a fused set's key from one step to the next (false for
-    anonymous tracks, :class:`RefinedRegions`)."""
+                  walkable: shapely.Geometry, window: shapely.Geometry,
+                  history: bool = True) -> KnownRegions:
+    """The region stage of ``estimator.filter``: ``zonotope`` or ``kalman``; refined regions
+    are kept in the tracked ``window``; ``history``: whether they carry a fused set's key from
+    one step to the next (false for anonymous tracks, :class:`RefinedRegions`)."""
     if filter_name == "kalman":
         return KalmanRegions(KalmanTracker(model))
-    return RefinedRegions(OccupancyTracker(model, step_length, walkable), history)
+    return RefinedRegions(OccupancyTracker(model, step_length, walkable, window), history)

@@ -223,7 +223,8 @@ class RunRecorder:
             checks[pid].fused = self._check(t, FUSED, pid, [position], truths[pid])
         regions = {pid: ego.possible[pid] for pid in truths if pid in ego.possible}
         for pid, region in regions.items():
-            checks[pid].refined = self._check_region(t, pid, [region], truths[pid])
+            checks[pid].refined = self._check_region(t, pid, [region], ego.window,
+                                                     truths[pid])
         return fused, regions
 
     def _check_anonymous(self, t: float, result: StepResult, ego: EgoStep,
@@ -238,7 +239,7 @@ class RunRecorder:
         for pid in sorted(known & truths.keys()):
             checks[pid].fused = self._check(t, FUSED, pid, list(fused.values()), truths[pid])
             checks[pid].refined = self._check_region(t, pid, list(ego.possible.values()),
-                                                     truths[pid])
+                                                     ego.window, truths[pid])
         return fused, dict(ego.possible)
 
     def _note_first_seen(self, result: StepResult) -> None:
@@ -323,10 +324,13 @@ class RunRecorder:
         return self._violation_unless(inside, t, node, pid, truth)
 
     def _check_region(self, t: float, pid: str, regions: list[shapely.Geometry],
-                      truth: np.ndarray) -> bool:
-        """Whether pedestrian ``pid``'s true position lies in one of ``regions``."""
+                      window: shapely.Geometry, truth: np.ndarray) -> bool:
+        """Whether pedestrian ``pid``'s true position lies in one of ``regions``, or outside
+        the ``window`` in which regions are kept (there every walkable place counts as
+        occupied)."""
         point = shapely.Point(truth)
-        inside = any(shapely.distance(r, point) <= 1e-7 for r in regions)
+        inside = not window.contains(point) or any(
+            shapely.distance(r, point) <= 1e-7 for r in regions)
         return self._violation_unless(inside, t, "possible", pid, truth)
 
     def _check_accounted(self, t: float, pid: str, ego: EgoStep, truth: np.ndarray) -> bool:

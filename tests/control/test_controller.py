@@ -138,6 +138,20 @@ def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
     assert assess(context, at_zebra, 0.0, empty, empty, [far]).path_clear
 
 
+def test_a_pedestrian_in_view_who_may_be_beyond_the_window_arrives_as_early_as_from_beyond(
+        context):
+    start = context.crossings[0].start_m
+    front = np.array(context.route_line.interpolate(start - 40.0).coords[0])
+    (zone,) = context.zones
+    empty = shapely.Polygon()
+    far = shapely.Point(200.0, zone.polygon.bounds[1] - 20.0).buffer(0.5)
+    inside = assess(context, front, 10.0, empty, empty, [far], [far])
+    beyond = assess(context, front, 10.0, empty, empty, [far], [far], in_view_beyond=True)
+    assert zone.beyond_arrival_s < inside.zones[0].in_view_arrival_s < np.inf
+    assert beyond.zones[0].in_view_arrival_s == zone.beyond_arrival_s
+    assert beyond.zones[0].arrival_s == inside.zones[0].arrival_s == zone.beyond_arrival_s
+
+
 def test_arrivals_in_one_call_are_the_earliest_arrival_of_each_zone():
     # _arrivals measures every source to every zone in one shapely call: per zone, the same
     # earliest arrival as the nearest source's distance, minus the slack, over the speed.

@@ -9,6 +9,7 @@ from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import (
     ClearRegion,
     OccupancyTracker,
+    TrackedWindow,
     UnobservedArea,
     dilate,
 )
@@ -159,3 +160,73 @@ def test_the_kept_move_of_the_base_is_the_move_computed_afresh():
             assert kept.update(step, own, shared).equals_exact(
                 afresh.update(step, own, shared), 0.0), (latency, step)
         assert kept._base_moved is not None
+
+
+def test_a_known_region_kept_in_the_window_holds_the_pedestrian_who_leaves_and_comes_back():
+    """A pedestrian walks out of the window along a sidewalk, hidden, and back in while views
+    clear the sidewalk where it is not: at every step it is in its region or outside the
+    window (also across a step without an update); the region stays within the window's
+    bounds; once it is seen back inside, it is no longer counted as possibly beyond. The
+    region without the window grows far larger."""
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    walkable = shapely.box(0, 0, 120, 3)
+    window = shapely.box(20, -5, 40, 8)
+    bounds = dilate(window, model.jitter).buffer(1e-9)
+    step_length = model.max_speed * DT
+    for seed in range(4):
+        rng = np.random.default_rng(seed)
+        windowed = OccupancyTracker(model, DT, walkable, window)
+        whole = OccupancyTracker(model, DT, walkable)
+        truth, estimate, heading, largest = np.array([30.0, 1.5]), None, 1.0, 0.0
+        for step in range(700):
+            if truth[0] > 75.0:
+                heading = -1.0  # and back
+            elif heading < 0 and truth[0] < 26.0:
+                heading = 0.0  # and stays
+            truth = truth + np.array([heading * rng.uniform(0.6, 1.0) * step_length, 0.0])
+            truth[1] = np.clip(truth[1] + rng.uniform(-0.1, 0.1), 0.2, 2.8)
+            seen = truth[0] < 36.0 or (heading < 0 and truth[0] < 30.0)
+            if seen or estimate is None:
+                estimate = Zonotope(truth.copy(), np.eye(2) * 0.4)
+            else:
+                estimate = model.predict(estimate)
+            if step % 9 == 4:
+                continue  # a step without an update: the next one moves two steps
+            x0 = rng.uniform(0, 110)
+            views = [shapely.box(x0, -1, x0 + rng.uniform(2, 12), 4)]
+            clear = [ClearRegion(v, 0) for v in views if v.distance(shapely.Point(truth)) > 1e-3]
+            region = windowed.update(step, {"p": estimate}, {"p": clear})["p"]
+            largest = max(largest, whole.update(step, {"p": estimate}, {"p": clear})["p"].area)
+            point = shapely.Point(truth)
+            assert region.buffer(1e-7).covers(point) or not window.contains(point), (seed, step)
+            assert region.difference(dilate(bounds, model.jitter)).is_empty  # in B (+) jitter
+            if seen and truth[0] < 34.0:
+                assert "p" not in windowed.beyond, (seed, step)
+        assert truth[0] < 30.0  # it came back
+        kept = shapely.intersection(dilate(walkable, 2 * model.jitter), dilate(bounds, 0.3))
+        assert largest > 2 * kept.area  # the region not kept in the window outgrows it
+
+
+def test_the_inflow_holds_every_path_that_enters_the_bounds_from_outside():
+    """A path s outside B (on walkable (+) disc(eps)) that moves at most ``steps`` times the
+    reach of a step ends, if inside B, inside the inflow of that many steps."""
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    walkable = shapely.union(shapely.box(0, 0, 60, 2), shapely.box(28, -8, 32, 10))
+    window = shapely.box(24, -6, 36, 8)
+    tracked = TrackedWindow(window, walkable, model, DT)
+    ground = dilate(walkable, model.jitter)
+    rng = np.random.default_rng(5)
+    for steps in (1, 2, 5):
+        inflow = tracked.inflow(steps).buffer(1e-7)
+        entered = 0
+        x0, y0, x1, y1 = tracked.bounds.buffer(steps * tracked.reach).bounds
+        for _ in range(20000):
+            start = shapely.Point(rng.uniform(x0, x1), rng.uniform(y0, y1))
+            if not ground.contains(start) or tracked.bounds.contains(start):
+                continue
+            angle, length = rng.uniform(0, 2 * np.pi), rng.uniform(0, steps * tracked.reach)
+            end = shapely.Point(start.x + length * np.cos(angle), start.y + length * np.sin(angle))
+            if tracked.bounds.contains(end):
+                entered += 1
+                assert inflow.covers(end), (steps, start, end)
+        assert entered > 50
