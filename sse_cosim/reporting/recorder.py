@@ -442,8 +442,11 @@ class RunRecorder:
             "collisions": _entries([r["collision"] for r in rows]),
             "route_completed": route_completed,
             "time_stopped_s": round(dt * int(np.sum(speeds < STOPPED_SPEED_MPS)), 6),
+            # the controller's own standstill: SUMO holding a bus that was told to go (right of
+            # way to a car, a leader) does not count
             "longest_standstill_after_clear_s": round(dt * _longest_run(
-                [r["path_clear"] and r["bus_speed"] < STOPPED_SPEED_MPS for r in rows]), 6),
+                [r["path_clear"] and r["bus_speed"] < STOPPED_SPEED_MPS
+                 and r["commanded_speed"] < STOPPED_SPEED_MPS for r in rows]), 6),
             "level_share": {
                 level.label: levels.get(level.label, 0) / max(len(rows), 1)
                 for level in SpeedLevel

@@ -9,7 +9,8 @@ shared sensors are, and the seed.
 The grid is not Cartesian over scenario fields: the pedestrian's start is given as an offset
 behind the truck's front (``pedestrians.pedestrian.start_pos_m = parked.truck.end_pos_m -
 offset``), so it moves with the truck, and a parameter whose pattern selects nothing in a
-scenario (the shared sensors' noise in S1, which has none) is simply not varied there. So the
+scenario (the shared sensors' noise in S1, which has none) is simply not varied there, nor is
+the start in a scenario without a truck (the junction's pedestrian keeps its start). So the
 campaign builds its list of runs here, with the sweep's run type and key scheme
 (:class:`~sse_cosim.runner.sweep.PlannedRun`, :func:`~sse_cosim.runner.sweep.run_key`), and
 hands it to the sweep's execution path (:func:`~sse_cosim.runner.sweep.run_planned`).
@@ -60,7 +61,8 @@ if TYPE_CHECKING:
 STEP_OUT_PATH = "pedestrians.pedestrian.steps_onto_crossing_s"
 WALKING_SPEED_PATH = "pedestrians.pedestrian.walking_speed_mps"
 START_PATH = "pedestrians.pedestrian.start_pos_m"
-TRUCK_FRONT_PATH = "parked.truck.end_pos_m"
+TRUCK = "truck"
+TRUCK_FRONT_PATH = f"parked.{TRUCK}.end_pos_m"
 BEHIND_TRUCK = f"{START_PATH} = {TRUCK_FRONT_PATH} - value"
 FILE_FIX = "see sweeps/safety.toml for a complete example"
 
@@ -360,11 +362,15 @@ def _scenario_runs(campaign: Campaign, path: Path, data: Mapping[str, Any],
         overrides = dict(fixed)
         for (_, paths), value in zip(active, combination, strict=True):
             overrides.update(dict.fromkeys(paths, value))
-        truck_front = overrides.get(TRUCK_FRONT_PATH, fields["parked"]["truck"]["end_pos_m"])
-        for offset, seed in itertools.product(behind.values, campaign.seeds):
-            run_values = {**values, behind.column: offset}
-            run_overrides = {**overrides, START_PATH: round(truck_front - offset, 9),
-                             SEED_PATH: seed}
+        truck = fields["parked"].get(TRUCK)
+        # a scenario without the truck keeps its pedestrian's start: the axis is not varied
+        offsets = behind.values if truck is not None else (None,)
+        for offset, seed in itertools.product(offsets, campaign.seeds):
+            run_values, run_overrides = dict(values), {**overrides, SEED_PATH: seed}
+            if offset is not None:
+                truck_front = overrides.get(TRUCK_FRONT_PATH, truck["end_pos_m"])
+                run_values[behind.column] = offset
+                run_overrides[START_PATH] = round(truck_front - offset, 9)
             key = run_key(path.stem, list(run_values.items()), seed, run_overrides)
             scenario = validate_scenario(apply_overrides(data, run_overrides, source),
                                          f"{source} ({key})")

@@ -18,18 +18,20 @@ SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "s3_pedestrian.to
 DONE, NOT_DONE = {"bus": True}, {"bus": False}  # whether the bus reached its route's end
 
 
-def recorder_with(speeds: list[float], contact: list[bool],
-                  clear: list[bool] | None = None) -> RunRecorder:
-    """A recorder whose rows hold the bus's speed, contact with the pedestrian and whether its
-    path was clear (default: always), every 0.1 s; the pedestrian is in the scene from the
-    second step on."""
+def recorder_with(speeds: list[float], contact: list[bool], clear: list[bool] | None = None,
+                  commanded: list[float] | None = None) -> RunRecorder:
+    """A recorder whose rows hold the bus's speed, contact with the pedestrian, whether its
+    path was clear (default: always) and its commanded speed (default: its speed), every
+    0.1 s; the pedestrian is in the scene from the second step on."""
     recorder = RunRecorder(load_scenario(SCENARIO))
-    steps = list(enumerate(zip(speeds, contact, clear or [True] * len(speeds), strict=True)))
+    steps = list(enumerate(zip(speeds, contact, clear or [True] * len(speeds),
+                               commanded or speeds, strict=True)))
     recorder.rows = [
         {"t": round(0.1 * i, 6), "vehicle": "bus", "bus_x": 2.0 * i, "bus_y": -1.75,
-         "bus_speed": v, "level": "nominal", "distance_bus_pedestrian": None,
-         "inconsistent": False, "collision": c, "path_clear": p}
-        for i, (v, c, p) in steps
+         "bus_speed": v, "commanded_speed": u, "level": "nominal",
+         "distance_bus_pedestrian": None, "inconsistent": False, "collision": c,
+         "path_clear": p}
+        for i, (v, c, p, u) in steps
     ]
     recorder.truth_rows = [{"t": round(0.1 * i, 6), "pedestrian": "pedestrian",
                             "x": 183.123456789, "y": -7.6} for i, _ in steps if i]
@@ -37,7 +39,7 @@ def recorder_with(speeds: list[float], contact: list[bool],
         {"t": round(0.1 * i, 6), "vehicle": "bus", "pedestrian": "pedestrian",
          "contained_fused": None, "contained_refined": None, "accounted_for": True,
          "distance": 0.0 if c else 5.0}
-        for i, (_, c, _) in steps
+        for i, (_, c, _, _) in steps
     ]
     return recorder
 
@@ -47,6 +49,14 @@ def test_longest_standstill_after_clear_counts_stopped_steps_with_a_clear_path_i
     clear = [False, False, True, True, True, True, True, True]
     summary = recorder_with(speeds, [False] * 8, clear).summary()
     assert summary["longest_standstill_after_clear_s"] == pytest.approx(0.3)
+
+
+def test_a_bus_told_to_go_that_sumo_holds_is_not_a_standstill_of_the_controller():
+    speeds = [0.0] * 6
+    commanded = [0.0, 0.0, 5.0, 5.0, 5.0, 0.0]  # SUMO holds it (a car's right of way)
+    summary = recorder_with(speeds, [False] * 6, None, commanded).summary()
+    assert summary["longest_standstill_after_clear_s"] == pytest.approx(0.2)
+    assert summary["time_stopped_s"] == pytest.approx(0.6)
 
 
 def test_collisions_count_entries_into_contact_and_contact_steps_every_step():

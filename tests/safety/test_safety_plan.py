@@ -88,18 +88,28 @@ def test_other_refusals_of_the_planner_stop_the_campaign(tmp_path):
 
 def test_the_default_campaign_has_at_least_1000_feasible_runs():
     plan = plan_campaign(load_campaign(DEFAULT))
-    assert len(plan.runs) == 1743 and len(plan.not_feasible) == 945  # crowd: 498 and 270
+    # crowd: 498 and 270; junction: 114 and 78
+    assert len(plan.runs) == 1857 and len(plan.not_feasible) == 1023
     assert {Path(r.scenario).stem for r in plan.runs} == {
-        *(f"s{i}_pedestrian" for i in (1, 2, 3)), "crowd"}
+        *(f"s{i}_pedestrian" for i in (1, 2, 3)), "crowd", "junction"}
     speeds = {r.values["walk_mps"] for r in plan.runs}
     assert max(speeds) == 2.5  # the estimator's bound
+
+
+def test_a_scenario_without_a_truck_keeps_its_pedestrians_start():
+    runs = [r for r in plan_campaign(load_campaign(DEFAULT)).runs
+            if Path(r.scenario).stem == "junction"]
+    assert runs and all("behind_m" not in r.values and "truck_m" not in r.values
+                        and START_PATH not in r.overrides for r in runs)
+    at_the_bound = {r.values["step_s"] for r in runs if r.values["walk_mps"] == 2.5}
+    assert at_the_bound == {7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0}
 
 
 def test_a_campaign_can_be_limited_to_some_of_its_scenarios():
     plan = plan_campaign(load_campaign(DEFAULT, only=("s1_pedestrian", "s3_pedestrian")))
     assert {Path(r.scenario).stem for r in plan.runs} == {"s1_pedestrian", "s3_pedestrian"}
     with pytest.raises(UserError, match=r"^--scenario: s4: is not a scenario of .*safety.toml "
-                                        r"-- choose from s1_pedestrian, .*crowd$"):
+                                        r"-- choose from s1_pedestrian, .*crowd, junction$"):
         load_campaign(DEFAULT, only=("s4",))
 
 
