@@ -172,6 +172,7 @@ def load_campaign(path: Path, quick: bool = False, only: Sequence[str] = ()) -> 
     if len(set(columns)) < len(columns) or "seed" in columns:
         raise UserError(str(path), "params", "two axes share a name (or one is named 'seed')",
                         "give every parameter its own name")
+    _parameter_targets(campaign, _scenario_fields(campaign))  # each selects something
     if only:
         campaign = _only_scenarios(campaign, only)
     return _quick_subset(campaign, model.quick) if quick else campaign
@@ -307,9 +308,8 @@ def plan_campaign(campaign: Campaign, feasibility: Feasibility | None = None) ->
     """
     check = feasibility or ActorPlanner()
     datas = [load_scenario_data(path) for path in campaign.scenarios]
-    fields = [validate_scenario(data, str(path)).model_dump(mode="json")
-              for data, path in zip(datas, campaign.scenarios, strict=True)]
-    targets = _parameter_targets(campaign, fields)
+    fields = _scenario_fields(campaign, datas)
+    targets = _parameter_targets(campaign, fields, every=False)
     runs: list[PlannedRun] = []
     left_out: list[NotFeasible] = []
     for path, data, found, paths in zip(campaign.scenarios, datas, fields, targets,
@@ -328,14 +328,23 @@ def plan_campaign(campaign: Campaign, feasibility: Feasibility | None = None) ->
     return CampaignPlan(tuple(runs), tuple(left_out))
 
 
-def _parameter_targets(campaign: Campaign,
-                       fields: Sequence[Mapping[str, Any]]) -> list[list[list[str]]]:
+def _scenario_fields(campaign: Campaign,
+                     datas: Sequence[Mapping[str, Any]] | None = None) -> list[dict[str, Any]]:
+    """Every scenario's fields, validated (from its file's ``datas`` if given)."""
+    datas = datas or [load_scenario_data(path) for path in campaign.scenarios]
+    return [validate_scenario(data, str(path)).model_dump(mode="json")
+            for data, path in zip(datas, campaign.scenarios, strict=True)]
+
+
+def _parameter_targets(campaign: Campaign, fields: Sequence[Mapping[str, Any]],
+                       every: bool = True) -> list[list[list[str]]]:
     """Per scenario, per parameter, the concrete paths it sets (none where its pattern selects
-    nothing there); a pattern that selects nothing in every scenario is an error."""
+    nothing there). With ``every`` (the whole campaign file), a pattern that selects nothing
+    in every scenario is an error; in a part of the file (``--scenario``) it may."""
     targets = [[_selected(p.pattern, found, str(path)) for p in campaign.parameters]
                for found, path in zip(fields, campaign.scenarios, strict=True)]
     for i, parameter in enumerate(campaign.parameters):
-        if not any(per_scenario[i] for per_scenario in targets):
+        if every and not any(per_scenario[i] for per_scenario in targets):
             expand_pattern(parameter.pattern, fields[0], campaign.source)  # raises: why
     return targets
 
