@@ -31,7 +31,7 @@ cleared (:meth:`SceneContext.crossing_at`).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from itertools import pairwise
@@ -200,6 +200,7 @@ def assess(
     pedestrian_regions: Iterable[shapely.Geometry],
     in_view: Iterable[shapely.Geometry] = (),
     in_view_beyond: bool = False,
+    floors: Mapping[int, float] | None = None,
 ) -> Picture:
     """The picture at one step.
 
@@ -208,7 +209,8 @@ def assess(
     area where a pedestrian nobody detected may be (every node's views, shared ones included);
     ``pedestrian_regions`` where each known pedestrian may be, unless outside the window;
     ``in_view`` the regions among them of the pedestrians some node detects now;
-    ``in_view_beyond``: whether one of those may be outside the window instead.
+    ``in_view_beyond``: whether one of those may be outside the window instead; ``floors``:
+    zone index -> an earliest arrival known from earlier steps (:func:`arrival_floors`).
     """
     cfg = context.config
     front_s = context.route_line.project(shapely.Point(front_xy))
@@ -228,7 +230,7 @@ def assess(
     stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0) \
         if sets else shapely.Polygon()
     zones = _outlook(context, front_s, [unobserved, *sets],
-                     [s for s in in_view if not s.is_empty], in_view_beyond)
+                     [s for s in in_view if not s.is_empty], in_view_beyond, floors or {})
     return Picture(
         front_s=float(front_s),
         speed_mps=float(speed),
@@ -252,13 +254,26 @@ def _around(area: shapely.Geometry, radius: float) -> shapely.Geometry:
     return area.buffer(radius)
 
 
+def arrival_floors(previous: Picture, elapsed_s: float) -> dict[int, float]:
+    """Per zone index, the earliest arrival that ``previous`` (``elapsed_s`` ago) still
+    proves: a pedestrian moves no faster than the bound (A1, docs/controller.md), so nobody
+    can be in a zone sooner than its earliest arrival then, less the time since.
+
+    The sets alone can bring an arrival nearer by more than that: their polygons circumscribe
+    the discs they grow by, so a region's edge moves up to 8 % faster than the bound. A plan
+    proven at one step then fails at the next against the new sets, though not against the
+    truth, and the bus brakes in emergency. The floor keeps the picture's arrivals as the
+    proof has them."""
+    return {z.index: z.arrival_s - elapsed_s for z in previous.zones}
+
+
 def _outlook(context: SceneContext, front_s: float, sources: Sequence[shapely.Geometry],
-             in_view: Sequence[shapely.Geometry],
-             in_view_beyond: bool) -> tuple[ZoneOutlook, ...]:
+             in_view: Sequence[shapely.Geometry], in_view_beyond: bool,
+             floors: Mapping[int, float]) -> tuple[ZoneOutlook, ...]:
     """The zones the bus has not yet cleared, with the earliest arrival from ``sources`` (and
-    from beyond the window) and from the pedestrians in view alone: their regions
-    ``in_view``, and beyond the window if ``in_view_beyond`` (every source to every such zone
-    in one distance call)."""
+    from beyond the window; never before its ``floors``) and from the pedestrians in view
+    alone: their regions ``in_view``, and beyond the window if ``in_view_beyond`` (every
+    source to every such zone in one distance call)."""
     ahead = [(index, zone, zone.end_m + context.bus.length_m - front_s)
              for index, zone in enumerate(context.zones)]
     ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead if to_clear > 0.0]
@@ -268,7 +283,7 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[shapely.Ge
     in_view_arrivals = _arrivals(in_view, polygons, speed, slack)
     return tuple(
         ZoneOutlook(index, zone.start_m - front_s, to_clear,
-                    min(zone.beyond_arrival_s, float(arrival)),
+                    max(min(zone.beyond_arrival_s, float(arrival)), floors.get(index, 0.0)),
                     min(zone.beyond_arrival_s if in_view_beyond else math.inf,
                         float(in_view_arrival)))
         for (index, zone, to_clear), arrival, in_view_arrival

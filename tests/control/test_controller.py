@@ -15,6 +15,7 @@ from sse_cosim.control.picture import (
     SceneContext,
     _around,
     _arrivals,
+    arrival_floors,
     assess,
     route_piece,
     route_stations,
@@ -150,6 +151,25 @@ def test_a_pedestrian_in_view_who_may_be_beyond_the_window_arrives_as_early_as_f
     assert zone.beyond_arrival_s < inside.zones[0].in_view_arrival_s < np.inf
     assert beyond.zones[0].in_view_arrival_s == zone.beyond_arrival_s
     assert beyond.zones[0].arrival_s == inside.zones[0].arrival_s == zone.beyond_arrival_s
+
+
+def test_an_arrival_comes_at_most_the_elapsed_time_sooner_than_the_last_picture_had_it(
+        context):
+    start = context.crossings[0].start_m
+    front = np.array(context.route_line.interpolate(start - 40.0).coords[0])
+    (zone,) = context.zones
+    empty = shapely.Polygon()
+    south = zone.polygon.bounds[1]
+    far = shapely.Point(200.0, south - 8.0).buffer(0.5)
+    near = shapely.Point(200.0, south - 2.0).buffer(0.5)  # the set grew faster than the bound
+    before = assess(context, front, 10.0, empty, empty, [far])
+    floors = arrival_floors(before, 0.1)
+    assert floors == {0: pytest.approx(before.zones[0].arrival_s - 0.1)}
+    now = assess(context, front, 10.0, empty, empty, [near], floors=floors)
+    assert now.zones[0].arrival_s == pytest.approx(before.zones[0].arrival_s - 0.1)
+    assert assess(context, front, 10.0, empty, empty, [near]).zones[0].arrival_s < floors[0]
+    nearer_later = assess(context, front, 10.0, empty, empty, [far], floors={0: 0.0})
+    assert nearer_later.zones[0].arrival_s == before.zones[0].arrival_s  # sets count too
 
 
 def test_arrivals_in_one_call_are_the_earliest_arrival_of_each_zone():
