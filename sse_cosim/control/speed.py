@@ -146,8 +146,8 @@ class SafePolicy:
 
     For a candidate command the bus is predicted one step ahead (the command acts over the
     next step; :data:`SPEED_UP_LOOKAHEAD_S` for a command that speeds the bus up, so that it
-    does not accelerate only to brake at the next step); from there, per zone, one of three
-    plans must hold:
+    does not accelerate only to brake at the next step; not at all for a stop, which is the
+    comfortable stop ordered now); from there, per zone, one of three plans must hold:
 
     - **stop** before the zone: the comfortable stopping distance (reaction time included)
       plus ``stopping_margin_m`` fits before it;
@@ -212,7 +212,10 @@ class SafePolicy:
         if command == 0.0 and picture.speed_mps < STANDING_MPS:
             return []  # standing still touches nobody
         dyn = self.dynamics
-        steps = 1 if command <= picture.speed_mps else max(
+        # a stop command is the comfortable stop itself, ordered now (its reaction time and
+        # step are in the stopping distance); any other command is held a step (a speed-up:
+        # the look-ahead) before a stop could be ordered
+        steps = 0 if command == 0.0 else 1 if command <= picture.speed_mps else max(
             1, round(SPEED_UP_LOOKAHEAD_S / dyn.step))
         position, speed = 0.0, picture.speed_mps
         for _ in range(steps):

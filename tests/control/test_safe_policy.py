@@ -269,3 +269,22 @@ def test_a_pass_through_one_zone_leaves_room_to_stop_before_the_next(
     still stop before the second once it has cleared the first (checked zone by zone, the
     bus could commit to a pass and then find no room to stop beyond it)."""
     assert two_zone_loop(first_start, gap_m, hidden_m, step_out_s)
+
+
+@pytest.mark.parametrize("start_arrival", [2.0, 2.5, 3.0, 3.5, 4.0])
+def test_a_creep_toward_a_pedestrian_closing_in_at_the_bound_ends_in_a_comfortable_stop(
+        start_arrival):
+    """Creeping up to a zone while a pedestrian approaches it at the speed bound (the earliest
+    arrival falls by one step per step): each step's stand plan holds at the next, so the bus
+    stops without its emergency brake. (Before, a stop command was itself predicted a step
+    ahead and then ordered again, its reaction time counted twice: at creep speed the stop
+    could not be proven and the bus braked in emergency.)"""
+    safe = policy()
+    s, v, levels = 0.0, 0.0, []
+    for k in range(60):
+        outlook = zone(2.0 - s, max(0.0, start_arrival - k * DT))
+        decision = safe.decide(picture(v, (outlook,)))
+        levels.append(decision.level)
+        s, v = DYN.advance(s, v, decision.command_mps)
+    assert SpeedLevel.CREEP in levels and SpeedLevel.EMERGENCY not in levels
+    assert v == 0.0
