@@ -139,10 +139,15 @@ def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
     assert assess(context, at_zebra, 0.0, empty, empty, [far]).path_clear
 
 
+def front_before_zebra(context: SceneContext, metres: float) -> np.ndarray:
+    """The point on the bus's route ``metres`` before the zebra, shape (2,)."""
+    start = context.crossings[0].start_m
+    return np.array(context.route_line.interpolate(start - metres).coords[0])
+
+
 def test_a_pedestrian_in_view_who_may_be_beyond_the_window_arrives_as_early_as_from_beyond(
         context):
-    start = context.crossings[0].start_m
-    front = np.array(context.route_line.interpolate(start - 40.0).coords[0])
+    front = front_before_zebra(context, 40.0)
     (zone,) = context.zones
     empty = shapely.Polygon()
     far = shapely.Point(200.0, zone.polygon.bounds[1] - 20.0).buffer(0.5)
@@ -155,8 +160,7 @@ def test_a_pedestrian_in_view_who_may_be_beyond_the_window_arrives_as_early_as_f
 
 def test_an_arrival_comes_at_most_the_elapsed_time_sooner_than_the_last_picture_had_it(
         context):
-    start = context.crossings[0].start_m
-    front = np.array(context.route_line.interpolate(start - 40.0).coords[0])
+    front = front_before_zebra(context, 40.0)
     (zone,) = context.zones
     empty = shapely.Polygon()
     south = zone.polygon.bounds[1]
