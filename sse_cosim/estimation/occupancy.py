@@ -108,6 +108,7 @@ class OccupancyTracker:
             raise ValueError("a tracked window needs the walkable ground")
         self.model = model
         self.reach = model.max_speed * step_length
+        self._walkable = walkable
         self._ground = None if walkable is None else dilate(walkable, model.jitter)
         if self._ground is not None:
             shapely.prepare(self._ground)
@@ -116,6 +117,11 @@ class OccupancyTracker:
         self._paths: dict[str, shapely.Geometry] = {}
         self._step: int | None = None
         self.beyond: frozenset[str] = frozenset()  # pedestrians who may be outside B now
+
+    def _on_foot(self, area: shapely.Geometry) -> shapely.Geometry:
+        """The walkable part of ``area`` (all of it without walkable ground given): where the
+        pedestrian itself can have been (A1)."""
+        return area if self._walkable is None else shapely.intersection(area, self._walkable)
 
     def forget(self) -> None:
         """Drop every pedestrian's history: the next update starts from its sets alone."""
@@ -152,11 +158,13 @@ class OccupancyTracker:
                 path = self._window.clip(path)
             now_clear = [c.region for c in clear.get(person_id, ()) if c.age == 0]
             for item in clear.get(person_id, ()):
-                # p was outside item.region ``age`` steps ago, within eps + reach*age of s now.
+                # p was outside item.region ``age`` steps ago, on walkable ground, within
+                # eps + reach*age of s now (so ground nobody saw off the walkable, such as a
+                # vehicle's shadow on the road, keeps no path alive)
                 slack = eps + self.reach * item.age
                 if _apart(path, item.region, 2.0 * ARC_SAFETY * slack):
                     continue  # the region cannot touch dilate(path): the cut keeps path whole
-                outside = shapely.difference(dilate(path, slack), item.region)
+                outside = shapely.difference(self._on_foot(dilate(path, slack)), item.region)
                 path = shapely.intersection(path, dilate(outside, slack))
             paths[person_id] = path = coarsen(path)
             region = dilate(path, eps)
