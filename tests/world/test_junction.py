@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import subprocess
 from pathlib import Path
+from xml.etree import ElementTree
 
 import pytest
 import shapely
@@ -84,4 +85,11 @@ def test_the_background_traffic_runs(net_path: Path, tmp_path: Path) -> None:
     assert result.returncode == 0, log
     assert "Error" not in log and "Warning: Vehicle" not in log, log
     inserted = next(line for line in log.splitlines() if "Inserted:" in line)
-    assert int(inserted.split()[1]) >= 100
+    assert int(inserted.split()[1]) == _departures_before(JUNCTION / "traffic.rou.xml", 300.0)
+
+
+def _departures_before(route_file: Path, end_s: float) -> int:
+    """How many vehicles the route file's periodic flows send off before ``end_s``."""
+    flows = ElementTree.parse(route_file).getroot().iter("flow")
+    return sum(len(range(int(float(f.get("begin"))), int(min(end_s, float(f.get("end")))),
+                         int(float(f.get("period"))))) for f in flows)
