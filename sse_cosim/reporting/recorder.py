@@ -328,19 +328,14 @@ class RunRecorder:
         """Whether pedestrian ``pid``'s true position lies in one of ``regions``, or outside
         the ``window`` in which regions are kept (there every walkable place counts as
         occupied)."""
-        point = shapely.Point(truth)
-        inside = not window.contains(point) or any(
-            shapely.distance(r, point) <= 1e-7 for r in regions)
+        inside = _outside_or_in(window, regions, truth)
         return self._violation_unless(inside, t, "possible", pid, truth)
 
     def _check_accounted(self, t: float, pid: str, ego: EgoStep, truth: np.ndarray) -> bool:
         """Whether the pedestrian is where the controller looks for pedestrians: inside a
         refined region (any track's) or the unobserved area, or outside the window where
         hidden ground is tracked (there every walkable place counts as occupied)."""
-        point = shapely.Point(truth)
-        inside = not ego.window.contains(point) or any(
-            shapely.distance(region, point) <= 1e-7
-            for region in [ego.unobserved, *ego.possible.values()])
+        inside = _outside_or_in(ego.window, [ego.unobserved, *ego.possible.values()], truth)
         return self._violation_unless(inside, t, UNACCOUNTED, pid, truth)
 
     def _violation_unless(self, inside: bool, t: float, node: str, pid: str,
@@ -512,6 +507,14 @@ class _PedestrianCheck:
                 "contained_refined": self.refined, "accounted_for": self.accounted_for,
                 "distance": self.distance}
 
+
+
+def _outside_or_in(window: shapely.Geometry, regions: list[shapely.Geometry],
+                   truth: np.ndarray) -> bool:
+    """Whether ``truth`` (2,) lies outside ``window`` or in one of ``regions`` (to 1e-7 m)."""
+    point = shapely.Point(truth)
+    return not window.contains(point) or any(
+        shapely.distance(region, point) <= 1e-7 for region in regions)
 
 def _total(values) -> float | None:
     """The sum of ``values``, None if there are none (no set, no area)."""
