@@ -267,6 +267,29 @@ def arrival_floors(previous: Picture, elapsed_s: float) -> dict[int, float]:
     return {z.index: z.arrival_s - elapsed_s for z in previous.zones}
 
 
+@dataclass
+class ArrivalMemory:
+    """The last consistent step's picture, kept for the next step's :func:`arrival_floors`.
+
+    A picture made while the picture is inconsistent (a flagged source may have misled it)
+    is not kept, and an inconsistent step gets no floors: after a flag the sets alone decide
+    until a consistent picture is made again."""
+
+    dt: float
+    _last: tuple[int, Picture] | None = None
+
+    def floors(self, step: int, inconsistent: bool) -> dict[int, float]:
+        """Per zone index, the earliest arrival the kept picture proves at ``step``."""
+        if inconsistent or self._last is None:
+            return {}
+        then, picture = self._last
+        return arrival_floors(picture, (step - then) * self.dt)
+
+    def keep(self, step: int, picture: Picture, inconsistent: bool) -> None:
+        """Keep ``picture`` (made at ``step``) unless it was made while inconsistent."""
+        self._last = None if inconsistent else (step, picture)
+
+
 def _outlook(context: SceneContext, front_s: float, sources: Sequence[shapely.Geometry],
              in_view: Sequence[shapely.Geometry], in_view_beyond: bool,
              floors: Mapping[int, float]) -> tuple[ZoneOutlook, ...]:

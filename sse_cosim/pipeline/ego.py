@@ -18,7 +18,7 @@ from typing import Protocol
 import numpy as np
 import shapely
 
-from sse_cosim.control.picture import Picture, SceneContext, arrival_floors, assess
+from sse_cosim.control.picture import ArrivalMemory, Picture, SceneContext, assess
 from sse_cosim.control.speed import Decision, fallback_floor, make_policy
 from sse_cosim.estimation.fusion_centre import BusEstimate
 from sse_cosim.estimation.motion import MotionModel
@@ -84,8 +84,7 @@ class Ego:
             model.jitter, scenario.pedestrian_radius_m(), dt,
         )
         self.policy = make_policy(self.context)
-        self.dt = dt
-        self._previous: tuple[int, Picture] | None = None  # the last step's picture
+        self.arrivals = ArrivalMemory(dt)  # the last consistent picture, for the floors
         self.known = known_regions(config.filter, model, dt, self.context.walkable,
                                    self.context.window, history=config.association == "labelled")
         # hidden ground is tracked near the crossings on its route; outside it counts as occupied
@@ -113,20 +112,10 @@ class Ego:
             union_or_empty(o.occluded for o in views), unknown, list(possible.values()),
             [region for key, region in possible.items() if key in estimate.in_view],
             in_view_beyond=not self.known.beyond.isdisjoint(estimate.in_view),
-            floors=self._floors(step, estimate.flags.inconsistent),
+            floors=self.arrivals.floors(step, estimate.flags.inconsistent),
         )
-        self._previous = (step, picture)
+        self.arrivals.keep(step, picture, estimate.flags.inconsistent)
         decision = self.policy.decide(
             picture, fallback_floor(estimate.flags.inconsistent, self.controller))
         return EgoStep(self.id, shared, estimate, possible, unknown, self.context.window,
                        picture, decision)
-
-    def _floors(self, step: int, inconsistent: bool) -> dict[int, float]:
-        """The earliest arrivals the previous picture proves now (:func:`arrival_floors`);
-        none while the picture is inconsistent: a flagged source may have misled it."""
-        if inconsistent:
-            self._previous = None
-        if self._previous is None:
-            return {}
-        then, picture = self._previous
-        return arrival_floors(picture, (step - then) * self.dt)

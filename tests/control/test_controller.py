@@ -11,6 +11,7 @@ import shapely
 from shapely.ops import substring
 
 from sse_cosim.control.picture import (
+    ArrivalMemory,
     Picture,
     SceneContext,
     _around,
@@ -174,6 +175,26 @@ def test_an_arrival_comes_at_most_the_elapsed_time_sooner_than_the_last_picture_
     assert assess(context, front, 10.0, empty, empty, [near]).zones[0].arrival_s < floors[0]
     nearer_later = assess(context, front, 10.0, empty, empty, [far], floors={0: 0.0})
     assert nearer_later.zones[0].arrival_s == before.zones[0].arrival_s  # sets count too
+
+
+def test_floors_come_only_from_a_picture_made_while_consistent(context):
+    # ArrivalMemory: an inconsistent step gets no floors, and the picture it makes is not
+    # kept: the next consistent step has no floors either, until a consistent picture is kept.
+    front = front_before_zebra(context, 40.0)
+    empty = shapely.Polygon()
+    far = shapely.Point(200.0, context.zones[0].polygon.bounds[1] - 8.0).buffer(0.5)
+    picture = assess(context, front, 10.0, empty, empty, [far])
+    memory = ArrivalMemory(0.1)
+    assert memory.floors(1, inconsistent=False) == {}
+    memory.keep(1, picture, inconsistent=False)
+    assert memory.floors(3, inconsistent=False) == {
+        0: pytest.approx(picture.zones[0].arrival_s - 0.2)}
+    assert memory.floors(3, inconsistent=True) == {}
+    memory.keep(3, picture, inconsistent=True)
+    assert memory.floors(4, inconsistent=False) == {}
+    memory.keep(4, picture, inconsistent=False)
+    assert memory.floors(5, inconsistent=False) == {
+        0: pytest.approx(picture.zones[0].arrival_s - 0.1)}
 
 
 def test_arrivals_in_one_call_are_the_earliest_arrival_of_each_zone():
