@@ -331,15 +331,15 @@ def enclose_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
     (:func:`~sse_cosim.sets.enclosure_kernels.enclose_correction`).
     """
     if zonotope.dim != 2:
-        return _volume_result(zonotope, strips)
+        return volume_correction(zonotope, strips)
     status, center, generators = enclosure_kernels.enclose_correction(
         zonotope.center, zonotope.generators, strips.normals, strips.values, strips.radii)
     if status == enclosure_kernels.FALLBACK:
-        return _volume_result(zonotope, strips)  # (strips that all cover Z: Z as it is)
+        return volume_correction(zonotope, strips)  # (strips that all cover Z: Z as it is)
     enclosed = Zonotope.unchecked(center, generators)
     if status == enclosure_kernels.EXACT:
         return enclosed
-    other = _volume_result(zonotope, strips)
+    other = volume_correction(zonotope, strips)
     return enclosed if enclosed.volume() < other.volume() else other
 
 
@@ -348,23 +348,35 @@ def enclose_correction_reference(zonotope: Zonotope, strips: Strips) -> Zonotope
     :func:`~sse_cosim.sets.enclosure_kernels.enclose_correction`)."""
     if zonotope.dim != 2 or not full_rank(zonotope.generators) \
             or strip_covers(zonotope, strips).all():
-        return _volume_result(zonotope, strips)
+        return volume_correction_reference(zonotope, strips)
     edges = np.stack([-strips.normals[:, 1], strips.normals[:, 0]])
     found = enclose_intersection_reference(zonotope, strips,
                                            np.hstack([zonotope.generators, edges]))
     if found is None:
-        return _volume_result(zonotope, strips)
-    return smaller_enclosure(*found, lambda: _volume_result(zonotope, strips))
+        return volume_correction_reference(zonotope, strips)
+    return smaller_enclosure(*found, lambda: volume_correction_reference(zonotope, strips))
 
 
-def _volume_result(zonotope: Zonotope, strips: Strips) -> Zonotope:
-    """Z ∩ S by Proposition 1 with the ``volume`` gain (the ``enclose`` correction's fallback)."""
+def volume_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
+    """Z ∩ S by Proposition 1 with the ``volume`` gain (also the ``enclose`` correction's
+    fallback): in 2-D one compiled call (:func:`~sse_cosim.sets.kernels.volume_correction_2d`),
+    in other dimensions :func:`volume_correction_reference`."""
+    if zonotope.dim != 2:
+        return volume_correction_reference(zonotope, strips)
+    center, generators = kernels.volume_correction_2d(
+        zonotope.center, zonotope.generators, strips.normals, strips.values, strips.radii)
+    return Zonotope.unchecked(center, generators)
+
+
+def volume_correction_reference(zonotope: Zonotope, strips: Strips) -> Zonotope:
+    """:func:`volume_correction` in NumPy: the ``volume`` gain applied by :func:`apply_gain`."""
     return apply_gain(zonotope, strips, GAIN_METHODS["volume"](zonotope, strips))
 
 
 CORRECTION_METHODS: dict[str, CorrectionMethod] = {
     **{name: _by_gain(choose) for name, choose in GAIN_METHODS.items()},
     "frobenius": frobenius_intersection,
+    "volume": volume_correction,
     "enclose": enclose_correction,
 }
 

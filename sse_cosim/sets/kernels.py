@@ -19,7 +19,10 @@ against the other on random and degenerate inputs:
 - :func:`frobenius_gain` and :func:`intersect_frobenius` for the Frobenius gain of
   Proposition 1 (reference ``frobenius_gain_reference`` in :mod:`~sse_cosim.sets.gains`): the
   same least-squares minimizer by Householder QR instead of LAPACK's SVD solver, so equal up
-  to rounding.
+  to rounding;
+- :func:`volume_correction_2d` for Proposition 1 with the ``volume`` gain in 2-D (reference
+  ``volume_correction_reference`` in :mod:`~sse_cosim.sets.gains`): the same candidates and
+  choice, the Frobenius one by QR, so equal up to rounding.
 
 numba caches the machine code in ``__pycache__`` next to this file (ignored by git).
 """
@@ -437,6 +440,100 @@ def intersect_frobenius(center: FloatArray, generators: FloatArray, normals: Flo
             for s in range(m):
                 total -= gain[i, s] * hg[s, j]
             full[i, j] = total
+    if not (np.isfinite(new_center).all() and np.isfinite(full).all()):
+        raise ValueError("zonotope center and generators must be finite")
+    return new_center, nonzero_columns(full)
+
+
+@njit(cache=True)
+def _sequential_volume_gain(generators: FloatArray, normals: FloatArray, values: FloatArray,
+                            radii: FloatArray, center: FloatArray) -> FloatArray:
+    """``gains._sequential(volume_gain_vertices)`` for a 2-D ⟨c, G⟩: the strips one after
+    another, λ_j = 0 where strip j covers the current set, the one-strip Frobenius gain where
+    the current set is not full rank, else :func:`volume_gain_2d`; the joint Λ (2, m)."""
+    m = normals.shape[0]
+    total = np.zeros((2, m))
+    c0, c1 = center[0], center[1]
+    g = generators.copy()
+    for j in range(m):
+        h0, h1, value, radius = normals[j, 0], normals[j, 1], values[j], radii[j]
+        e = g.shape[1]
+        hg = np.empty(e)
+        for i in range(e):
+            hg[i] = h0 * g[0, i] + h1 * g[1, i]
+        mid = h0 * c0 + h1 * c1
+        half = pairwise_sum(np.abs(hg), 0, e)
+        if mid - half >= value - radius and mid + half <= value + radius:
+            continue
+        if not full_rank_2d(g):
+            scale = pairwise_sum(hg * hg, 0, e) + radius * radius
+            lam0 = pairwise_sum(g[0] * hg, 0, e) / scale
+            lam1 = pairwise_sum(g[1] * hg, 0, e) / scale
+        else:
+            lam = volume_gain_2d(g, normals[j], radius)
+            lam0, lam1 = lam[0], lam[1]
+        if lam0 == 0.0 and lam1 == 0.0:
+            continue
+        for k in range(j):
+            t = h0 * total[0, k] + h1 * total[1, k]
+            total[0, k] -= lam0 * t
+            total[1, k] -= lam1 * t
+        total[0, j], total[1, j] = lam0, lam1
+        c0 += lam0 * (value - mid)
+        c1 += lam1 * (value - mid)
+        grown = np.empty((2, e + 1))
+        for i in range(e):
+            grown[0, i] = g[0, i] - lam0 * hg[i]
+            grown[1, i] = g[1, i] - lam1 * hg[i]
+        grown[0, e], grown[1, e] = lam0 * radius, lam1 * radius
+        g = nonzero_columns(grown)
+    return total
+
+
+@njit(cache=True)
+def _updated(generators: FloatArray, hg: FloatArray, gain: FloatArray,
+             radii: FloatArray) -> FloatArray:
+    """G' = [(I - ΛH)G, Λ diag(r)] (eq. G_lambda) from HG (m, e); G (n, e), Λ (n, m)."""
+    n, e = generators.shape
+    m = hg.shape[0]
+    full = np.empty((n, e + m))
+    for i in range(n):
+        for s in range(m):
+            full[i, e + s] = gain[i, s] * radii[s]
+        for j in range(e):
+            total = generators[i, j]
+            for s in range(m):
+                total -= gain[i, s] * hg[s, j]
+            full[i, j] = total
+    return full
+
+
+@njit(cache=True)
+def volume_correction_2d(center: FloatArray, generators: FloatArray, normals: FloatArray,
+                         values: FloatArray, radii: FloatArray
+                         ) -> tuple[FloatArray, FloatArray]:
+    """Prop. 1 with the ``volume`` gain for a 2-D ⟨c, G⟩ and unit-normal strips (H (m, 2), y
+    and r (m,)): of the sequential vertex gain, the Frobenius gain and Λ = 0, the gain whose
+    G' has the least area (the first of the least), applied by eqs. C_lambda and G_lambda,
+    zero columns dropped; -> c' (2,), G' (2, <= e + m). ``gains._smallest_volume`` and
+    ``gains.apply_gain`` in one call (reference: ``gains.volume_correction_reference``)."""
+    m = normals.shape[0]
+    hg = _project(normals, generators)
+    candidates = (_sequential_volume_gain(generators, normals, values, radii, center),
+                  _gain(generators, hg, radii), np.zeros((2, m)))
+    best, best_area = 0, 0.0
+    for k in range(3):
+        area = area_2d(_updated(generators, hg, candidates[k], radii)) if k < 2 \
+            else area_2d(generators)
+        if k == 0 or area < best_area or (np.isnan(area) and not np.isnan(best_area)):
+            best, best_area = k, area
+    gain = candidates[best]
+    new_center = center.copy()
+    for s in range(m):
+        innovation = values[s] - (normals[s, 0] * center[0] + normals[s, 1] * center[1])
+        for i in range(2):
+            new_center[i] += gain[i, s] * innovation
+    full = _updated(generators, hg, gain, radii)
     if not (np.isfinite(new_center).all() and np.isfinite(full).all()):
         raise ValueError("zonotope center and generators must be finite")
     return new_center, nonzero_columns(full)
