@@ -30,6 +30,7 @@ from sse_cosim.sets.kernels import (
     pairwise_sum,
     row_sum,
     vertices_2d,
+    volume_correction_2d,
 )
 
 MARGIN = 1e-10
@@ -409,6 +410,24 @@ def enclose_correction(center: FloatArray, generators: FloatArray, normals: Floa
         return FALLBACK, none[0], none[1]
     exact = area_2d(enclosure) <= polygon_area(polygon) * (1 + EXACT_RTOL)
     return EXACT if exact else ENCLOSED, center + offset, enclosure
+
+
+@njit(cache=True)
+def enclose_or_volume(center: FloatArray, generators: FloatArray, normals: FloatArray,
+                      values: FloatArray, radii: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """``gains.enclose_correction`` for a 2-D ⟨c, G⟩ and unit-normal strips in one call:
+    :func:`enclose_correction`, kept when EXACT; else the ``volume`` gain's result
+    (:func:`~sse_cosim.sets.kernels.volume_correction_2d`) on FALLBACK, or the smaller in area
+    of the two; -> c' (2,), G' (2, e')."""
+    status, enclosed_center, enclosed = enclose_correction(center, generators, normals,
+                                                           values, radii)
+    if status == EXACT:
+        return enclosed_center, enclosed
+    volume_center, volume_generators = volume_correction_2d(center, generators, normals,
+                                                            values, radii)
+    if status == ENCLOSED and area_2d(enclosed) < area_2d(volume_generators):
+        return enclosed_center, enclosed
+    return volume_center, volume_generators
 
 
 @njit(cache=True)

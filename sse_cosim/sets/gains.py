@@ -327,20 +327,14 @@ def enclose_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
     Falls back to the ``volume`` result when n != 2, when Z is not full-dimensional, when
     Z ∩ S is empty (an inconsistent measurement: any set is sound, and
     :mod:`sse_cosim.sets.overlap` is where that is detected, as for the gains), or when
-    no enclosure is found. All but the ``volume`` gain runs compiled
-    (:func:`~sse_cosim.sets.enclosure_kernels.enclose_correction`).
+    no enclosure is found. In 2-D one compiled call
+    (:func:`~sse_cosim.sets.enclosure_kernels.enclose_or_volume`).
     """
     if zonotope.dim != 2:
         return volume_correction(zonotope, strips)
-    status, center, generators = enclosure_kernels.enclose_correction(
+    center, generators = enclosure_kernels.enclose_or_volume(
         zonotope.center, zonotope.generators, strips.normals, strips.values, strips.radii)
-    if status == enclosure_kernels.FALLBACK:
-        return volume_correction(zonotope, strips)  # (strips that all cover Z: Z as it is)
-    enclosed = Zonotope.unchecked(center, generators)
-    if status == enclosure_kernels.EXACT:
-        return enclosed
-    other = volume_correction(zonotope, strips)
-    return enclosed if enclosed.volume() < other.volume() else other
+    return Zonotope.unchecked(center, generators)
 
 
 def enclose_correction_reference(zonotope: Zonotope, strips: Strips) -> Zonotope:
