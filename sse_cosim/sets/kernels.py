@@ -537,3 +537,27 @@ def volume_correction_2d(center: FloatArray, generators: FloatArray, normals: Fl
     if not (np.isfinite(new_center).all() and np.isfinite(full).all()):
         raise ValueError("zonotope center and generators must be finite")
     return new_center, nonzero_columns(full)
+
+
+@njit(cache=True)
+def unit_strips(normals: FloatArray, values: FloatArray, radii: FloatArray
+                ) -> tuple[bool, FloatArray, FloatArray, FloatArray]:
+    """``Strips.normalized`` on arrays H (m, n), y and r (m,): whether every row of H already
+    has norm 1.0, and the rows, values and radii divided by ‖h_j‖ (sqrt of Σ_i h_ji² summed
+    in order, as numpy sums a short row)."""
+    m, n = normals.shape
+    unit_normals = np.empty((m, n))
+    unit_values = np.empty(m)
+    unit_radii = np.empty(m)
+    already = True
+    for j in range(m):
+        squares = 0.0
+        for i in range(n):
+            squares += normals[j, i] * normals[j, i]
+        norm = np.sqrt(squares)
+        already &= norm == 1.0
+        for i in range(n):
+            unit_normals[j, i] = normals[j, i] / norm
+        unit_values[j] = values[j] / norm
+        unit_radii[j] = radii[j] / norm
+    return already, unit_normals, unit_values, unit_radii

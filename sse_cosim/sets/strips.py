@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from sse_cosim.sets.kernels import unit_strips
 from sse_cosim.sets.zonotope import BoolArray, FloatArray, Zonotope, facet_normals, full_rank
 
 
@@ -92,7 +93,14 @@ class Strips:
         )
 
     def normalized(self) -> Strips:
-        """The same sets with unit normals (rows divided by ‖h_j‖)."""
+        """The same sets with unit normals (rows divided by ‖h_j‖), by the compiled
+        :func:`~sse_cosim.sets.kernels.unit_strips` (NumPy reference
+        :meth:`normalized_reference`)."""
+        already, normals, values, radii = unit_strips(self.normals, self.values, self.radii)
+        return self if already else Strips.unchecked(normals, values, radii)
+
+    def normalized_reference(self) -> Strips:
+        """:meth:`normalized` in NumPy."""
         norms = np.sqrt((self.normals * self.normals).sum(axis=1))
         if (norms == 1.0).all():
             return self

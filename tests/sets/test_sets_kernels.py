@@ -168,3 +168,19 @@ def test_compiled_volume_correction_matches_the_reference_and_is_sound(case, tou
     points = np.array([point_in(zonotope, rng) for _ in range(200)])
     inside = np.abs(points @ unit.normals.T - unit.values) <= unit.radii
     assert compiled.contains(points[inside.all(axis=1)], tol=1e-9 * scale).all()
+
+
+@SETTINGS
+@given(zonotope_with_strips(2), st.booleans())
+def test_compiled_normalization_is_the_reference_bit_for_bit(case, unit):
+    # Strips.normalized (kernels.unit_strips) against Strips.normalized_reference, on strips
+    # of any scale and on strips whose normals already have norm 1.0 (the same object back).
+    _, strips = case
+    if unit:
+        k = min(len(strips), 2)
+        strips = Strips(np.array([[1.0, 0.0], [0.0, -1.0]])[:k], strips.values[:k],
+                        strips.radii[:k])
+    compiled, reference = strips.normalized(), strips.normalized_reference()
+    assert (compiled is strips) == (reference is strips) == unit
+    for name in ("normals", "values", "radii"):
+        np.testing.assert_array_equal(getattr(compiled, name), getattr(reference, name))
