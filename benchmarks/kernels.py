@@ -16,7 +16,15 @@ import shapely
 
 from benchmarks.common import time_calls
 from benchmarks.gain_methods import typical_problem
-from sse_cosim.sets import Strips, Zonotope, fuse, intersect_strips, zonotope_facet_strips
+from sse_cosim.sets import (
+    Strips,
+    Zonotope,
+    enclosure_kernels,
+    fuse,
+    intersect_strips,
+    kernels,
+    zonotope_facet_strips,
+)
 from sse_cosim.sets.enclosure import enclose_intersection_reference
 from sse_cosim.sets.gains import apply_gain, frobenius_gain_reference
 from sse_cosim.sets.reduction import girard_reduce_reference
@@ -91,6 +99,13 @@ def run(number: int = 2000, repeats: int = 5) -> dict:
         "enclose fusion of 3": lambda: enclose_intersection_reference(inputs[0], others,
                                                                       every_direction),
     }
+    # the compiled kernel called on arrays, without the public function's Python around it
+    alone = {
+        "intersection": lambda: kernels.intersect_frobenius(
+            z.center, z.generators, unit.normals, unit.values, unit.radii),
+        "enclose intersection": lambda: enclosure_kernels.enclose_or_volume(
+            z.center, z.generators, unit.normals, unit.values, unit.radii),
+    }
     peers: dict[str, tuple[str, Callable[[], object]]] = {
         op: ("shapely", call) for op, call in _shapely_cases(z, strips, inputs).items()}
     with contextlib.suppress(ImportError):
@@ -98,6 +113,8 @@ def run(number: int = 2000, repeats: int = 5) -> dict:
     us: dict[str, dict[str, float]] = {}
     for op in ours:
         sides = {"compiled": ours[op], "reference": reference[op]}
+        if op in alone:
+            sides["kernel alone"] = alone[op]
         if op in peers:
             sides[peers[op][0]] = peers[op][1]
         us[op] = {}

@@ -13,6 +13,7 @@ import pstats
 import sysconfig
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from benchmarks.common import median
@@ -62,14 +63,20 @@ def cosim(scenario: Scenario, folder: Path) -> tuple[float, dict[str, float], in
 
 
 def profile_run(scenario: Scenario, folder: Path, top: int = 15) -> str:
-    """cProfile of one full run: the functions with the largest cumulative time (file paths
-    relative to the Python environment or the current folder: no machine path)."""
+    """cProfile of one full run: the functions with the largest cumulative time."""
+    return profile_call(lambda: simulate(scenario, folder, "profile", RunRecorder(scenario)),
+                        "cumulative", top)
+
+
+def profile_call(call: Callable[[], object], order: str, top: int) -> str:
+    """cProfile of ``call()``: the ``top`` functions by ``order`` (file paths relative to the
+    Python environment or the current folder: no machine path)."""
     profiler = cProfile.Profile()
     profiler.enable()
-    simulate(scenario, folder, "profile", RunRecorder(scenario))
+    call()
     profiler.disable()
     out = io.StringIO()
-    pstats.Stats(profiler, stream=out).sort_stats("cumulative").print_stats(top)
+    pstats.Stats(profiler, stream=out).sort_stats(order).print_stats(top)
     text = out.getvalue()
     for prefix in sorted({sysconfig.get_paths()["purelib"], str(Path.cwd())}, key=len,
                          reverse=True):

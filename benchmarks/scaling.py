@@ -18,6 +18,7 @@ import numpy as np
 import shapely
 
 from benchmarks.common import PlainObserver, fuse_inputs, median
+from benchmarks.loop_cost import profile_call
 from sse_cosim.control.picture import SceneContext, assess
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea
@@ -112,13 +113,18 @@ def measure(pedestrians: int, sensors: int, steps: int, warmup: int, roadmap) ->
     return median(samples)
 
 
-def run(pedestrians=PEDESTRIANS, sensors=SENSORS, steps: int = 8, warmup: int = 3) -> dict:
+def run(pedestrians=PEDESTRIANS, sensors=SENSORS, steps: int = 8, warmup: int = 3,
+        profile: bool = True) -> dict:
     roadmap = load_roadmap(build_network("sumo_net"))
     grid = []
     for p in pedestrians:
         for s in sensors:
             grid.append({"pedestrians": p, "sensors": s,
                          "us_per_step": 1e6 * measure(p, s, steps, warmup, roadmap)})
+    largest = max(grid, key=lambda g: (g["pedestrians"] * g["sensors"], g["pedestrians"]))
+    # where the largest configuration's time goes: its steps (warm-up included) profiled
+    text = profile_call(lambda: measure(largest["pedestrians"], largest["sensors"], steps,
+                                        warmup, roadmap), "tottime", 20) if profile else ""
     x = np.log([g["pedestrians"] * g["sensors"] for g in grid])
     y = np.log([g["us_per_step"] for g in grid])
     design = np.column_stack([np.ones_like(x), x])
@@ -135,6 +141,7 @@ def run(pedestrians=PEDESTRIANS, sensors=SENSORS, steps: int = 8, warmup: int = 
         mx = np.log([m[0] for m in marginal])
         my = np.log([m[1] for m in marginal])
         marginal_exponent = float(np.polyfit(mx, my, 1)[0])
-    return {"grid": grid, "exponent_in_pedestrians_x_sensors": exponent,
+    return {"grid": grid, "largest": largest, "profile_largest": text,
+            "exponent_in_pedestrians_x_sensors": exponent,
             "exponent_pedestrians": float(per_axis[1]), "exponent_sensors": float(per_axis[2]),
             "marginal_exponent": marginal_exponent, "steps": steps, "warmup": warmup}
