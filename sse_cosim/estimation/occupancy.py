@@ -216,8 +216,6 @@ class UnobservedArea:
         self.latency = latency_steps
         self._window = None if window is None else TrackedWindow(window, walkable, model,
                                                                  step_length)
-        # O's rim moved one step: paths entering B from outside
-        self._inflow = EMPTY if self._window is None else self._window.inflow()
         if self._window is not None:
             walkable = shapely.intersection(walkable, dilate(self._window.bounds, model.jitter))
         self.walkable = walkable  # the walkable ground whose views matter
@@ -269,7 +267,9 @@ class UnobservedArea:
         """
         if self._base_moved is not None and self._base_moved[0] is path:
             return self._base_moved[1]
-        moved = shapely.union(dilate(path, self.reach), self._inflow)
+        moved = dilate(path, self.reach)
+        if self._window is not None:  # O's rim moved one step: paths entering B from outside
+            moved = shapely.union(moved, self._window.inflow())
         if path is self._base:
             self._base_moved = (path, moved)
         return moved

@@ -172,7 +172,7 @@ def load_campaign(path: Path, quick: bool = False, only: Sequence[str] = ()) -> 
     if len(set(columns)) < len(columns) or "seed" in columns:
         raise UserError(str(path), "params", "two axes share a name (or one is named 'seed')",
                         "give every parameter its own name")
-    _parameter_targets(campaign, _scenario_fields(campaign))  # each selects something
+    _check_every_parameter_selects(campaign, _scenario_fields(campaign))
     if only:
         campaign = _only_scenarios(campaign, only)
     return _quick_subset(campaign, model.quick) if quick else campaign
@@ -302,14 +302,14 @@ def plan_campaign(campaign: Campaign, feasibility: Feasibility | None = None) ->
     """Every combination in a fixed order (scenario, axes in file order, start offset, seed),
     split into feasible runs and the combinations ``feasibility`` rules out.
 
-    Raises :class:`UserError` for anything wrong with the grid: a pattern that selects
-    nothing in any scenario, a field set from two places, a value the schema rejects, two
-    identical runs.
+    Raises :class:`UserError` for anything wrong with the grid: a field set from two places,
+    a value the schema rejects, two identical runs (a pattern that selects nothing anywhere
+    is refused by :func:`load_campaign`).
     """
     check = feasibility or ActorPlanner()
     datas = [load_scenario_data(path) for path in campaign.scenarios]
     fields = _scenario_fields(campaign, datas)
-    targets = _parameter_targets(campaign, fields, every=False)
+    targets = _parameter_targets(campaign, fields)
     runs: list[PlannedRun] = []
     left_out: list[NotFeasible] = []
     for path, data, found, paths in zip(campaign.scenarios, datas, fields, targets,
@@ -336,17 +336,23 @@ def _scenario_fields(campaign: Campaign,
             for data, path in zip(datas, campaign.scenarios, strict=True)]
 
 
-def _parameter_targets(campaign: Campaign, fields: Sequence[Mapping[str, Any]],
-                       every: bool = True) -> list[list[list[str]]]:
+def _parameter_targets(campaign: Campaign,
+                       fields: Sequence[Mapping[str, Any]]) -> list[list[list[str]]]:
     """Per scenario, per parameter, the concrete paths it sets (none where its pattern selects
-    nothing there). With ``every`` (the whole campaign file), a pattern that selects nothing
-    in every scenario is an error; in a part of the file (``--scenario``) it may."""
-    targets = [[_selected(p.pattern, found, str(path)) for p in campaign.parameters]
-               for found, path in zip(fields, campaign.scenarios, strict=True)]
+    nothing there)."""
+    return [[_selected(p.pattern, found, str(path)) for p in campaign.parameters]
+            for found, path in zip(fields, campaign.scenarios, strict=True)]
+
+
+def _check_every_parameter_selects(campaign: Campaign,
+                                   fields: Sequence[Mapping[str, Any]]) -> None:
+    """Raise :class:`UserError` for a parameter whose pattern selects nothing in any of the
+    campaign file's scenarios (checked on the whole file: a part of it, ``--scenario``, may
+    leave a parameter out)."""
+    targets = _parameter_targets(campaign, fields)
     for i, parameter in enumerate(campaign.parameters):
-        if every and not any(per_scenario[i] for per_scenario in targets):
+        if not any(per_scenario[i] for per_scenario in targets):
             expand_pattern(parameter.pattern, fields[0], campaign.source)  # raises: why
-    return targets
 
 
 def _selected(pattern: str, fields: Mapping[str, Any], source: str) -> list[str]:
