@@ -15,6 +15,7 @@ from safety_helpers import (
     slow_walkers_cannot,
 )
 
+from sse_cosim.cli.safety_commands import safety as safety_cli
 from sse_cosim.errors import UserError
 from sse_cosim.runner.safety import (
     START_PATH,
@@ -94,6 +95,9 @@ def test_the_default_campaign_has_at_least_1000_feasible_runs():
         *(f"s{i}_pedestrian" for i in (1, 2, 3)), "crowd", "junction"}
     speeds = {r.values["walk_mps"] for r in plan.runs}
     assert max(speeds) == 2.5  # the estimator's bound
+    # `sse-cosim safety --help` tells the user the same count
+    assert f"({len(plan.runs):,} runs with sweeps/safety.toml" in " ".join(
+        safety_cli.help.split())
 
 
 def test_a_scenario_without_a_truck_keeps_its_pedestrians_start():
