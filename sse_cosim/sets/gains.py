@@ -94,9 +94,14 @@ def frobenius_intersection(zonotope: Zonotope, strips: Strips) -> Zonotope:
     """Prop. 1 with the Frobenius gain in one compiled call
     (:func:`~sse_cosim.sets.kernels.intersect_frobenius`); equals :func:`apply_gain` with
     :func:`frobenius_gain` up to rounding."""
-    center, generators = kernels.intersect_frobenius(
-        zonotope.center, zonotope.generators, strips.normals, strips.values, strips.radii)
-    return Zonotope.unchecked(center, generators)
+    return _compiled_2d(kernels.intersect_frobenius, zonotope, strips)
+
+
+def _compiled_2d(kernel: Callable[..., tuple[FloatArray, FloatArray]], zonotope: Zonotope,
+                 strips: Strips) -> Zonotope:
+    """The zonotope ``kernel`` makes, (c', G'), from Z's c and G and the strips' H, y and r."""
+    return Zonotope.unchecked(*kernel(zonotope.center, zonotope.generators, strips.normals,
+                                      strips.values, strips.radii))
 
 
 def frobenius_gain_reference(zonotope: Zonotope, strips: Strips) -> FloatArray:
@@ -332,9 +337,7 @@ def enclose_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
     """
     if zonotope.dim != 2:
         return volume_correction(zonotope, strips)
-    center, generators = enclosure_kernels.enclose_or_volume(
-        zonotope.center, zonotope.generators, strips.normals, strips.values, strips.radii)
-    return Zonotope.unchecked(center, generators)
+    return _compiled_2d(enclosure_kernels.enclose_or_volume, zonotope, strips)
 
 
 def enclose_correction_reference(zonotope: Zonotope, strips: Strips) -> Zonotope:
@@ -357,9 +360,7 @@ def volume_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
     in other dimensions :func:`volume_correction_reference`."""
     if zonotope.dim != 2:
         return volume_correction_reference(zonotope, strips)
-    center, generators = kernels.volume_correction_2d(
-        zonotope.center, zonotope.generators, strips.normals, strips.values, strips.radii)
-    return Zonotope.unchecked(center, generators)
+    return _compiled_2d(kernels.volume_correction_2d, zonotope, strips)
 
 
 def volume_correction_reference(zonotope: Zonotope, strips: Strips) -> Zonotope:

@@ -421,28 +421,9 @@ def intersect_frobenius(center: FloatArray, generators: FloatArray, normals: Flo
     """Prop. 1 with the Frobenius gain: c' = c + Λ(y - Hc) (eq. C_lambda) and
     G' = [(I - ΛH)G, Λ diag(r)] (eq. G_lambda), zero columns dropped; c (n,), G (n, e),
     H (m, n), y and r (m,) -> c' (n,), G' (n, <= e + m)."""
-    n, e = generators.shape
-    m = normals.shape[0]
     hg = _project(normals, generators)
-    gain = _gain(generators, hg, radii)
-    innovation = values.copy()  # y - Hc
-    for s in range(m):
-        for i in range(n):
-            innovation[s] -= normals[s, i] * center[i]
-    full = np.empty((n, e + m))
-    new_center = center.copy()
-    for i in range(n):
-        for s in range(m):
-            new_center[i] += gain[i, s] * innovation[s]
-            full[i, e + s] = gain[i, s] * radii[s]
-        for j in range(e):
-            total = generators[i, j]
-            for s in range(m):
-                total -= gain[i, s] * hg[s, j]
-            full[i, j] = total
-    if not (np.isfinite(new_center).all() and np.isfinite(full).all()):
-        raise ValueError("zonotope center and generators must be finite")
-    return new_center, nonzero_columns(full)
+    return _apply_gain(center, generators, hg, _gain(generators, hg, radii), normals, values,
+                       radii)
 
 
 @njit(cache=True)
@@ -509,6 +490,27 @@ def _updated(generators: FloatArray, hg: FloatArray, gain: FloatArray,
 
 
 @njit(cache=True)
+def _apply_gain(center: FloatArray, generators: FloatArray, hg: FloatArray, gain: FloatArray,
+                normals: FloatArray, values: FloatArray, radii: FloatArray
+                ) -> tuple[FloatArray, FloatArray]:
+    """Prop. 1 for the gain Λ (n, m): c' = c + Λ(y - Hc) (eq. C_lambda) and G' (eq. G_lambda,
+    :func:`_updated`), zero columns dropped; raises ValueError unless both are finite."""
+    n, m = gain.shape
+    innovation = values.copy()  # y - Hc
+    for s in range(m):
+        for i in range(n):
+            innovation[s] -= normals[s, i] * center[i]
+    new_center = center.copy()
+    for i in range(n):
+        for s in range(m):
+            new_center[i] += gain[i, s] * innovation[s]
+    full = _updated(generators, hg, gain, radii)
+    if not (np.isfinite(new_center).all() and np.isfinite(full).all()):
+        raise ValueError("zonotope center and generators must be finite")
+    return new_center, nonzero_columns(full)
+
+
+@njit(cache=True)
 def volume_correction_2d(center: FloatArray, generators: FloatArray, normals: FloatArray,
                          values: FloatArray, radii: FloatArray
                          ) -> tuple[FloatArray, FloatArray]:
@@ -527,16 +529,7 @@ def volume_correction_2d(center: FloatArray, generators: FloatArray, normals: Fl
             else area_2d(generators)
         if k == 0 or area < best_area or (np.isnan(area) and not np.isnan(best_area)):
             best, best_area = k, area
-    gain = candidates[best]
-    new_center = center.copy()
-    for s in range(m):
-        innovation = values[s] - (normals[s, 0] * center[0] + normals[s, 1] * center[1])
-        for i in range(2):
-            new_center[i] += gain[i, s] * innovation
-    full = _updated(generators, hg, gain, radii)
-    if not (np.isfinite(new_center).all() and np.isfinite(full).all()):
-        raise ValueError("zonotope center and generators must be finite")
-    return new_center, nonzero_columns(full)
+    return _apply_gain(center, generators, hg, candidates[best], normals, values, radii)
 
 
 @njit(cache=True)
