@@ -29,6 +29,7 @@ from sse_cosim.sets.kernels import (
     full_rank_2d,
     pairwise_sum,
     row_sum,
+    unit_strips,
     vertices_2d,
     volume_correction_2d,
 )
@@ -415,10 +416,12 @@ def enclose_correction(center: FloatArray, generators: FloatArray, normals: Floa
 @njit(cache=True)
 def enclose_or_volume(center: FloatArray, generators: FloatArray, normals: FloatArray,
                       values: FloatArray, radii: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """``gains.enclose_correction`` for a 2-D ⟨c, G⟩ and unit-normal strips in one call:
-    :func:`enclose_correction`, kept when EXACT; else the ``volume`` gain's result
+    """``gains.enclose_correction`` for a 2-D ⟨c, G⟩ and strips (H (m, 2), y and r (m,)) in one
+    call: the strips rescaled to unit normals (:func:`~sse_cosim.sets.kernels.unit_strips`),
+    then :func:`enclose_correction`, kept when EXACT; else the ``volume`` gain's result
     (:func:`~sse_cosim.sets.kernels.volume_correction_2d`) on FALLBACK, or the smaller in area
     of the two; -> c' (2,), G' (2, e')."""
+    _, normals, values, radii = unit_strips(normals, values, radii)
     status, enclosed_center, enclosed = enclose_correction(center, generators, normals,
                                                            values, radii)
     if status == EXACT:

@@ -45,7 +45,8 @@ GainMethod = Callable[[Zonotope, Strips], FloatArray]
 """Chooses Λ (n, m) for Z and m strips with unit normals."""
 
 CorrectionMethod = Callable[[Zonotope, Strips], Zonotope]
-"""Encloses Z ∩ S_1 ∩ ... ∩ S_m (strips with unit normals, Z with generators) in a zonotope."""
+"""Encloses Z ∩ S_1 ∩ ... ∩ S_m (Z with generators) in a zonotope; each method rescales the
+strips to unit normals first (:meth:`Strips.normalized`, or the same inside a kernel)."""
 
 StripGain = Callable[[FloatArray, FloatArray, float], FloatArray]
 """Chooses λ (n,) for generators G (n, e) of a full-rank zonotope and one strip (h, r)."""
@@ -317,7 +318,16 @@ def _by_gain(choose: GainMethod) -> CorrectionMethod:
     def correct(zonotope: Zonotope, strips: Strips) -> Zonotope:
         return apply_gain(zonotope, strips, choose(zonotope, strips))
 
-    return correct
+    return _normalized_first(correct)
+
+
+def _normalized_first(correct: CorrectionMethod) -> CorrectionMethod:
+    """``correct`` (for strips with unit normals) on the strips rescaled to unit normals."""
+
+    def on_unit_strips(zonotope: Zonotope, strips: Strips) -> Zonotope:
+        return correct(zonotope, strips.normalized())
+
+    return on_unit_strips
 
 
 def enclose_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
@@ -332,11 +342,11 @@ def enclose_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
     Falls back to the ``volume`` result when n != 2, when Z is not full-dimensional, when
     Z ∩ S is empty (an inconsistent measurement: any set is sound, and
     :mod:`sse_cosim.sets.overlap` is where that is detected, as for the gains), or when
-    no enclosure is found. In 2-D one compiled call
-    (:func:`~sse_cosim.sets.enclosure_kernels.enclose_or_volume`).
+    no enclosure is found. ``strips`` may have normals of any length: in 2-D one compiled
+    call rescales them and corrects (:func:`~sse_cosim.sets.enclosure_kernels.enclose_or_volume`).
     """
     if zonotope.dim != 2:
-        return volume_correction(zonotope, strips)
+        return volume_correction(zonotope, strips.normalized())
     return _compiled_2d(enclosure_kernels.enclose_or_volume, zonotope, strips)
 
 
@@ -370,9 +380,9 @@ def volume_correction_reference(zonotope: Zonotope, strips: Strips) -> Zonotope:
 
 CORRECTION_METHODS: dict[str, CorrectionMethod] = {
     **{name: _by_gain(choose) for name, choose in GAIN_METHODS.items()},
-    "frobenius": frobenius_intersection,
-    "volume": volume_correction,
-    "enclose": enclose_correction,
+    "frobenius": _normalized_first(frobenius_intersection),
+    "volume": _normalized_first(volume_correction),
+    "enclose": enclose_correction,  # rescales the strips inside its kernel
 }
 
 
@@ -386,7 +396,7 @@ def intersect_strips(zonotope: Zonotope, strips: Strips, method: str = "frobeniu
     """Zonotope ⊇ Z ∩ S_1 ∩ ... ∩ S_m by Prop. 1 with the gain of ``method``, or by the exact
     2-D enclosure (``enclose``, :func:`enclose_correction`).
 
-    Strips are first rescaled to unit normals (same sets, same result for every method up to
+    Every method first rescales the strips to unit normals (same sets, same result up to
     rounding). A point Z (no generators) or no strips returns Z.
     """
     correct = lookup(CORRECTION_METHODS, method, "gain method")
@@ -394,4 +404,4 @@ def intersect_strips(zonotope: Zonotope, strips: Strips, method: str = "frobeniu
         raise ValueError(f"{strips.dim}-D strips cannot cut a {zonotope.dim}-D zonotope")
     if len(strips) == 0 or zonotope.n_generators == 0:
         return zonotope
-    return correct(zonotope, strips.normalized())
+    return correct(zonotope, strips)
