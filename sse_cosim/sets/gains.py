@@ -95,12 +95,13 @@ def frobenius_intersection(zonotope: Zonotope, strips: Strips) -> Zonotope:
     """Prop. 1 with the Frobenius gain in one compiled call
     (:func:`~sse_cosim.sets.kernels.intersect_frobenius`); equals :func:`apply_gain` with
     :func:`frobenius_gain` up to rounding."""
-    return _compiled_2d(kernels.intersect_frobenius, zonotope, strips)
+    return _kernel_result(kernels.intersect_frobenius, zonotope, strips)
 
 
-def _compiled_2d(kernel: Callable[..., tuple[FloatArray, FloatArray]], zonotope: Zonotope,
+def _kernel_result(kernel: Callable[..., tuple[FloatArray, FloatArray]], zonotope: Zonotope,
                  strips: Strips) -> Zonotope:
-    """The zonotope ``kernel`` makes, (c', G'), from Z's c and G and the strips' H, y and r."""
+    """The zonotope (c', G') that the compiled ``kernel`` makes from Z's c and G and the
+    strips' H, y and r."""
     return Zonotope.unchecked(*kernel(zonotope.center, zonotope.generators, strips.normals,
                                       strips.values, strips.radii))
 
@@ -347,12 +348,12 @@ def enclose_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
     """
     if zonotope.dim != 2:
         return volume_correction(zonotope, strips.normalized())
-    return _compiled_2d(enclosure_kernels.enclose_or_volume, zonotope, strips)
+    return _kernel_result(enclosure_kernels.enclose_or_volume, zonotope, strips)
 
 
 def enclose_correction_reference(zonotope: Zonotope, strips: Strips) -> Zonotope:
-    """The NumPy reference of :func:`enclose_correction` (compiled in
-    :func:`~sse_cosim.sets.enclosure_kernels.enclose_correction`)."""
+    """The NumPy reference of :func:`enclose_correction`, for strips with unit normals
+    (compiled in :func:`~sse_cosim.sets.enclosure_kernels.enclose_or_volume`)."""
     if zonotope.dim != 2 or not full_rank(zonotope.generators) \
             or strip_covers(zonotope, strips).all():
         return volume_correction_reference(zonotope, strips)
@@ -365,12 +366,13 @@ def enclose_correction_reference(zonotope: Zonotope, strips: Strips) -> Zonotope
 
 
 def volume_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
-    """Z ∩ S by Proposition 1 with the ``volume`` gain (also the ``enclose`` correction's
-    fallback): in 2-D one compiled call (:func:`~sse_cosim.sets.kernels.volume_correction_2d`),
-    in other dimensions :func:`volume_correction_reference`."""
+    """Z ∩ S (strips with unit normals) by Proposition 1 with the ``volume`` gain (also the
+    ``enclose`` correction's fallback): in 2-D one compiled call
+    (:func:`~sse_cosim.sets.kernels.volume_correction_2d`), in other dimensions
+    :func:`volume_correction_reference`."""
     if zonotope.dim != 2:
         return volume_correction_reference(zonotope, strips)
-    return _compiled_2d(kernels.volume_correction_2d, zonotope, strips)
+    return _kernel_result(kernels.volume_correction_2d, zonotope, strips)
 
 
 def volume_correction_reference(zonotope: Zonotope, strips: Strips) -> Zonotope:
