@@ -105,4 +105,4 @@ def _combine(model: MotionModel, gain_method: str, base: Zonotope | None,
         return model.initial_set(strips, gain_method)
     if strips is None:
         return base
-    return intersect_strips(base, strips.pullback(model.position_matrix), gain_method)
+    return intersect_strips(base, model.state_strips(strips), gain_method)
