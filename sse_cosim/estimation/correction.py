@@ -84,9 +84,12 @@ def correct(
             or frozenset(names)
         latched = Suspicion(suspicion.latched | suspects, suspicion.probation)
         return TrackCorrection(interval_hull(voters), latched, suspects)
-    stacked = Strips.stack([paths[name] for name in used]) if used else None
-    # Without the prediction, two or more sensors agreed against it: start again from them.
-    estimate = _combine(model, gain_method, predicted if keeps_prediction else None, stacked)
+    if keeps_prediction or len(used) > 1:
+        stacked = Strips.stack([paths[name] for name in used]) if used else None
+        # Without the prediction, two or more sensors agreed against it: start again from them.
+        estimate = _combine(model, gain_method, predicted if keeps_prediction else None, stacked)
+    else:  # one sensor without the prediction (a new track): its first set, made above
+        estimate = measured[used[0]]
     held = [n for n in accepted if n in suspicion.latched and n not in used]
     if held:  # keep the hypothesis "the latched sensor is right" beside the estimate
         estimate = interval_hull([estimate, *(measured[name] for name in held)])
