@@ -73,7 +73,8 @@ def correct(
     measured = {name: model.initial_set(paths[name], gain_method) for name in names}
     voters = ([] if predicted is None else [predicted]) + [measured[n] for n in names]
     first = 0 if predicted is None else 1  # index of the first sensor among the voters
-    proven = frozenset(i + first for i, n in enumerate(names) if n in suspicion.probation.proven)
+    outvoted = suspicion.probation.proven
+    proven = frozenset(i + first for i, n in enumerate(names) if n in outvoted)
     result = vote([model.path_set(z) for z in voters], tol, proven)
     accepted = [names[i - first] for i in sorted(result.accepted) if i >= first]
     trusted = [n for n in accepted if n not in suspicion.latched and n not in suspicion.probation]
