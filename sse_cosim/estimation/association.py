@@ -334,8 +334,7 @@ def _start(scene: _Scene, d: int, step: int, track_id: int) -> tuple[LocalTrack,
 
 def _cut(scene: _Scene, estimate: Zonotope, path: Strips) -> Zonotope:
     """X ∩ path strips (Proposition 1) in the state space."""
-    strips = path.pullback(scene.model.position_matrix)
-    return intersect_strips(estimate, strips, scene.settings.gain_method)
+    return intersect_strips(estimate, scene.model.state_strips(path), scene.settings.gain_method)
 
 
 def _hidden(scene: _Scene, estimate: Zonotope, predicted: Zonotope, sensor: str) -> Zonotope:

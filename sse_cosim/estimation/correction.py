@@ -73,7 +73,8 @@ def correct(
     measured = {name: model.initial_set(paths[name], gain_method) for name in names}
     voters = ([] if predicted is None else [predicted]) + [measured[n] for n in names]
     first = 0 if predicted is None else 1  # index of the first sensor among the voters
-    proven = frozenset(i + first for i, n in enumerate(names) if n in suspicion.probation.proven)
+    outvoted = suspicion.probation.proven
+    proven = frozenset(i + first for i, n in enumerate(names) if n in outvoted)
     result = vote([model.path_set(z) for z in voters], tol, proven)
     accepted = [names[i - first] for i in sorted(result.accepted) if i >= first]
     trusted = [n for n in accepted if n not in suspicion.latched and n not in suspicion.probation]
@@ -84,9 +85,12 @@ def correct(
             or frozenset(names)
         latched = Suspicion(suspicion.latched | suspects, suspicion.probation)
         return TrackCorrection(interval_hull(voters), latched, suspects)
-    stacked = Strips.stack([paths[name] for name in used]) if used else None
-    # Without the prediction, two or more sensors agreed against it: start again from them.
-    estimate = _combine(model, gain_method, predicted if keeps_prediction else None, stacked)
+    if keeps_prediction or len(used) > 1:
+        stacked = Strips.stack([paths[name] for name in used]) if used else None
+        # Without the prediction, two or more sensors agreed against it: start again from them.
+        estimate = _combine(model, gain_method, predicted if keeps_prediction else None, stacked)
+    else:  # one sensor without the prediction (a new track): its first set, made above
+        estimate = measured[used[0]]
     held = [n for n in accepted if n in suspicion.latched and n not in used]
     if held:  # keep the hypothesis "the latched sensor is right" beside the estimate
         estimate = interval_hull([estimate, *(measured[name] for name in held)])
@@ -105,4 +109,4 @@ def _combine(model: MotionModel, gain_method: str, base: Zonotope | None,
         return model.initial_set(strips, gain_method)
     if strips is None:
         return base
-    return intersect_strips(base, strips.pullback(model.position_matrix), gain_method)
+    return intersect_strips(base, model.state_strips(strips), gain_method)

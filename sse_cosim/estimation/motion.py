@@ -49,6 +49,14 @@ class MotionModel:
         default_factory=lambda: IdentityMemo(POSITION_MEMO), init=False, repr=False,
         compare=False)
 
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.jitter) and self.jitter >= 0):
+            raise ValueError(f"jitter must be finite and >= 0; got {self.jitter}")
+        if not (np.isfinite(self.max_speed) and self.max_speed > 0):
+            raise ValueError(f"max speed must be finite and > 0; got {self.max_speed}")
+        if not np.array_equal(self.position_matrix, np.eye(2, self.dim)):
+            raise ValueError("the position matrix must pick the state's first two entries")
+
     @property
     def dim(self) -> int:
         return int(self.transition.shape[0])
@@ -109,36 +117,70 @@ class MotionModel:
         return Zonotope(np.zeros(2), np.eye(2) * self.jitter)
 
     def path_strips(self, measured: Strips) -> Strips:
-        """Position strips about p turned into strips about the path s (widened by the jitter)."""
-        widened = measured.radii + self.jitter * np.linalg.norm(measured.normals, axis=1)
-        return Strips(measured.normals, measured.values, widened)
+        """Position strips about p (m, 2) turned into strips about the path s: radii r_j widened
+        by jitter * ||h_j||.
+
+        No re-validation: ``measured`` is validated (finite, r > 0, h_j != 0) and the jitter is
+        finite and >= 0, so the widened radii are > 0; only their finiteness is checked (a norm
+        may overflow).
+        """
+        norms = np.sqrt((measured.normals * measured.normals).sum(axis=1))  # np.linalg.norm's
+        widened = measured.radii + self.jitter * norms
+        if not np.isfinite(widened).all():
+            raise ValueError("strip normals too large: the widened radii overflow")
+        return Strips.unchecked(measured.normals, measured.values, widened)
+
+    def state_strips(self, path: Strips) -> Strips:
+        """Path strips (m, 2) as strips about the state: normals H C (m, n).
+
+        ``path.pullback(C)`` without its checks: C = [I 0] (checked with the model), so H C
+        holds H's entries and zeros, exactly -- finite and with nonzero rows as H's.
+        """
+        return Strips.unchecked(path.normals @ self.position_matrix, path.values, path.radii)
 
     def initial_set(self, strips: Strips, gain_method: str) -> Zonotope:
-        """A first estimate from path strips (at least two with independent normals).
+        """A first estimate from path strips (m, 2), at least two with independent normals.
 
         The first two independent strips intersect exactly in the parallelogram
         <H^-1 y, H^-1 diag(r)>; the others are intersected with it by Proposition 1.
         Velocity components (constant-velocity model) start as the box |v| <= v_max.
         """
-        chosen = np.zeros(len(strips), dtype=bool)  # the first two independent strips
-        chosen[list(_independent_pair(strips.normals))] = True
-        pair = strips.select(chosen)
-        inverse = np.linalg.inv(pair.normals)
-        position = Zonotope(inverse @ pair.values, inverse * pair.radii[np.newaxis, :])
-        rest = ~chosen
-        if rest.any():
+        i, j = _independent_pair(strips.normals)
+        position = _parallelogram(strips, i, j)
+        if len(strips) > 2:
+            rest = np.ones(len(strips), dtype=bool)
+            rest[[i, j]] = False
             position = intersect_strips(position, strips.select(rest), gain_method)
         if self.dim == 2:
             return position
-        velocity_box = np.eye(2) * self.max_speed
+        return self._with_velocity_box(position)
+
+    def _with_velocity_box(self, position: Zonotope) -> Zonotope:
+        """The 4-D state set ``position`` (2-D) x box(v_max) (constant-velocity model):
+        center (4,), generators (4, e + 2); finite from finite parts, so unchecked."""
         center = np.concatenate([position.center, np.zeros(2)])
         generators = np.block(
             [
                 [position.generators, np.zeros((2, 2))],
-                [np.zeros((2, position.n_generators)), velocity_box],
+                [np.zeros((2, position.n_generators)), np.eye(2) * self.max_speed],
             ]
         )
-        return Zonotope(center, generators)
+        return Zonotope.unchecked(center, generators)
+
+
+def _parallelogram(strips: Strips, i: int, j: int) -> Zonotope:
+    """The intersection of strips i and j (independent normals) of ``strips`` (m, 2):
+    ⟨H^-1 y, H^-1 diag(r)⟩ with H (2, 2) their normals, y and r (2,) their values and radii.
+
+    Only finiteness is checked (as the validated constructor would: H^-1 may overflow); the
+    rest holds for validated strips.
+    """
+    pair = strips if len(strips) == 2 else strips.select(np.array([i, j]))
+    inverse = np.linalg.inv(pair.normals)
+    center, generators = inverse @ pair.values, inverse * pair.radii[np.newaxis, :]
+    if not (np.isfinite(center).all() and np.isfinite(generators).all()):
+        raise ValueError("zonotope center and generators must be finite")
+    return Zonotope.unchecked(center, generators)
 
 
 def _linear_map(matrix: np.ndarray, estimate: Zonotope) -> Zonotope:
@@ -148,9 +190,12 @@ def _linear_map(matrix: np.ndarray, estimate: Zonotope) -> Zonotope:
 
 
 def _independent_pair(normals: np.ndarray, tol: float = 1e-6) -> tuple[int, int]:
-    """Indices of the first two rows of ``normals`` (m, 2) that are not parallel."""
-    for i in range(len(normals)):
-        for j in range(i + 1, len(normals)):
-            if abs(np.linalg.det(normals[[i, j]])) > tol:
+    """Indices of the first two rows of ``normals`` (m, 2) that are not parallel:
+    |det [h_i; h_j]| = |h_i0 h_j1 - h_i1 h_j0| > ``tol`` (the 2x2 closed form)."""
+    rows = normals.tolist()
+    for i, (a, b) in enumerate(rows):
+        for j in range(i + 1, len(rows)):
+            c, d = rows[j]
+            if abs(a * d - b * c) > tol:
                 return i, j
     raise ValueError("a track needs two position strips with independent normals")

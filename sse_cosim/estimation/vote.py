@@ -26,7 +26,7 @@ shrinks below the width of the consistent set can no longer be seen but still dr
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterable, Sequence
+from collections.abc import Collection, Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -123,10 +123,12 @@ class Probation:
         """Sources on probation because a majority outvoted them."""
         return frozenset(name for name, _, proven in self.remaining if proven)
 
-    def update(self, voted: Iterable[str], accepted: Iterable[str]) -> Probation:
+    def update(self, voted: Collection[str], accepted: Iterable[str]) -> Probation:
         """After a vote among ``voted``: the outvoted start (again), the others count down."""
-        left = {name: (steps, proven) for name, steps, proven in self.remaining}
         agreed = set(accepted)
+        if not self.remaining and agreed.issuperset(voted):
+            return self  # nobody waits, nobody outvoted (the usual step)
+        left = {name: (steps, proven) for name, steps, proven in self.remaining}
         for source in voted:
             if source not in agreed:
                 left[source] = (READMIT_STEPS, True)

@@ -12,6 +12,8 @@ against the other on random and degenerate inputs:
   2-D zonotope (reference ``contains_2d_reference``): the same sums in numpy's order, the
   two-term dot products may round differently from numpy's BLAS calls (a point within a
   rounding of a facet, beyond the tolerance, is the only place they can disagree);
+- :func:`meet_2d` for ``overlap.zonotopes_disjoint`` in 2-D (reference
+  ``zonotopes_disjoint_reference``): the same kernels on the same arrays, so the same answer;
 - :func:`volume_gain_2d` for ``gains.volume_gain_vertices`` (reference
   ``volume_gain_vertices_reference``): bit for bit;
 - :func:`vertices_2d` for :meth:`~sse_cosim.sets.zonotope.Zonotope.vertices` (reference
@@ -186,6 +188,25 @@ def contains_2d(center: FloatArray, generators: FloatArray, points: FloatArray,
             if not offset <= bound:
                 inside[p] = False
     return inside
+
+
+@njit(cache=True)
+def meet_2d(first_center: FloatArray, first_generators: FloatArray, second_center: FloatArray,
+            second_generators: FloatArray, tol: float) -> int:
+    """Whether 2-D ⟨c1, G1⟩ and ⟨c2, G2⟩ (centers (2,), generators (2, e1), (2, e2)) meet:
+    c1 - c2 ∈ ⟨0, [G1, -G2]⟩ up to ``tol`` by :func:`contains_2d`, as
+    ``overlap.zonotopes_disjoint`` tests it. 1 if they meet, 0 if not, -1 if [G1, -G2] is
+    rank-deficient (no half-space test: the caller's LP decides)."""
+    e1 = first_generators.shape[1]
+    difference = np.empty((2, e1 + second_generators.shape[1]))
+    difference[:, :e1] = first_generators
+    difference[:, e1:] = -second_generators
+    if not full_rank_2d(difference):
+        return -1
+    offset = np.empty((1, 2))
+    offset[0, 0] = first_center[0] - second_center[0]
+    offset[0, 1] = first_center[1] - second_center[1]
+    return 1 if contains_2d(np.zeros(2), difference, offset, tol)[0] else 0
 
 
 @njit(cache=True)

@@ -49,11 +49,12 @@ class Strips:
                 f"strips need normals (m, n), values (m,) and radii (m,); got "
                 f"{normals.shape}, {values.shape}, {radii.shape}"
             )
-        if not all(np.isfinite(a).all() for a in (normals, values, radii)):
+        if not (np.isfinite(normals).all() and np.isfinite(values).all()
+                and np.isfinite(radii).all()):
             raise ValueError("strip normals, values and radii must be finite")
-        if np.any(radii <= 0):
+        if (radii <= 0).any():
             raise ValueError(f"strip radii must be > 0 (bounded noise r > 0); got {radii.tolist()}")
-        if np.any(~np.any(normals != 0, axis=1)):
+        if not normals.any(axis=1).all():
             raise ValueError("strip normals must be nonzero")
         object.__setattr__(self, "normals", _read_only(normals))
         object.__setattr__(self, "values", _read_only(values))

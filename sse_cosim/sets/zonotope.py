@@ -228,7 +228,7 @@ class Zonotope:
         if isinstance(other, Zonotope):
             if other.dim != self.dim:
                 raise ValueError(f"Minkowski sum of a {self.dim}-D and a {other.dim}-D zonotope")
-            generators = np.hstack([self.generators, other.generators])
+            generators = np.concatenate([self.generators, other.generators], axis=1)
             return Zonotope.unchecked(self.center + other.center, generators)
         return self.translate(other)
 
