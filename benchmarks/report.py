@@ -165,6 +165,9 @@ NEXT_STEPS = {
           "track in its own call, with the Python around it (strips, vote, first sets) "
           "costing more than the compiled kernels. Next: one compiled call per node and step "
           "that predicts, votes and corrects all its tracks.",
+    "4 Dask cluster": "item 4b: each run is one Dask task, and at 3 s of simulated time a "
+                      "run is short, so the scheduler's per-task round trip is a visible "
+                      "share of it. Next: several runs per task.",
     "4 sweep": "the workers' start-up (imports, numba's cached kernels, the network) is "
                "inside the 16-run timing; the 1,000-run cluster figure (item 4b) shows the "
                "rate once started. Next: time start-up apart from the runs.",
