@@ -13,13 +13,17 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Generic, Protocol, TypeVar
 
+import numpy as np
 from shapely.geometry.base import BaseGeometry
 
+from sse_cosim.estimation import track_kernels
 from sse_cosim.estimation.association import AnonymousDetection, Association, associate
 from sse_cosim.estimation.correction import Suspicion, correct
 from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.vote import CONSISTENCY_TOL
 from sse_cosim.sets import Strips, Zonotope, intersect_strips
 
 
@@ -66,27 +70,91 @@ class NodeObserver:
 
         ``detections`` maps a pedestrian id to the position strips of this node's sensors
         that see it at this step, by sensor name (or as a list). Strips inconsistent with the
-        prediction and the other sensors are left out (:func:`correction.correct`).
+        prediction and the other sensors are left out (:func:`correction.correct`). The
+        plain updates go through one compiled call (:func:`_plain_tracks`), the rest one by
+        one (:meth:`_track`).
         """
-        updated: dict[str, Track] = {}
-        for person_id in self.tracks.keys() | detections.keys():
-            strips = _by_sensor(detections.get(person_id, ()))
-            previous = self.tracks.get(person_id)
-            predicted = None if previous is None else self.model.predict(
-                previous.estimate, step - previous.step)
-            update = correct(self.model, self.settings.gain_method, predicted, strips,
-                             self._suspicion.get(person_id, Suspicion()))
-            self._suspicion[person_id] = update.suspicion
-            estimate = update.estimate
-            if self.model.state_bounds is not None:
-                estimate = intersect_strips(
-                    estimate, self.model.state_bounds, self.settings.gain_method
-                )
-            estimate = estimate.reduce(self.settings.max_generators, self.settings.reduction_method)
-            updated[person_id] = Track(person_id, estimate, step, bool(strips), update.flagged,
-                                       update.conflict)
-        self.tracks = updated
-        return updated
+        order = list(self.tracks.keys() | detections.keys())
+        by_sensor = {pid: _by_sensor(detections.get(pid, ())) for pid in order}
+        updated = self._plain_tracks(step, by_sensor)
+        for person_id in order:
+            if person_id not in updated:
+                updated[person_id] = self._track(step, person_id, by_sensor[person_id])
+        self.tracks = {person_id: updated[person_id] for person_id in order}
+        return self.tracks
+
+    def _track(self, step: int, person_id: str, strips: Mapping[str, Strips]) -> Track:
+        """One track's update by the per-track path (the reference of :meth:`_plain_tracks`)."""
+        previous = self.tracks.get(person_id)
+        predicted = None if previous is None else self.model.predict(
+            previous.estimate, step - previous.step)
+        update = correct(self.model, self.settings.gain_method, predicted, strips,
+                         self._suspicion.get(person_id, Suspicion()))
+        self._suspicion[person_id] = update.suspicion
+        estimate = update.estimate
+        if self.model.state_bounds is not None:
+            estimate = intersect_strips(
+                estimate, self.model.state_bounds, self.settings.gain_method
+            )
+        estimate = estimate.reduce(self.settings.max_generators, self.settings.reduction_method)
+        return Track(person_id, estimate, step, bool(strips), update.flagged, update.conflict)
+
+    def _plain_tracks(self, step: int, by_sensor: Mapping[str, Mapping[str, Strips]]
+                      ) -> dict[str, Track]:
+        """The tracks whose update is plain, in one compiled call
+        (:func:`~sse_cosim.estimation.track_kernels.plain_updates`): an existing track that
+        no sensor sees, or that one sensor sees (two strips) while none is held out; the
+        same estimates as :meth:`_track`. Those the kernel does not settle are left out."""
+        if not self._compiled_path:
+            return {}
+        plain = [pid for pid, strips in by_sensor.items()
+                 if pid in self.tracks and (not strips or (
+                     len(strips) == 1 and len(next(iter(strips.values()))) == 2
+                     and _unsuspected(self._suspicion.get(pid))))]
+        if not plain:
+            return {}
+        previous = [self.tracks[pid].estimate for pid in plain]
+        widest = max(z.n_generators for z in previous)
+        generators = np.zeros((len(plain), 2, widest))
+        for t, z in enumerate(previous):
+            generators[t, :, :z.n_generators] = z.generators
+        normals, values, radii = np.zeros((len(plain), 2, 2)), np.zeros((len(plain), 2)), \
+            np.ones((len(plain), 2))
+        detected = np.zeros(len(plain), dtype=np.bool_)
+        for t, pid in enumerate(plain):
+            if by_sensor[pid]:
+                strips = next(iter(by_sensor[pid].values()))
+                normals[t], values[t], radii[t] = strips.normals, strips.values, strips.radii
+                detected[t] = True
+        settled, centers, reduced, counts = track_kernels.plain_updates(
+            np.array([z.center for z in previous]), generators,
+            np.array([z.n_generators for z in previous], dtype=np.int64),
+            np.array([step - self.tracks[pid].step for pid in plain], dtype=np.int64),
+            self.model.process_noise.generators, normals, values, radii, detected,
+            self.model.jitter, track_kernels.GAIN_CODES[self.settings.gain_method],
+            self.settings.max_generators, CONSISTENCY_TOL)
+        tracks = {}
+        for t, pid in enumerate(plain):
+            if settled[t]:
+                estimate = Zonotope.unchecked(centers[t].copy(), reduced[t, :, :counts[t]].copy())
+                # unseen, a track keeps its sensors held out; seen, none was (nothing changes)
+                latched = bool(self._suspicion.get(pid, Suspicion()).latched)
+                tracks[pid] = Track(pid, estimate, step, bool(detected[t]), frozenset(), latched)
+        return tracks
+
+    @cached_property
+    def _compiled_path(self) -> bool:
+        """Whether :meth:`_plain_tracks` applies: a 2-D position model (transition I, no
+        state bounds), a gain with a compiled 2-D correction and Girard's reduction."""
+        return (self.model.dim == 2 and np.array_equal(self.model.transition, np.eye(2))
+                and self.model.state_bounds is None
+                and self.settings.gain_method in track_kernels.GAIN_CODES
+                and self.settings.reduction_method == "girard")
+
+
+def _unsuspected(suspicion: Suspicion | None) -> bool:
+    """No sensor of the track held out (latched or on probation)."""
+    return suspicion is None or not (suspicion.latched or suspicion.probation.remaining)
 
 
 @dataclass(frozen=True)
