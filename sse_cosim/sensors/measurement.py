@@ -52,7 +52,7 @@ def measure(
     h = measurement_matrix(pose)
     r = np.asarray(bounds, dtype=float).reshape(2)
     y = p @ h.T + draw_noise(r, kind, rng, p.shape[0])  # (k, 2)
-    return [Strips(h, row, r) for row in y]  # Strips copies (read-only)
+    return Strips.rows(h, y, r)  # copies (read-only)
 
 
 @dataclass(frozen=True)

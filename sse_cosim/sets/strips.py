@@ -39,6 +39,18 @@ class Strips:
             object.__setattr__(strips, name, array)
         return strips
 
+    @classmethod
+    def rows(cls, normals: ArrayLike, values: ArrayLike, radii: ArrayLike) -> list[Strips]:
+        """k strip sets sharing H (m, n) and r (m,), one per row of ``values`` (k, m): what k
+        calls of the constructor give, with H and r validated once."""
+        shared = cls(normals, np.zeros(np.atleast_2d(normals).shape[0]), radii)
+        rows = np.array(values, dtype=np.float64)
+        if rows.ndim != 2 or rows.shape[1] != len(shared):
+            raise ValueError(f"strip values need shape (k, {len(shared)}); got {rows.shape}")
+        if not np.isfinite(rows).all():
+            raise ValueError("strip normals, values and radii must be finite")
+        return [cls.unchecked(shared.normals, row, shared.radii) for row in rows]
+
     def __post_init__(self) -> None:
         normals = np.atleast_2d(np.array(self.normals, dtype=np.float64))
         values = np.atleast_1d(np.array(self.values, dtype=np.float64))

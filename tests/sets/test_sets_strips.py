@@ -22,6 +22,26 @@ def test_validation_messages():
         Strips.stack([])
 
 
+def test_rows_equal_one_constructor_call_per_row_and_check_the_same():
+    h, r = np.array([[0.6, 0.8], [-0.8, 0.6]]), np.array([0.5, 0.25])
+    values = np.array([[1.0, 2.0], [-3.0, 0.5], [0.0, 7.25]])
+    for made, expected in zip(Strips.rows(h, values, r), [Strips(h, y, r) for y in values],
+                              strict=True):
+        for name in ("normals", "values", "radii"):
+            assert np.array_equal(getattr(made, name), getattr(expected, name))
+            assert not getattr(made, name).flags.writeable
+    assert Strips.rows(h, np.empty((0, 2)), r) == []
+    with pytest.raises(ValueError, match="finite"):
+        Strips.rows(h, [[1.0, np.nan]], r)
+    with pytest.raises(ValueError, match="radii must be > 0"):
+        Strips.rows(h, values, [0.5, 0.0])
+    with pytest.raises(ValueError, match=r"shape \(k, 2\)"):
+        Strips.rows(h, [1.0, 2.0], r)
+    first = Strips.rows(h, values, r)[0]
+    values[0, 0], h[0, 0], r[0] = 99.0, 99.0, 99.0  # the strips hold copies
+    assert (first.values[0], first.normals[0, 0], first.radii[0]) == (1.0, 0.6, 0.5)
+
+
 def test_single_strip_shorthand_contains_len_select_stack():
     one = Strips([1.0, 1.0], 2.0, 0.5)
     assert len(one) == 1 and one.dim == 2
