@@ -21,10 +21,12 @@ from sse_cosim.runner.tasks import (
     RunTask,
     WorkerPool,
     finished_outcome,
-    run_in_worker,
+    run_batch_in_worker,
 )
 
 ExecutorName = Literal["local", "dask"]
+BATCHES_PER_THREAD = 4  # Dask: at least this many batches per worker thread, to balance load
+MAX_BATCH_RUNS = 16  # Dask: at most this many runs per task
 
 
 @dataclass(frozen=True)
@@ -113,10 +115,23 @@ def _dask_client(workers: int, scheduler: str | None):
         yield client
 
 
+def dask_batches(todo: Sequence[RunTask], threads: int) -> list[list[RunTask]]:
+    """``todo`` cut, in order, into batches (one Dask task each): as many runs per batch as
+    leaves every worker thread :data:`BATCHES_PER_THREAD` batches, between 1 and
+    :data:`MAX_BATCH_RUNS`.
+
+    A run of a few seconds is short next to a scheduler's round trip and the worker's
+    bookkeeping per task; batches pay them once per several runs.
+    """
+    size = max(1, min(MAX_BATCH_RUNS, len(todo) // (BATCHES_PER_THREAD * max(threads, 1))))
+    return [list(todo[i:i + size]) for i in range(0, len(todo), size)]
+
+
 def _dask(client, todo: Sequence[RunTask]) -> Iterator[TaskOutcome]:
     from dask.distributed import as_completed as dask_as_completed
 
-    futures = [client.submit(run_in_worker, task, key=f"run-{task.key}", pure=False)
-               for task in todo]
+    threads = sum(client.nthreads().values())
+    futures = [client.submit(run_batch_in_worker, batch, key=f"runs-{batch[0].key}", pure=False)
+               for batch in dask_batches(todo, threads)]
     for future in dask_as_completed(futures):
-        yield future.result()
+        yield from future.result()

@@ -27,6 +27,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import IO, Any
@@ -160,10 +161,12 @@ _PROCESS_POOL = WorkerPool()
 atexit.register(_PROCESS_POOL.close)
 
 
-def run_in_worker(task: RunTask) -> TaskOutcome:
-    """Run ``task`` in this thread's worker of a pool that lives as long as this process
-    (for executors such as Dask whose own workers call it)."""
-    return _PROCESS_POOL.run(task)
+def run_batch_in_worker(tasks: Sequence[RunTask]) -> list[TaskOutcome]:
+    """Run ``tasks`` one after another in this thread's worker, of a pool that lives as long
+    as this process (for executors such as Dask whose own workers call it): one remote call
+    for several runs, so a scheduler's round trip is paid once per batch. Each run publishes
+    its folder as it ends, so an interrupted batch loses only the run in flight."""
+    return [_PROCESS_POOL.run(task) for task in tasks]
 
 
 def record_failure(task: RunTask, error: str) -> TaskOutcome:
