@@ -4,6 +4,11 @@ localhost -- against the local pool with two workers, in one process, one after 
 Both execute the same tasks (S3 with the pedestrian, seeds 1..n, cut to ``duration_s``,
 summary only); the figure is runs per minute (wall time of ``execute()``, the cluster's
 start-up excluded: a user starts it once), and every run's summary must be identical on both.
+
+The machine's load drifts over minutes, so the runs go in two halves, in the order local,
+Dask, Dask, local (each executor's two halves straddle the other's): a load that rises or
+falls steadily slows both alike. The local pool starts its workers in each half (as each
+sweep does); a worker is replaced every ``TASKS_PER_WORKER`` runs anyway.
 """
 
 from __future__ import annotations
@@ -95,21 +100,28 @@ def _timed(tasks: list[RunTask], execution: Execution) -> tuple[float, dict[str,
 def run(runs: int = 1000, duration_s: float = 3.0, workers: int = 2) -> dict:
     with tempfile.TemporaryDirectory(prefix="sse-bench-cluster-") as tmp:
         root = Path(tmp)
-        local_s, local_rows = _timed(_tasks(root / "local", runs, duration_s),
-                                     Execution(workers, "local", progress=False))
+        tasks = {name: _tasks(root / name, runs, duration_s) for name in ("local", "dask")}
+        halves = {name: (t[:runs // 2], t[runs // 2:]) for name, t in tasks.items()}
+        seconds = {"local": 0.0, "dask": 0.0}
+        rows: dict[str, dict[str, dict]] = {"local": {}, "dask": {}}
         with dask_cluster(root, workers) as address:
-            dask_s, dask_rows = _timed(_tasks(root / "dask", runs, duration_s),
-                                       Execution(workers, "dask", scheduler=address,
-                                                 progress=False))
-    local_rate, dask_rate = 60.0 * runs / local_s, 60.0 * runs / dask_s
-    different = sorted(k for k in local_rows if local_rows[k] != dask_rows[k])
+            executions = {"local": Execution(workers, "local", progress=False),
+                          "dask": Execution(workers, "dask", scheduler=address,
+                                            progress=False)}
+            for name, half in (("local", 0), ("dask", 0), ("dask", 1), ("local", 1)):
+                elapsed, found = _timed(halves[name][half], executions[name])
+                seconds[name] += elapsed
+                rows[name].update(found)
+    local_rate, dask_rate = 60.0 * runs / seconds["local"], 60.0 * runs / seconds["dask"]
+    different = sorted(k for k in rows["local"] if rows["local"][k] != rows["dask"][k])
     return {"scenario": str(SCENARIO), "runs": runs, "duration_s": duration_s,
             "workers": workers,
-            "local": {"seconds": local_s, "runs_per_minute": local_rate},
-            "dask_cluster": {"seconds": dask_s, "runs_per_minute": dask_rate},
+            "local": {"seconds": seconds["local"], "runs_per_minute": local_rate},
+            "dask_cluster": {"seconds": seconds["dask"], "runs_per_minute": dask_rate},
             "dask_over_local": dask_rate / local_rate,
             "rows_identical": not different, "rows_different": different[:10],
             "note": "dask scheduler + 2 dask worker processes on localhost (one thread "
-                    "each), started before the timing; the local pool starts its workers "
-                    "inside its timing"}
-
+                    "each), started before the timing; the runs in two halves, in the order "
+                    "local, Dask, Dask, local (a steady drift in the machine's load slows "
+                    "both alike); the local pool starts its workers inside each half's "
+                    "timing; Dask tasks carry batches of runs"}

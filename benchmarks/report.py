@@ -161,13 +161,17 @@ NEXT_STEPS = {
                       "public function's Python around the kernel. Next: strips normalized "
                       "inside the kernel, and the enclosure's clipping and scaling loops "
                       "fused (one pass over the polygon).",
-    "3 ": "the profile of the largest configuration (item 3): each node corrects each "
-          "track in its own call, with the Python around it (strips, vote, first sets) "
-          "costing more than the compiled kernels. Next: one compiled call per node and step "
-          "that predicts, votes and corrects all its tracks.",
-    "4 Dask cluster": "item 4b: each run is one Dask task, and at 3 s of simulated time a "
-                      "run is short, so the scheduler's per-task round trip is a visible "
-                      "share of it. Next: several runs per task.",
+    "3 ": "the profile of the largest configuration (item 3): a node's plain track updates "
+          "are one compiled call per node and step; what is left is the bus's refined region "
+          "of every known pedestrian (shapely's buffer and overlay calls, one pedestrian at a "
+          "time, against every node's view), the fusion of each pedestrian's sets and the "
+          "sensors' strips. Next: the raster over-approximation of item 1, for every "
+          "pedestrian's region at once.",
+    "4 Dask cluster": "item 4b: Dask tasks carry batches of runs, so the scheduler's round "
+                      "trips are few; on 2 cores the scheduler and the workers' own "
+                      "processes (event loops, heartbeats, memory monitor) take their share "
+                      "of the CPU beside the runs. Next: record the cluster processes' own "
+                      "CPU time in the benchmark, and run it on a machine with spare cores.",
     "4 sweep": "the workers' start-up (imports, numba's cached kernels, the network) is "
                "inside the 16-run timing; the 1,000-run cluster figure (item 4b) shows the "
                "rate once started. Next: time start-up apart from the runs.",
