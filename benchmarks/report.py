@@ -143,20 +143,42 @@ def _summary(r: dict, t: dict) -> list[str]:
     for name, value, target, ok in rows:
         lines.append(f"| {name} | {value} | {target} | "
                      f"{'' if ok is None else _verdict(ok)} |")
-    missed = [(name, step) for name, _, _, ok in rows if ok is False
-              for prefix, step in NEXT_STEPS.items() if name.startswith(prefix)]
+    missed = [(name, step + _budget(name, loop, r, t)) for name, _, _, ok in rows
+              if ok is False for prefix, step in NEXT_STEPS.items() if name.startswith(prefix)]
     if missed:
         lines += ["", "Each target not met, where its time goes and the next step:", ""]
         lines += [f"- **{name}**: {step}" for name, step in missed]
     return [*lines, ""]
 
 
+LOOP_TARGETS = {"1a": ("a_frobenius", "loop_a_ratio_to_bare"),
+                "1 ": ("default_enclose", "loop_default_ratio_to_bare")}
+"""By the start of a cost-per-step target's name: its configuration and target key."""
+
+
+def _budget(name: str, loop: dict, r: dict, t: dict) -> str:
+    """For a missed cost-per-step target: how much of the step must go to meet it, against
+    its largest stage (empty for any other target)."""
+    key = next((v for prefix, v in LOOP_TARGETS.items() if name.startswith(prefix)), None)
+    if key is None or key[0] not in loop:
+        return ""
+    config = loop[key[0]]
+    allowed = t[key[1]] * r["loop_cost"]["bare_us_per_step"]
+    stage, largest = max(config["stages_us"].items(), key=lambda item: item[1])
+    return (f" At ≤ {t[key[1]]:g}× a step may take {allowed:,.0f} µs; it takes "
+            f"{config['us_per_step']:,.0f}, so {config['us_per_step'] - allowed:,.0f} µs must "
+            f"go ({'more' if config['us_per_step'] - allowed > largest else 'less'} than its "
+            f"largest stage, `{stage}`, at {largest:,.0f} µs).")
+
+
 NEXT_STEPS = {
     "1": "the stage table (item 1) and the profile at the end of this file: most of a step "
          "is shapely's overlay calls (buffer, intersection, difference, union) in the "
-         "occupancy and sensor stages, each on small polygons. Next: a raster "
-         "over-approximation of the unobserved area and of the known regions (the largest "
-         "stage), with a test that proves it covers the exact polygons on random shapes.",
+         "occupancy and sensor stages, each on small polygons, and the rest is spread over "
+         "every stage. Next: a raster over-approximation of the unobserved area and of the "
+         "known regions (the occupancy stage) and of the sensors' visible and hidden regions "
+         "(in the geometry stage), with a test that proves it covers the exact polygons on "
+         "random shapes; the controller and the recorder would then read rasters.",
     "kernel enclose": "the table of item 2: *kernel alone* against *compiled* is the "
                       "public function's Python around the kernel. Next: strips normalized "
                       "inside the kernel, and the enclosure's clipping and scaling loops "
@@ -172,9 +194,11 @@ NEXT_STEPS = {
                       "processes (event loops, heartbeats, memory monitor) take their share "
                       "of the CPU beside the runs. Next: record the cluster processes' own "
                       "CPU time in the benchmark, and run it on a machine with spare cores.",
-    "4 sweep": "the workers' start-up (imports, numba's cached kernels, the network) is "
-               "inside the 16-run timing; the 1,000-run cluster figure (item 4b) shows the "
-               "rate once started. Next: time start-up apart from the runs.",
+    "4 sweep": "item 4: the target is the speed-up of the whole batch, with the workers' "
+               "start-up (imports, numba's cached kernels, the network; a LocalCluster's "
+               "scheduler too) inside it; the table also gives the start-up alone and the "
+               "speed-up once started. Next: start the workers once per session, not once per "
+               "batch (a standing pool or cluster that takes batch after batch).",
 }
 """By the start of a target's name in the summary: where its profile is and the next step."""
 
@@ -279,10 +303,15 @@ def _throughput(tp: dict, t: dict) -> list[str]:
     lines = ["## 4. Sweep throughput", "",
              f"`{tp['scenario']}` {length}, seeds 1..n, summary only, in worker processes "
              f"that start once and take run after run; {tp['note']}.", "",
-             "| executor | workers | runs | s | runs/min | speed-up |", "|---|---|---|---|---|---|"]
+             "| executor | workers | runs | s | runs/min | speed-up | s for twice the runs | "
+             "start-up s | runs/min once started | speed-up once started |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for c in tp["configs"].values():
         lines.append(f"| {c['executor']} | {c['workers']} | {c['runs']} | {c['seconds']:.1f} | "
-                     f"{c['runs_per_minute']:.1f} | {c['speedup_vs_1_worker']:.2f}× |")
+                     f"{c['runs_per_minute']:.1f} | {c['speedup_vs_1_worker']:.2f}× | "
+                     f"{c['seconds_doubled']:.1f} | {c['startup_seconds']:.1f} | "
+                     f"{c['started_runs_per_minute']:.1f} | "
+                     f"{c['started_speedup_vs_1_worker']:.2f}× |")
     return [*lines, ""]
 
 

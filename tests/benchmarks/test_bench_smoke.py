@@ -59,6 +59,8 @@ def test_quick_figures_are_sane(quick):
     assert results["soundness"]["violations"] == 0
     assert results["soundness"]["node_steps"] >= 300
     assert results["baseline"]["open_loop_total"]["zonotope_misses"] == 0
+    for config in results["throughput"]["configs"].values():
+        assert config["seconds_doubled"] > 0 and config["started_runs_per_minute"] > 0
     local = results["tightness"]["local"]["volume"]
     assert local["count"] > 0 and local["mean"] >= 1.0 - 1e-9  # never below the exact set
 
@@ -72,3 +74,16 @@ def test_independent_lp_catches_a_point_outside():
     checks = [(c, g, inside)] * 70 + [(c, g, outside)] + [(c, g, inside)] * 5
     answers = contains_lp_batch(checks)
     assert answers.count(False) == 1 and answers[70] is False
+
+
+def test_a_missed_cost_target_says_how_much_of_the_step_must_go():
+    from benchmarks.report import _budget
+
+    loop = {"default_enclose": {"us_per_step": 700.0,
+                                "stages_us": {"sumo": 50.0, "occupancy": 200.0}}}
+    results = {"loop_cost": {"bare_us_per_step": 5.0}}
+    text = _budget("1 co-sim (default methods) / bare SUMO", loop, results,
+                   {"loop_default_ratio_to_bare": 70.0})
+    assert "may take 350 µs" in text and "350 µs must go" in text
+    assert "more than its largest stage, `occupancy`, at 200 µs" in text
+    assert _budget("3 64 pedestrians × 16 sensors, ms per step", loop, results, {}) == ""
