@@ -37,9 +37,9 @@ from functools import cache
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import linprog
 
 from sse_cosim.sets.enclosure_kernels import EXACT_RTOL, MARGIN, PARALLEL_SIN, REFINE_STEPS
+from sse_cosim.sets.lp import linprog
 from sse_cosim.sets.strips import Strips
 from sse_cosim.sets.zonotope import FloatArray, Zonotope
 

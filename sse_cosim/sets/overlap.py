@@ -11,9 +11,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.optimize import linprog
 
 from sse_cosim.sets.kernels import meet_2d
+from sse_cosim.sets.lp import linprog
 from sse_cosim.sets.strips import Strips
 from sse_cosim.sets.zonotope import BoolArray, FloatArray, Zonotope
 

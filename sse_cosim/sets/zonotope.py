@@ -20,10 +20,10 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import linprog
 
 from sse_cosim.sets._registry import lookup
 from sse_cosim.sets.kernels import PARALLEL_RTOL, area_2d, contains_2d, full_rank_2d, vertices_2d
+from sse_cosim.sets.lp import linprog
 from sse_cosim.sets.reduction import REDUCTION_METHODS
 
 FloatArray = NDArray[np.float64]
