@@ -196,9 +196,10 @@ NEXT_STEPS = {
                       "CPU time in the benchmark, and run it on a machine with spare cores.",
     "4 sweep": "item 4: the target is the speed-up of the whole batch, with the workers' "
                "start-up (imports, numba's cached kernels, the network; a LocalCluster's "
-               "scheduler too) inside it; the table also gives the start-up alone and the "
-               "speed-up once started. Next: start the workers once per session, not once per "
-               "batch (a standing pool or cluster that takes batch after batch).",
+               "scheduler too) inside it; the table also gives the start-up alone, the "
+               "speed-up once started and where a worker's start-up goes. Next: a shorter "
+               "start-up (fewer kernels for numba to load, fewer imports in the worker), or "
+               "workers that stay up from one batch to the next.",
 }
 """By the start of a target's name in the summary: where its profile is and the next step."""
 
@@ -312,6 +313,13 @@ def _throughput(tp: dict, t: dict) -> list[str]:
                      f"{c['seconds_doubled']:.1f} | {c['startup_seconds']:.1f} | "
                      f"{c['started_runs_per_minute']:.1f} | "
                      f"{c['started_speedup_vs_1_worker']:.2f}× |")
+    w = tp.get("worker_startup")
+    if w:
+        lines += ["", f"One worker process on its own: importing the package takes "
+                      f"{w['imports_seconds']:.2f} s; its first run takes "
+                      f"{w['first_run_seconds']:.2f} s against {w['later_run_seconds']:.2f} s "
+                      f"for the later ones ({w['first_run_extra_seconds']:.2f} s more: numba "
+                      "loads its cached kernels, lazy imports, SUMO's first start)."]
     return [*lines, ""]
 
 

@@ -5,12 +5,14 @@ length (or cut with ``duration_s``), seeds 1..n, summary only, in worker process
 
 from __future__ import annotations
 
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 from sse_cosim.runner.executors import Execution, execute
-from sse_cosim.runner.tasks import RunTask
+from sse_cosim.runner.tasks import RunTask, WorkerProcess
 
 SCENARIO = "scenarios/s3_pedestrian.toml"
 
@@ -37,6 +39,31 @@ def _timed(runs: int, duration_s: float | None, workers: int, executor: str) -> 
             "runs_per_minute": 60.0 * runs / elapsed}
 
 
+IMPORT_TIMER = ("import time; start = time.perf_counter(); import sse_cosim.runner.worker; "
+                "print(time.perf_counter() - start)")
+
+
+def _worker_startup(duration_s: float | None, runs: int = 3) -> dict:
+    """Where a worker's start-up goes: its imports (timed in a fresh interpreter), and its
+    first run against the later ones (numba loading its cached kernels, lazy imports, SUMO's
+    first start), in one worker process."""
+    imports = float(subprocess.run([sys.executable, "-c", IMPORT_TIMER], capture_output=True,
+                                   text=True, check=True).stdout)
+    worker, seconds = WorkerProcess(), []
+    with tempfile.TemporaryDirectory(prefix="sse-bench-startup-") as tmp:
+        try:
+            for task in _tasks(Path(tmp), runs, duration_s):
+                start = time.perf_counter()
+                if not worker.run(task).ok:
+                    raise RuntimeError(f"start-up benchmark run {task.key} failed")
+                seconds.append(time.perf_counter() - start)
+        finally:
+            worker.close()
+    later = sorted(seconds[1:])[len(seconds[1:]) // 2]
+    return {"imports_seconds": imports, "first_run_seconds": seconds[0],
+            "later_run_seconds": later, "first_run_extra_seconds": seconds[0] - later}
+
+
 def run(runs: int = 16, duration_s: float | None = None, dask: bool = True) -> dict:
     """Each executor times ``runs`` runs, then ``2 * runs``: the difference is ``runs`` runs
     without the start-up (workers, imports, a LocalCluster), so it gives the rate once
@@ -58,6 +85,7 @@ def run(runs: int = 16, duration_s: float | None = None, dask: bool = True) -> d
         result["speedup_vs_1_worker"] = result["runs_per_minute"] / base
         result["started_speedup_vs_1_worker"] = result["started_runs_per_minute"] / base_started
     return {"scenario": SCENARIO, "duration_s": duration_s, "configs": results,
+            "worker_startup": _worker_startup(duration_s),
             "note": "wall time of execute() for the whole batch, worker start-up included; "
                     "the Dask figure includes starting and stopping the LocalCluster. Each "
                     "executor then runs twice as many: the extra runs' time is the rate once "
