@@ -194,12 +194,12 @@ NEXT_STEPS = {
                       "processes (event loops, heartbeats, memory monitor) take their share "
                       "of the CPU beside the runs. Next: record the cluster processes' own "
                       "CPU time in the benchmark, and run it on a machine with spare cores.",
-    "4 sweep": "item 4: the target is the speed-up of the whole batch, with the workers' "
-               "start-up (imports, numba's cached kernels, the network; a LocalCluster's "
-               "scheduler too) inside it; the table also gives the start-up alone, the "
-               "speed-up once started and where a worker's start-up goes. Next: a shorter "
-               "start-up (fewer kernels for numba to load, fewer imports in the worker), or "
-               "workers that stay up from one batch to the next.",
+    "4 sweep": "item 4: the speed-up of the whole batch, each worker's start-up inside it "
+               "(measured alone under the table: imports, then numba loading its cached "
+               "kernels and SUMO's first start in the first run); on 2 cores the main "
+               "process, and any other job on the machine, also take their share beside two "
+               "workers. Next: a shorter start-up (fewer kernels for numba to load, fewer "
+               "imports in the worker), or workers that stay up from one batch to the next.",
 }
 """By the start of a target's name in the summary: where its profile is and the next step."""
 
@@ -304,15 +304,10 @@ def _throughput(tp: dict, t: dict) -> list[str]:
     lines = ["## 4. Sweep throughput", "",
              f"`{tp['scenario']}` {length}, seeds 1..n, summary only, in worker processes "
              f"that start once and take run after run; {tp['note']}.", "",
-             "| executor | workers | runs | s | runs/min | speed-up | s for twice the runs | "
-             "start-up s | runs/min once started | speed-up once started |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "| executor | workers | runs | s | runs/min | speed-up |", "|---|---|---|---|---|---|"]
     for c in tp["configs"].values():
         lines.append(f"| {c['executor']} | {c['workers']} | {c['runs']} | {c['seconds']:.1f} | "
-                     f"{c['runs_per_minute']:.1f} | {c['speedup_vs_1_worker']:.2f}× | "
-                     f"{c['seconds_doubled']:.1f} | {c['startup_seconds']:.1f} | "
-                     f"{c['started_runs_per_minute']:.1f} | "
-                     f"{c['started_speedup_vs_1_worker']:.2f}× |")
+                     f"{c['runs_per_minute']:.1f} | {c['speedup_vs_1_worker']:.2f}× |")
     w = tp.get("worker_startup")
     if w:
         lines += ["", f"One worker process on its own: importing the package takes "

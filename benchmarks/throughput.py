@@ -65,28 +65,14 @@ def _worker_startup(duration_s: float | None, runs: int = 3) -> dict:
 
 
 def run(runs: int = 16, duration_s: float | None = None, dask: bool = True) -> dict:
-    """Each executor times ``runs`` runs, then ``2 * runs``: the difference is ``runs`` runs
-    without the start-up (workers, imports, a LocalCluster), so it gives the rate once
-    started, and ``2 T(n) - T(2n)`` the start-up itself."""
     configs = {"local_1": (1, "local"), "local_2": (2, "local")}
     if dask:
         configs["dask_2"] = (2, "dask")
-    results = {}
-    for name, (workers, executor) in configs.items():
-        result = _timed(runs, duration_s, workers, executor)
-        doubled = _timed(2 * runs, duration_s, workers, executor)["seconds"]
-        added = max(doubled - result["seconds"], 1e-9)
-        results[name] = {**result, "seconds_doubled": doubled,
-                         "started_runs_per_minute": 60.0 * runs / added,
-                         "startup_seconds": 2 * result["seconds"] - doubled}
-    base, base_started = (results["local_1"][k]
-                          for k in ("runs_per_minute", "started_runs_per_minute"))
+    results = {name: _timed(runs, duration_s, w, ex) for name, (w, ex) in configs.items()}
+    base = results["local_1"]["runs_per_minute"]
     for result in results.values():
         result["speedup_vs_1_worker"] = result["runs_per_minute"] / base
-        result["started_speedup_vs_1_worker"] = result["started_runs_per_minute"] / base_started
     return {"scenario": SCENARIO, "duration_s": duration_s, "configs": results,
             "worker_startup": _worker_startup(duration_s),
             "note": "wall time of execute() for the whole batch, worker start-up included; "
-                    "the Dask figure includes starting and stopping the LocalCluster. Each "
-                    "executor then runs twice as many: the extra runs' time is the rate once "
-                    "started, and twice the first time less the second is the start-up"}
+                    "the Dask figure includes starting and stopping the LocalCluster"}
