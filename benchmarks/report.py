@@ -189,11 +189,12 @@ NEXT_STEPS = {
           "time, against every node's view), the fusion of each pedestrian's sets and the "
           "sensors' strips. Next: the raster over-approximation of item 1, for every "
           "pedestrian's region at once.",
-    "4 Dask cluster": "item 4b: Dask tasks carry batches of runs, so the scheduler's round "
-                      "trips are few; on 2 cores the scheduler and the workers' own "
-                      "processes (event loops, heartbeats, memory monitor) take their share "
-                      "of the CPU beside the runs. Next: record the cluster processes' own "
-                      "CPU time in the benchmark, and run it on a machine with spare cores.",
+    "4 Dask cluster": "item 4b, its CPU table: the cluster's own processes (scheduler, "
+                      "nannies, Dask workers) take CPU time beside the runs on the same 2 "
+                      "cores, while the local pool pays its workers' start-up in each half. "
+                      "Next: run the cluster's scheduler off the workers' cores, as on a real "
+                      "cluster, or quiet its per-worker bookkeeping (heartbeats, memory "
+                      "monitor).",
     "4 sweep": "item 4: the speed-up of the whole batch, each worker's start-up inside it "
                "(measured alone under the table: imports, then numba loading its cached "
                "kernels and SUMO's first start in the first run); on 2 cores the main "
@@ -331,14 +332,29 @@ def _crowd(c: dict) -> list[str]:
 def _cluster(c: dict) -> list[str]:
     rows = "identical" if c["rows_identical"] else \
         f"DIFFERENT in {len(c['rows_different'])}+ runs, e.g. {c['rows_different'][0]}"
-    return ["## 4b. A sweep on a Dask cluster", "",
-            f"`{c['scenario']}` cut to {c['duration_s']} s, seeds 1..{c['runs']}, summary only; "
-            f"{c['note']}. Every run's summary.json: {rows}.", "",
-            "| executor | workers | runs | s | runs/min |", "|---|---|---|---|---|",
-            f"| local pool | {c['workers']} | {c['runs']} | {c['local']['seconds']:.1f} | "
-            f"{c['local']['runs_per_minute']:.1f} |",
-            f"| Dask cluster | {c['workers']} | {c['runs']} | {c['dask_cluster']['seconds']:.1f} "
-            f"| {c['dask_cluster']['runs_per_minute']:.1f} |", ""]
+    lines = ["## 4b. A sweep on a Dask cluster", "",
+             f"`{c['scenario']}` cut to {c['duration_s']} s, seeds 1..{c['runs']}, summary "
+             f"only; {c['note']}. Every run's summary.json: {rows}.", "",
+             "| executor | workers | runs | s | runs/min |", "|---|---|---|---|---|"]
+    executors = {"local pool": c["local"], "Dask cluster": c["dask_cluster"]}
+    for name, e in executors.items():
+        lines.append(f"| {name} | {c['workers']} | {c['runs']} | {e['seconds']:.1f} | "
+                     f"{e['runs_per_minute']:.1f} |")
+    if "cpu_seconds" not in c["local"]:
+        return [*lines, ""]
+    lines += ["", f"Where the CPU went while each executor ran (CPU seconds, user + system; "
+                  f"{c['cores']} cores × the wall time is what the machine could give): the "
+                  "run workers, the cluster's own processes (scheduler, nannies, Dask workers; "
+                  "running beside the local pool too), this process (the pool's threads, the "
+                  "Dask client), and the rest (other jobs, or idle).", "",
+              "| executor | cores × wall | runs | cluster processes | this process | "
+              "other or idle |", "|---|---|---|---|---|---|"]
+    for name, e in executors.items():
+        u = e["cpu_seconds"]
+        lines.append(f"| {name} | {u['cores_wall']:.1f} | {u['runs']:.1f} | "
+                     f"{u['cluster']:.1f} | {u['this_process']:.1f} | "
+                     f"{u['other_or_idle']:.1f} |")
+    return [*lines, ""]
 
 
 def _tightness(tt: dict, t: dict) -> list[str]:

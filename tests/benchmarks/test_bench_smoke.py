@@ -49,6 +49,9 @@ def test_the_cluster_sweep_gives_the_local_pools_rows(quick):
     """The runs on the dask scheduler + workers give the same summaries as the local pool."""
     cluster = quick[0]["cluster"]
     assert cluster["runs"] == 10 and cluster["rows_identical"], cluster["rows_different"]
+    for executor in ("local", "dask_cluster"):  # every run worker's CPU time is found
+        cpu = cluster[executor]["cpu_seconds"]
+        assert cpu["runs"] > 0 and cpu["cluster"] > 0
 
 
 def test_quick_figures_are_sane(quick):
