@@ -179,10 +179,12 @@ NEXT_STEPS = {
          "known regions (the occupancy stage) and of the sensors' visible and hidden regions "
          "(in the geometry stage), with a test that proves it covers the exact polygons on "
          "random shapes; the controller and the recorder would then read rasters.",
-    "kernel enclose": "the table of item 2: *kernel alone* against *compiled* is the "
-                      "public function's Python around the kernel. Next: strips normalized "
-                      "inside the kernel, and the enclosure's clipping and scaling loops "
-                      "fused (one pass over the polygon).",
+    "kernel enclose": "the table of item 2: *kernel alone* is the one compiled call "
+                      "(strips normalized, clipped, enclosed, the volume gain as its "
+                      "fallback); *compiled* adds the public function's Python (checks, "
+                      "wrapping the result), and shapely's own time moves a great deal from "
+                      "run to run on this machine. Next: the checks and the wrapping folded "
+                      "into the call, so the public function is the kernel.",
     "3 ": "the profile of the largest configuration (item 3): a node's plain track updates "
           "are one compiled call per node and step; what is left is the bus's refined region "
           "of every known pedestrian (shapely's buffer and overlay calls, one pedestrian at a "
