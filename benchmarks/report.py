@@ -72,16 +72,18 @@ def markdown(r: dict) -> str:
 
 def _summary(r: dict, t: dict) -> list[str]:
     rows = []
+    budgets: dict[str, str] = {}  # a cost-per-step row's name -> what must go to meet it
     loop = r.get("loop_cost", {}).get("configs", {})
     if "a_frobenius" in loop:
-        a = loop["a_frobenius"]["ratio_to_bare"]
-        rows.append(("1a co-sim (frobenius) / bare SUMO", f"{a:.1f}×",
-                     f"≤ {t['loop_a_ratio_to_bare']:.0f}×", a <= t["loop_a_ratio_to_bare"]))
-        if "default_enclose" in loop:
-            d = loop["default_enclose"]["ratio_to_bare"]
-            rows.append(("1 co-sim (default methods) / bare SUMO", f"{d:.1f}×",
-                         f"≤ {t['loop_default_ratio_to_bare']:.0f}×",
-                         d <= t["loop_default_ratio_to_bare"]))
+        for name, config, key in (("1a co-sim (frobenius) / bare SUMO", "a_frobenius",
+                                   "loop_a_ratio_to_bare"),
+                                  ("1 co-sim (default methods) / bare SUMO", "default_enclose",
+                                   "loop_default_ratio_to_bare")):
+            if config not in loop:
+                continue
+            ratio = loop[config]["ratio_to_bare"]
+            rows.append((name, f"{ratio:.1f}×", f"≤ {t[key]:.0f}×", ratio <= t[key]))
+            budgets[name] = _budget(loop[config], t[key], r["loop_cost"]["bare_us_per_step"])
         for name, c in loop.items():
             if name.startswith("b_"):
                 rows.append((f"1b co-sim ({c['gain_method']}) / (a)", f"{c['ratio_to_a']:.1f}×",
@@ -143,7 +145,7 @@ def _summary(r: dict, t: dict) -> list[str]:
     for name, value, target, ok in rows:
         lines.append(f"| {name} | {value} | {target} | "
                      f"{'' if ok is None else _verdict(ok)} |")
-    missed = [(name, step + _budget(name, loop, r, t)) for name, _, _, ok in rows
+    missed = [(name, step + budgets.get(name, "")) for name, _, _, ok in rows
               if ok is False for prefix, step in NEXT_STEPS.items() if name.startswith(prefix)]
     if missed:
         lines += ["", "Each target not met, where its time goes and the next step:", ""]
@@ -151,24 +153,16 @@ def _summary(r: dict, t: dict) -> list[str]:
     return [*lines, ""]
 
 
-LOOP_TARGETS = {"1a": ("a_frobenius", "loop_a_ratio_to_bare"),
-                "1 ": ("default_enclose", "loop_default_ratio_to_bare")}
-"""By the start of a cost-per-step target's name: its configuration and target key."""
-
-
-def _budget(name: str, loop: dict, r: dict, t: dict) -> str:
-    """For a missed cost-per-step target: how much of the step must go to meet it, against
-    its largest stage (empty for any other target)."""
-    key = next((v for prefix, v in LOOP_TARGETS.items() if name.startswith(prefix)), None)
-    if key is None or key[0] not in loop:
-        return ""
-    config = loop[key[0]]
-    allowed = t[key[1]] * r["loop_cost"]["bare_us_per_step"]
+def _budget(config: dict, ratio: float, bare_us: float) -> str:
+    """For a cost-per-step target of at most ``ratio`` × bare SUMO (``bare_us`` per step):
+    how much of ``config``'s step must go to meet it, against its largest stage."""
+    allowed = ratio * bare_us
+    excess = config["us_per_step"] - allowed
     stage, largest = max(config["stages_us"].items(), key=lambda item: item[1])
-    return (f" At ≤ {t[key[1]]:g}× a step may take {allowed:,.0f} µs; it takes "
-            f"{config['us_per_step']:,.0f}, so {config['us_per_step'] - allowed:,.0f} µs must "
-            f"go ({'more' if config['us_per_step'] - allowed > largest else 'less'} than its "
-            f"largest stage, `{stage}`, at {largest:,.0f} µs).")
+    return (f" At ≤ {ratio:g}× a step may take {allowed:,.0f} µs; it takes "
+            f"{config['us_per_step']:,.0f}, so {excess:,.0f} µs must go "
+            f"({'more' if excess > largest else 'less'} than its largest stage, `{stage}`, "
+            f"at {largest:,.0f} µs).")
 
 
 NEXT_STEPS = {
@@ -311,13 +305,12 @@ def _throughput(tp: dict, t: dict) -> list[str]:
     for c in tp["configs"].values():
         lines.append(f"| {c['executor']} | {c['workers']} | {c['runs']} | {c['seconds']:.1f} | "
                      f"{c['runs_per_minute']:.1f} | {c['speedup_vs_1_worker']:.2f}× |")
-    w = tp.get("worker_startup")
-    if w:
-        lines += ["", f"One worker process on its own: importing the package takes "
-                      f"{w['imports_seconds']:.2f} s; its first run takes "
-                      f"{w['first_run_seconds']:.2f} s against {w['later_run_seconds']:.2f} s "
-                      f"for the later ones ({w['first_run_extra_seconds']:.2f} s more: numba "
-                      "loads its cached kernels, lazy imports, SUMO's first start)."]
+    w = tp["worker_startup"]
+    lines += ["", f"One worker process on its own: importing the package takes "
+                  f"{w['imports_seconds']:.2f} s; its first run takes "
+                  f"{w['first_run_seconds']:.2f} s against {w['later_run_seconds']:.2f} s "
+                  f"for the later ones ({w['first_run_extra_seconds']:.2f} s more: numba "
+                  "loads its cached kernels, lazy imports, SUMO's first start)."]
     return [*lines, ""]
 
 
@@ -342,8 +335,6 @@ def _cluster(c: dict) -> list[str]:
     for name, e in executors.items():
         lines.append(f"| {name} | {c['workers']} | {c['runs']} | {e['seconds']:.1f} | "
                      f"{e['runs_per_minute']:.1f} |")
-    if "cpu_seconds" not in c["local"]:
-        return [*lines, ""]
     lines += ["", f"Where the CPU went while each executor ran (CPU seconds, user + system; "
                   f"{c['cores']} cores × the wall time is what the machine could give): the "
                   "run workers, the cluster's own processes (scheduler, nannies, Dask workers; "
