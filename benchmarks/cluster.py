@@ -19,7 +19,6 @@ sweep does); a worker is replaced every ``TASKS_PER_WORKER`` runs anyway.
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import subprocess
 import sys
@@ -31,7 +30,7 @@ from pathlib import Path
 import psutil
 
 from sse_cosim.reporting.outputs import SUMMARY
-from sse_cosim.runner.executors import Execution, execute
+from sse_cosim.runner.executors import Execution, default_workers, execute
 from sse_cosim.runner.tasks import RunTask
 
 SCENARIO = Path("scenarios/s3_pedestrian.toml")
@@ -156,7 +155,7 @@ def _timed(tasks: list[RunTask], execution: Execution,
 
 
 def run(runs: int = 1000, duration_s: float = 3.0, workers: int = 2) -> dict:
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    cores = default_workers()  # the cores this process may use
     with tempfile.TemporaryDirectory(prefix="sse-bench-cluster-") as tmp:
         root = Path(tmp)
         tasks = {name: _tasks(root / name, runs, duration_s) for name in ("local", "dask")}

@@ -5,6 +5,7 @@ length (or cut with ``duration_s``), seeds 1..n, summary only, in worker process
 
 from __future__ import annotations
 
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -59,7 +60,7 @@ def _worker_startup(duration_s: float | None, runs: int = 3) -> dict:
                 seconds.append(time.perf_counter() - start)
         finally:
             worker.close()
-    later = sorted(seconds[1:])[len(seconds[1:]) // 2]
+    later = statistics.median_high(seconds[1:])  # a run that took place
     return {"imports_seconds": imports, "first_run_seconds": seconds[0],
             "later_run_seconds": later, "first_run_extra_seconds": seconds[0] - later}
 
