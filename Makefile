@@ -14,12 +14,15 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
-$(STAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/pip install --quiet -e ".[dask]"
+# Every install takes the versions pinned in requirements.lock (README, "Pinned installs").
+LOCK   := requirements.lock
+
+$(STAMP): pyproject.toml $(LOCK) | $(BIN)/python
+	$(BIN)/pip install --quiet -c $(LOCK) -e ".[dask]"
 	touch $@
 
-$(DEVSTAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/pip install --quiet -e ".[dev,dask]"
+$(DEVSTAMP): pyproject.toml $(LOCK) | $(BIN)/python
+	$(BIN)/pip install --quiet -c $(LOCK) -e ".[dev,dask]"
 	touch $@ $(STAMP)
 
 run: $(STAMP)
@@ -27,8 +30,8 @@ run: $(STAMP)
 	$(BIN)/sse-cosim sweep --file sweeps/noise.toml --out results/sweep/ --summaries-only
 	$(BIN)/sse-cosim report results/ --out results/
 
-$(BENCHSTAMP): pyproject.toml | $(BIN)/python
-	$(BIN)/pip install --quiet -e ".[dask,bench]"
+$(BENCHSTAMP): pyproject.toml $(LOCK) | $(BIN)/python
+	$(BIN)/pip install --quiet -c $(LOCK) -e ".[dask,bench]"
 	touch $@ $(STAMP)
 
 # The browser tests drive Debian's chromium (playwright never downloads a browser).
