@@ -74,6 +74,7 @@ gain), 1 s with ``frobenius``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
@@ -90,10 +91,12 @@ from sse_cosim.sets import (
     Strips,
     Zonotope,
     intersect_strips,
+    portable,
     zonotope_facet_strips,
     zonotopes_disjoint,
 )
 from sse_cosim.sets.enclosure import clip_to_strips, enclose_polygon, unit_directions
+from sse_cosim.sets.portable import matmul
 from sse_cosim.sets.zonotope import FloatArray, full_rank
 
 if TYPE_CHECKING:
@@ -304,7 +307,7 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
         if len(options) == 1:
             estimate = options[0]
             continue
-        edges = [scene.model.position_matrix @ estimate.generators,
+        edges = [matmul(scene.model.position_matrix, estimate.generators),
                  *(scene.detections.parallelograms[d].generators for d in used)]
         estimate = _hull(options, np.hstack(edges))  # along the edges of every option
     if scene.ground is not None and not scene.ground.intersects(
@@ -426,21 +429,22 @@ def _buffer(geometry: BaseGeometry, distance: float) -> BaseGeometry:
     """``geometry`` grown (or, for a negative ``distance``, shrunk) by at least |distance|:
     shapely's arcs are polygons inscribed in the circle, so the radius is raised until the
     polygon's edges lie |distance| away."""
-    return geometry.buffer(distance / np.cos(np.pi / (4 * QUAD_SEGMENTS)),
+    return geometry.buffer(distance / math.cos(math.pi / (4 * QUAD_SEGMENTS)),
                            quad_segs=QUAD_SEGMENTS)
 
 
 def _parallelogram(path: Strips) -> Zonotope:
     """The set of a detection's two path strips: <H^-1 y, H^-1 diag(r)> (H (2, 2))."""
-    inverse = np.linalg.inv(path.normals[:2])
-    return Zonotope(inverse @ path.values[:2], inverse * path.radii[np.newaxis, :2])
+    inverse = portable.inverse_2x2(path.normals[:2])
+    return Zonotope(matmul(inverse, path.values[:2]), inverse * path.radii[np.newaxis, :2])
 
 
 def _meets(path_set: Zonotope, strips: Strips) -> bool:
     """Whether the 2-D set meets the strips widened by :data:`MEET_TOL` (exact clipping)."""
     unit = strips.normalized()
     corners = Zonotope.unchecked(np.zeros(2), path_set.generators).vertices()
-    clipped = clip_to_strips(corners, unit.normals, unit.values - unit.normals @ path_set.center,
+    clipped = clip_to_strips(corners, unit.normals,
+                             unit.values - matmul(unit.normals, path_set.center),
                              unit.radii + MEET_TOL)
     return len(clipped) > 0
 

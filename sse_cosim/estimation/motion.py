@@ -29,7 +29,7 @@ import numpy as np
 
 from sse_cosim.memo import IdentityMemo
 from sse_cosim.scenario.model import Estimator
-from sse_cosim.sets import Strips, Zonotope, intersect_strips
+from sse_cosim.sets import Strips, Zonotope, intersect_strips, portable
 
 POSITION_MEMO = 64  # position sets MotionModel.position keeps
 
@@ -136,7 +136,8 @@ class MotionModel:
         ``path.pullback(C)`` without its checks: C = [I 0] (checked with the model), so H C
         holds H's entries and zeros, exactly -- finite and with nonzero rows as H's.
         """
-        return Strips.unchecked(path.normals @ self.position_matrix, path.values, path.radii)
+        return Strips.unchecked(portable.matmul(path.normals, self.position_matrix), path.values,
+                                path.radii)
 
     def initial_set(self, strips: Strips, gain_method: str) -> Zonotope:
         """A first estimate from path strips (m, 2), at least two with independent normals.
@@ -176,8 +177,8 @@ def _parallelogram(strips: Strips, i: int, j: int) -> Zonotope:
     rest holds for validated strips.
     """
     pair = strips if len(strips) == 2 else strips.select(np.array([i, j]))
-    inverse = np.linalg.inv(pair.normals)
-    center, generators = inverse @ pair.values, inverse * pair.radii[np.newaxis, :]
+    inverse = portable.inverse_2x2(pair.normals)
+    center, generators = portable.matmul(inverse, pair.values), inverse * pair.radii[np.newaxis, :]
     if not (np.isfinite(center).all() and np.isfinite(generators).all()):
         raise ValueError("zonotope center and generators must be finite")
     return Zonotope.unchecked(center, generators)
@@ -186,7 +187,8 @@ def _parallelogram(strips: Strips, i: int, j: int) -> Zonotope:
 def _linear_map(matrix: np.ndarray, estimate: Zonotope) -> Zonotope:
     """M Z = ⟨Mc, MG⟩ (eq. linmap) for a model matrix M (m, n), as ``M @ Z`` computes it, without
     its per-call checks: the model's matrices are finite and shaped for its states."""
-    return Zonotope.unchecked(matrix @ estimate.center, matrix @ estimate.generators)
+    return Zonotope.unchecked(portable.matmul(matrix, estimate.center),
+                              portable.matmul(matrix, estimate.generators))
 
 
 def _independent_pair(normals: np.ndarray, tol: float = 1e-6) -> tuple[int, int]:

@@ -38,10 +38,10 @@ left every view keeps a region that grows without bound.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-import numpy as np
 import shapely
 
 from sse_cosim.estimation.motion import MotionModel
@@ -50,7 +50,7 @@ from sse_cosim.sets.exact import zonotope_polygon
 
 EMPTY = shapely.Polygon()
 QUAD_SEGMENTS = 2  # polygon arcs: 2 segments per quarter circle
-ARC_SAFETY = 1.0 / np.cos(np.pi / (4 * QUAD_SEGMENTS))  # makes those arcs circumscribe the disc
+ARC_SAFETY = 1.0 / math.cos(math.pi / (4 * QUAD_SEGMENTS))  # makes those arcs circumscribe the disc
 
 
 COARSEN_M = 0.01  # regions are kept as polygons at most this much larger, with few vertices

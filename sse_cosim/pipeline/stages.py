@@ -32,7 +32,7 @@ from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
 from sse_cosim.memo import IdentityMemo
 from sse_cosim.sensors import SensorObservation, SensorSpec, observe
 from sse_cosim.sensors.faults import FaultInjector
-from sse_cosim.sets import Strips
+from sse_cosim.sets import Strips, portable
 from sse_cosim.world.snapshot import Snapshot
 
 Observations = dict[str, SensorObservation]  # sensor name -> its observation at this step
@@ -180,7 +180,7 @@ class Sharing:
         receiver_xy = snapshot.vehicles[self.receiver].footprint.front.position
         for out in messages:
             if out.message.sender != self.receiver:
-                self.link.send(out.message, float(np.hypot(*(out.position - receiver_xy))),
+                self.link.send(out.message, float(portable.hypot(*(out.position - receiver_xy))),
                                out.extra_latency_steps)
 
     def receive(self, step: int) -> Received:

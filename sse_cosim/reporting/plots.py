@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 
 from sse_cosim.files import atomic_path
 from sse_cosim.reporting.recorder import SceneFrame
+from sse_cosim.sets.portable import matmul
 from sse_cosim.world.roadmap import RoadMap
 
 NODE_COLORS = {"bus": "tab:blue", "car": "tab:orange", "fused": "black"}
@@ -198,7 +199,7 @@ def _draw_strip(ax, normal: np.ndarray, value: float, radius: float, view, color
     direction = np.array([-normal[1], normal[0]])
     span = 200.0
     for offset in (value - radius, value + radius):
-        base = normal * offset / float(normal @ normal)
+        base = normal * offset / float(matmul(normal, normal))
         line = shapely.LineString([base - span * direction, base + span * direction])
         clipped = line.intersection(box)
         if not clipped.is_empty:

@@ -28,6 +28,7 @@ from sse_cosim.control.speed import SpeedLevel
 from sse_cosim.reporting.shapes import polygon_parts
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sets import Zonotope
+from sse_cosim.sets.portable import matmul
 from sse_cosim.world.roadmap import RoadMap
 
 if TYPE_CHECKING:  # only the types: the recorder reads results, it does not make them
@@ -182,7 +183,7 @@ def _band(normal: np.ndarray, value: float, radius: float,
     rectangle ``box`` (x0, y0, x1, y1); empty without a box."""
     if box is None:
         return shapely.Polygon()
-    norm2 = float(normal @ normal)
+    norm2 = float(matmul(normal, normal))
     direction = np.array([-normal[1], normal[0]]) / np.sqrt(norm2)
     low, high = (normal * (value + side * radius) / norm2 for side in (-1.0, 1.0))
     span = STRIP_SPAN_M * direction

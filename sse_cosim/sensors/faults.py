@@ -34,7 +34,7 @@ from sse_cosim.scenario.model import FaultWindow, LinkFault, NodeFault, Scenario
 from sse_cosim.sensors.measurement import Detection
 from sse_cosim.sensors.observe import SensorObservation
 from sse_cosim.sensors.spec import SensorSpec
-from sse_cosim.sets import Strips, Zonotope
+from sse_cosim.sets import Strips, Zonotope, portable
 from sse_cosim.world.snapshot import Snapshot
 
 if TYPE_CHECKING:  # node faults act on estimates; the sensor layer does not import estimation
@@ -146,7 +146,7 @@ class FaultInjector:
             if fault.node != node:
                 continue
             if fault.kind == "shift":
-                offset = model.position_matrix.T @ np.asarray(fault.shift_m)
+                offset = portable.matmul(model.position_matrix.T, np.asarray(fault.shift_m))
                 estimates = {pid: z.translate(offset) for pid, z in estimates.items()}
             else:
                 estimates = {pid: Zonotope(z.center, fault.scale * z.generators)
@@ -172,7 +172,7 @@ def _biased(detection: Detection, fault: SensorFault, truth: np.ndarray | None) 
     strips = detection.strips
     values = strips.values + np.asarray(fault.bias_m)
     if fault.within_bound and truth is not None:
-        exact = strips.normals @ truth
+        exact = portable.matmul(strips.normals, truth)
         values = exact + np.clip(values - exact, -strips.radii, strips.radii)
     return replace(detection, strips=Strips(strips.normals, values, strips.radii))
 

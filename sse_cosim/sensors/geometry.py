@@ -25,6 +25,7 @@ from shapely.geometry.base import BaseGeometry
 
 from sse_cosim.memo import IdentityMemo
 from sse_cosim.sensors import kernels
+from sse_cosim.sets import portable
 from sse_cosim.world.snapshot import Footprint, Pose
 
 FULL_TURN = 2.0 * math.pi
@@ -75,7 +76,7 @@ class Boxes:
         """Corners counter-clockwise from the rear right, shape (m, 4, 2)."""
         signs = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])  # (4, 2)
         local = signs[None, :, :] * self.half[:, None, :]  # (m, 4, 2)
-        return self.centers[:, None, :] + np.einsum("mki,mij->mkj", local, self.axes)
+        return self.centers[:, None, :] + portable.matmul(local, self.axes)
 
     def distances(self, point: np.ndarray) -> np.ndarray:
         """Euclidean distance from ``point`` (2,) to each (closed) box, shape (m,)."""
@@ -102,9 +103,9 @@ def sector_mask(
     dist2 = dx * dx + dy * dy
     reach = np.asarray(ranges_m, dtype=float).reshape(-1, 1)
     half = 0.5 * np.asarray(fovs_rad, dtype=float).reshape(-1, 1)
-    along = dx * np.cos(heading) + dy * np.sin(heading)
+    along = dx * portable.cos(heading) + dy * portable.sin(heading)
     full = half >= 0.5 * FULL_TURN - _FULL_EPS
-    return (dist2 <= reach * reach) & (full | (along >= np.sqrt(dist2) * np.cos(half)))
+    return (dist2 <= reach * reach) & (full | (along >= np.sqrt(dist2) * portable.cos(half)))
 
 
 def in_sector(pose: Pose, fov_rad: float, range_m: float, targets: np.ndarray) -> np.ndarray:

@@ -8,7 +8,7 @@ from typing import Literal, get_args
 
 import numpy as np
 
-from sse_cosim.sets import Strips
+from sse_cosim.sets import Strips, portable
 from sse_cosim.world.snapshot import Pose
 
 NoiseKind = Literal["uniform", "worst-case"]
@@ -51,7 +51,7 @@ def measure(
         return []
     h = measurement_matrix(pose)
     r = np.asarray(bounds, dtype=float).reshape(2)
-    y = p @ h.T + draw_noise(r, kind, rng, p.shape[0])  # (k, 2)
+    y = portable.matmul(p, h.T) + draw_noise(r, kind, rng, p.shape[0])  # (k, 2)
     return Strips.rows(h, y, r)  # copies (read-only)
 
 

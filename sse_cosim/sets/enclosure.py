@@ -38,8 +38,10 @@ from functools import cache
 import numpy as np
 from numpy.typing import NDArray
 
+from sse_cosim.sets import portable
 from sse_cosim.sets.enclosure_kernels import EXACT_RTOL, MARGIN, PARALLEL_SIN, REFINE_STEPS
 from sse_cosim.sets.lp import linprog
+from sse_cosim.sets.portable import matmul
 from sse_cosim.sets.strips import Strips
 from sse_cosim.sets.zonotope import FloatArray, Zonotope
 
@@ -54,7 +56,7 @@ def clip_polygon(vertices: FloatArray, normal: FloatArray, bound: float) -> Floa
     """
     if len(vertices) == 0:
         return vertices
-    s = vertices @ normal - bound
+    s = matmul(vertices, normal) - bound
     inside = s <= 0
     if inside.all():
         return vertices
@@ -84,14 +86,14 @@ def unit_directions(generators: FloatArray) -> FloatArray:
     folded into the upper half-plane and sorted by angle; directions closer than
     :data:`PARALLEL_SIN` are merged (the first of each run is kept). Columns shorter than
     :data:`PARALLEL_SIN` times the longest (rounding residue of earlier updates) give none."""
-    norms = np.hypot(generators[0], generators[1])
+    norms = portable.hypot(generators[0], generators[1])
     keep = norms > PARALLEL_SIN * norms.max(initial=0.0)
     if not keep.any():
         return np.zeros((2, 0))
     g = generators[:, keep] / norms[keep]
     flip = (g[1] < 0) | ((g[1] == 0) & (g[0] < 0))
     g = np.where(flip, -g, g)
-    g = g[:, np.argsort(np.arctan2(g[1], g[0]), kind="stable")]
+    g = g[:, np.argsort(portable.arctan2(g[1], g[0]), kind="stable")]
     keep = [0]
     for i in range(1, g.shape[1]):
         last = g[:, keep[-1]]
@@ -106,7 +108,7 @@ def unit_directions(generators: FloatArray) -> FloatArray:
 
 def support_intervals(vertices: FloatArray, normals: FloatArray) -> tuple[FloatArray, FloatArray]:
     """[min, max] of n_iᵀv over the vertices (m, 2) for every normal (k, 2): each (k,)."""
-    projections = vertices @ normals.T
+    projections = matmul(vertices, normals.T)
     return projections.min(axis=0), projections.max(axis=0)
 
 
@@ -123,9 +125,9 @@ def tangent_weights(directions: FloatArray) -> FloatArray:
     disc (A ω/2 = 1), and the perimeter of a zonotope with these directions whose every
     direction is an edge is 2 Σ ω_i h_i, with h_i its half-width along n_i.
     """
-    theta = np.arctan2(directions[1], directions[0])
+    theta = portable.arctan2(directions[1], directions[0])
     gaps = np.diff(np.concatenate([theta, theta[:1] + np.pi]))
-    return np.tan(gaps / 2) + np.tan(np.roll(gaps, 1) / 2)
+    return portable.tan(gaps / 2) + portable.tan(np.roll(gaps, 1) / 2)
 
 
 @cache
@@ -148,7 +150,7 @@ def weighted_l1_center(normals: FloatArray, middle: FloatArray, weights: FloatAr
     i, j, det = i[ok], j[ok], det[ok]
     points = np.stack([(middle[i] * normals[j, 1] - middle[j] * normals[i, 1]) / det,
                        (normals[i, 0] * middle[j] - normals[j, 0] * middle[i]) / det], axis=1)
-    cost = (np.abs(points @ normals.T - middle) * weights).sum(axis=1)
+    cost = (np.abs(matmul(points, normals.T) - middle) * weights).sum(axis=1)
     return points[int(np.argmin(cost))]
 
 
@@ -163,7 +165,7 @@ def symmetric_scales(directions: FloatArray, half_widths: FloatArray) -> FloatAr
     negative and a local minimum (never two neighbours, so each keeps the wedge that makes it
     redundant) and recomputes, until every edge is >= 0 or two directions are left.
     """
-    theta = np.arctan2(directions[1], directions[0])
+    theta = portable.arctan2(directions[1], directions[0])
     active = np.arange(len(theta))
     while True:
         t, h = theta[active], half_widths[active]
@@ -173,8 +175,8 @@ def symmetric_scales(directions: FloatArray, half_widths: FloatArray) -> FloatAr
         prev_gap = np.concatenate([gap[-1:], gap[:-1]])
         h_next = np.concatenate([h[1:], h[:1]])
         h_prev = np.concatenate([h[-1:], h[:-1]])
-        lengths = ((h_prev - h * np.cos(prev_gap)) / np.sin(prev_gap)
-                   + (h_next - h * np.cos(gap)) / np.sin(gap))
+        lengths = ((h_prev - h * portable.cos(prev_gap)) / portable.sin(prev_gap)
+                   + (h_next - h * portable.cos(gap)) / portable.sin(gap))
         if len(active) <= 2 or lengths.min() >= 0:
             alpha = np.zeros(len(theta))
             alpha[active] = np.maximum(lengths, 0.0) / 2
@@ -210,7 +212,7 @@ def _centered(directions: FloatArray, normals: FloatArray, middle: FloatArray,
               half: FloatArray, weights: FloatArray) -> tuple[FloatArray, FloatArray]:
     """(c, α) with c = argmin Σ w_i |n_iᵀc - m_i| and α the symmetric polygon about c."""
     center = weighted_l1_center(normals, middle, weights)
-    return center, symmetric_scales(directions, half + np.abs(normals @ center - middle))
+    return center, symmetric_scales(directions, half + np.abs(matmul(normals, center) - middle))
 
 
 def least_perimeter_lp(vertices: FloatArray, directions: FloatArray
@@ -220,7 +222,7 @@ def least_perimeter_lp(vertices: FloatArray, directions: FloatArray
     units of the vertices' size); None if the solver fails. Not checked for containment."""
     k = directions.shape[1]
     normals = _normals(directions)
-    widths = np.abs(normals @ directions)
+    widths = np.abs(matmul(normals, directions))
     lower, upper = support_intervals(vertices, normals)
     scale = float(np.abs(vertices).max()) or 1.0
     result = linprog(np.concatenate([np.zeros(2), np.ones(k)]),
@@ -250,18 +252,18 @@ def enclose_polygon(vertices: FloatArray, directions: FloatArray, size: float,
     if directions.shape[1] < 2 or len(vertices) == 0:
         return None
     normals = _normals(directions)
-    widths = np.abs(normals @ directions)
+    widths = np.abs(matmul(normals, directions))
     lower, upper = support_intervals(vertices, normals)
     middle, half = (upper + lower) / 2, (upper - lower) / 2
     center, alpha = _centered(directions, normals, middle, half, tangent_weights(directions))
-    area = alpha @ widths @ alpha  # area / 2
+    area = matmul(matmul(alpha, widths), alpha)  # area / 2
     for _ in range(REFINE_STEPS if refine is None else refine):
         candidate, scales = _centered(directions, normals, middle, half, alpha)
-        if scales @ widths @ scales >= area:
+        if matmul(matmul(scales, widths), scales) >= area:
             break
-        center, alpha, area = candidate, scales, scales @ widths @ scales
+        center, alpha, area = candidate, scales, matmul(matmul(scales, widths), scales)
     alpha[alpha <= 1e-12 * alpha.max(initial=0.0)] = 0.0  # rounding, not generators
-    alpha = _contain(alpha, widths, normals @ center, upper, lower, MARGIN * size)
+    alpha = _contain(alpha, widths, matmul(normals, center), upper, lower, MARGIN * size)
     if alpha is None:
         return None
     used = alpha > 0
@@ -277,8 +279,8 @@ def enclose_intersection_reference(base: Zonotope, strips: Strips, generators: F
     enclosure see numbers of the set's size, not of its position. The NumPy reference of
     :func:`~sse_cosim.sets.enclosure_kernels.enclose_intersection`."""
     corners = Zonotope.unchecked(np.zeros(2), base.generators).vertices()
-    polygon = clip_to_strips(corners, strips.normals, strips.values - strips.normals @ base.center,
-                             strips.radii)
+    polygon = clip_to_strips(corners, strips.normals,
+                             strips.values - matmul(strips.normals, base.center), strips.radii)
     if len(polygon) == 0:
         return None
     found = enclose_polygon(polygon, unit_directions(generators), float(np.abs(corners).max()))
@@ -300,7 +302,7 @@ def _contain(alpha: FloatArray, widths: FloatArray, middle: FloatArray, upper: F
     need = np.maximum(upper - middle, middle - lower) + margin
     used = alpha > 0
     for _ in range(3):
-        deficit = need - widths @ alpha
+        deficit = need - matmul(widths, alpha)
         short = deficit > 0
         if not short.any():
             return alpha
@@ -316,7 +318,7 @@ def _contain(alpha: FloatArray, widths: FloatArray, middle: FloatArray, upper: F
 def polygon_area(vertices: FloatArray) -> float:
     """Area of the convex polygon with ``vertices`` (m, 2) in order (shoelace; 0 if m < 3)."""
     x, y = vertices[:, 0], vertices[:, 1]
-    return 0.5 * abs(float(x @ np.roll(y, -1) - y @ np.roll(x, -1)))
+    return 0.5 * abs(float(matmul(x, np.roll(y, -1)) - matmul(y, np.roll(x, -1))))
 
 
 def smaller_enclosure(enclosed: Zonotope, polygon: FloatArray,

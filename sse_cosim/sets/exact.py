@@ -11,6 +11,8 @@ from numpy.typing import ArrayLike
 from shapely.geometry import MultiPoint, Polygon
 from shapely.geometry.base import BaseGeometry
 
+from sse_cosim.sets import portable
+from sse_cosim.sets.portable import matmul
 from sse_cosim.sets.strips import Strips
 from sse_cosim.sets.zonotope import Zonotope
 
@@ -30,7 +32,7 @@ def zonotope_polygon(zonotope: Zonotope) -> BaseGeometry:
 def predict_exact(geometry: BaseGeometry, state_matrix: ArrayLike, noise: Zonotope) -> BaseGeometry:
     """F·P ⊕ Q: convex hull of F v + q over the vertices v of P and q of Q (F (2, 2))."""
     f = np.asarray(state_matrix, dtype=np.float64)
-    mapped = shapely.get_coordinates(geometry) @ f.T
+    mapped = matmul(shapely.get_coordinates(geometry), f.T)
     sums = mapped[:, None, :] + noise.vertices()[None, :, :]
     return MultiPoint(sums.reshape(-1, 2)).convex_hull
 
@@ -39,13 +41,13 @@ def _strip_polygon(
     normal: np.ndarray, value: float, radius: float, bounds: tuple[float, ...]
 ) -> Polygon:
     """{x : |hᵀx - y| <= r} cut to a rectangle covering the box ``bounds`` (x0, y0, x1, y1)."""
-    norm = float(np.linalg.norm(normal))
+    norm = float(portable.hypot(normal[0], normal[1]))
     across = normal / norm
     along = np.array([-across[1], across[0]])
     mid = np.array([(bounds[0] + bounds[2]) / 2, (bounds[1] + bounds[3]) / 2])
-    reach = float(np.hypot(bounds[2] - bounds[0], bounds[3] - bounds[1])) + 1.0
+    reach = float(portable.hypot(bounds[2] - bounds[0], bounds[3] - bounds[1])) + 1.0
     lo, hi = (value - radius) / norm, (value + radius) / norm
-    t0 = along @ mid
+    t0 = matmul(along, mid)
     corners = [s * across + t * along for s, t in
                ((lo, t0 - reach), (hi, t0 - reach), (hi, t0 + reach), (lo, t0 + reach))]
     return Polygon(corners)

@@ -12,6 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from sse_cosim.sets import portable
 from sse_cosim.sets.kernels import meet_2d
 from sse_cosim.sets.lp import linprog
 from sse_cosim.sets.strips import Strips
@@ -20,8 +21,8 @@ from sse_cosim.sets.zonotope import BoolArray, FloatArray, Zonotope
 
 def projection_interval(zonotope: Zonotope, strips: Strips) -> tuple[FloatArray, FloatArray]:
     """[min, max] of h_jᵀx over Z for every strip normal: h_jᵀc ∓ Σ_i |h_jᵀg_i|, each (m,)."""
-    center = strips.normals @ zonotope.center
-    radius = np.abs(strips.normals @ zonotope.generators).sum(axis=1)
+    center = portable.matmul(strips.normals, zonotope.center)
+    radius = np.abs(portable.matmul(strips.normals, zonotope.generators)).sum(axis=1)
     return center - radius, center + radius
 
 

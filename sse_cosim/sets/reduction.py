@@ -13,7 +13,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from sse_cosim.sets import kernels
+from sse_cosim.sets import kernels, portable
 
 FloatArray = NDArray[np.float64]
 Reducer = Callable[[FloatArray, int], FloatArray]
@@ -22,7 +22,7 @@ Reducer = Callable[[FloatArray, int], FloatArray]
 def box_in_frame(generators: FloatArray, frame: FloatArray) -> FloatArray:
     """Generators (n, n) of the box aligned with the orthonormal ``frame`` (n, n) that encloses
     ⟨0, generators⟩: column i is frame_i · Σ_j |frame_iᵀ g_j|."""
-    return frame * np.abs(frame.T @ generators).sum(axis=1)
+    return frame * np.abs(portable.matmul(frame.T, generators)).sum(axis=1)
 
 
 def _girard_frame(rest: FloatArray) -> FloatArray:

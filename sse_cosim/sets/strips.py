@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from sse_cosim.sets import portable
 from sse_cosim.sets.kernels import unit_strips
 from sse_cosim.sets.zonotope import BoolArray, FloatArray, Zonotope, facet_normals, full_rank
 
@@ -83,7 +84,7 @@ class Strips:
     def contains(self, point: ArrayLike, tol: float = 1e-9) -> bool | BoolArray:
         """Whether x (n,) satisfies every strip, |Hx - y| <= r + tol, or per row of x (k, n)."""
         x = np.asarray(point, dtype=np.float64)
-        residual = np.abs(np.atleast_2d(x) @ self.normals.T - self.values)
+        residual = np.abs(portable.matmul(np.atleast_2d(x), self.normals.T) - self.values)
         inside = (residual <= self.radii + tol).all(axis=1)
         return bool(inside[0]) if x.ndim == 1 else inside
 
@@ -92,7 +93,7 @@ class Strips:
         c = np.asarray(output_map, dtype=np.float64)
         if c.ndim != 2 or c.shape[0] != self.dim:
             raise ValueError(f"output map must have shape ({self.dim}, n); got {c.shape}")
-        normals = self.normals @ c
+        normals = portable.matmul(self.normals, c)
         if not np.isfinite(normals).all() or not np.any(normals != 0, axis=1).all():
             raise ValueError("strip normals must be finite and nonzero")
         return Strips.unchecked(normals, self.values, self.radii)
@@ -146,5 +147,6 @@ def zonotope_facet_strips(zonotope: Zonotope) -> Strips:
     if not full_rank(g):
         return Strips.unchecked(np.zeros((0, zonotope.dim)), np.zeros(0), np.zeros(0))
     normals = facet_normals(g)
-    return Strips.unchecked(normals, normals @ zonotope.center, np.abs(normals @ g).sum(axis=1))
+    return Strips.unchecked(normals, portable.matmul(normals, zonotope.center),
+                            np.abs(portable.matmul(normals, g)).sum(axis=1))
 

@@ -21,9 +21,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from sse_cosim.sets import portable
 from sse_cosim.sets._registry import lookup
 from sse_cosim.sets.kernels import PARALLEL_RTOL, area_2d, contains_2d, full_rank_2d, vertices_2d
 from sse_cosim.sets.lp import linprog
+from sse_cosim.sets.portable import matmul
 from sse_cosim.sets.reduction import REDUCTION_METHODS
 
 FloatArray = NDArray[np.float64]
@@ -130,7 +132,7 @@ def full_rank(generators: FloatArray) -> bool:
     if n != 2:
         return bool(np.linalg.matrix_rank(generators) == n)
     a, b = generators[0], generators[1]
-    p, q, r = a @ a, b @ b, a @ b
+    p, q, r = matmul(a, a), matmul(b, b), matmul(a, b)
     if p + q == 0.0:
         return False
     s_max2 = 0.5 * (p + q) + np.sqrt(0.25 * (p - q) ** 2 + r * r)  # largest eigenvalue of GGᵀ
@@ -144,8 +146,8 @@ def contains_2d_reference(center: FloatArray, generators: FloatArray, points: Fl
     """The NumPy reference of :func:`~sse_cosim.sets.kernels.contains_2d`: whether each point
     (k, 2) lies in the full-rank 2-D ⟨c, G⟩, shape (k,), by the unit facet normals."""
     normals = _unit_rows(cofactor_vectors(generators))  # parallel repeats only repeat a test
-    offsets = np.abs((points - center) @ normals.T)
-    return (offsets <= np.abs(normals @ generators).sum(axis=1) + tol).all(axis=1)
+    offsets = np.abs(matmul(points - center, normals.T))
+    return (offsets <= np.abs(matmul(normals, generators)).sum(axis=1) + tol).all(axis=1)
 
 
 def _merge_parallel(sorted_generators: FloatArray) -> FloatArray:
@@ -154,7 +156,7 @@ def _merge_parallel(sorted_generators: FloatArray) -> FloatArray:
     groups the terms otherwise)."""
     a, b = sorted_generators[:, :-1], sorted_generators[:, 1:]
     cross = a[0] * b[1] - a[1] * b[0]
-    scale = np.linalg.norm(a, axis=0) * np.linalg.norm(b, axis=0)
+    scale = np.sqrt((a * a).sum(axis=0)) * np.sqrt((b * b).sum(axis=0))
     starts = np.flatnonzero(np.concatenate([[True], np.abs(cross) > PARALLEL_RTOL * scale]))
     ends = np.append(starts[1:], sorted_generators.shape[1])
     return np.stack([np.cumsum(sorted_generators[:, start:end], axis=1)[:, -1]
@@ -167,7 +169,7 @@ def vertices_2d_reference(center: FloatArray, generators: FloatArray) -> FloatAr
     g = generators[:, np.any(generators != 0, axis=0)]
     flip = (g[1] < 0) | ((g[1] == 0) & (g[0] < 0))
     g = np.where(flip, -g, g)
-    g = g[:, np.argsort(np.arctan2(g[1], g[0]), kind="stable")]
+    g = g[:, np.argsort(portable.arctan2(g[1], g[0]), kind="stable")]
     if g.shape[1] == 0:
         return center[None, :].copy()
     g = _merge_parallel(g)
@@ -241,7 +243,7 @@ class Zonotope:
             raise ValueError(f"linear map must have shape (m, {self.dim}); got {m.shape}")
         if not np.isfinite(m).all():
             raise ValueError("zonotope center and generators must be finite")
-        return Zonotope.unchecked(m @ self.center, m @ self.generators)
+        return Zonotope.unchecked(matmul(m, self.center), matmul(m, self.generators))
 
     def translate(self, vector: ArrayLike) -> Zonotope:
         """⟨c + v, G⟩ for v (n,)."""
@@ -264,7 +266,7 @@ class Zonotope:
     def support(self, direction: ArrayLike) -> float | FloatArray:
         """h_Z(d) = dᵀc + Σ_i |dᵀg_i|; d (n,) -> float, d (k, n) -> (k,)."""
         d = np.asarray(direction, dtype=np.float64)
-        values = d @ self.center + np.abs(d @ self.generators).sum(axis=-1)
+        values = matmul(d, self.center) + np.abs(matmul(d, self.generators)).sum(axis=-1)
         return float(values) if d.ndim == 1 else values
 
     def volume(self) -> float:

@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
+from sse_cosim.sets import portable
+
 
 @dataclass(frozen=True)
 class Pose:
@@ -28,12 +30,12 @@ class Pose:
     @property
     def forward(self) -> np.ndarray:
         """Unit vector along the heading, shape (2,)."""
-        return np.array([np.cos(self.heading), np.sin(self.heading)])
+        return np.array([portable.cos(self.heading), portable.sin(self.heading)])
 
     @property
     def left(self) -> np.ndarray:
         """Unit vector to the left of the heading, shape (2,)."""
-        return np.array([-np.sin(self.heading), np.cos(self.heading)])
+        return np.array([-portable.sin(self.heading), portable.cos(self.heading)])
 
     def compose(self, forward_m: float, left_m: float, yaw: float) -> Pose:
         """The pose offset by ``forward_m``/``left_m`` in this frame and turned by ``yaw`` (rad)."""

@@ -34,7 +34,7 @@ from sse_cosim.scenario.base import PositiveFloat
 from sse_cosim.sensors.geometry import FULL_TURN
 from sse_cosim.sensors.kinds.base import SensorConfig
 from sse_cosim.sensors.measurement import NoiseKind, draw_noise
-from sse_cosim.sets import Strips
+from sse_cosim.sets import Strips, portable
 from sse_cosim.world.snapshot import Pose
 
 
@@ -63,8 +63,8 @@ class RangeBearing:
             return []
         bounds = np.array([self.range_bound_m, self.bearing_bound_rad])
         v = draw_noise(bounds, self.noise, rng, d.shape[0])  # (k, 2)
-        rho = np.hypot(d[:, 0], d[:, 1]) + v[:, 0]
-        theta = np.arctan2(d[:, 1], d[:, 0]) + v[:, 1]
+        rho = portable.hypot(d[:, 0], d[:, 1]) + v[:, 0]
+        theta = portable.arctan2(d[:, 1], d[:, 0]) + v[:, 1]
         return range_bearing_strips(pose.position, rho, theta, *bounds)
 
 
@@ -81,10 +81,10 @@ def range_bearing_strips(
     r, delta = range_bound, bearing_bound
     rho = np.maximum(np.asarray(rho, dtype=float), 0.0)  # (k,): a range is never negative
     theta = np.asarray(theta, dtype=float)
-    c, s = np.cos(theta), np.sin(theta)
+    c, s = portable.cos(theta), portable.sin(theta)
     normals = np.stack([np.stack([c, s], axis=1), np.stack([-s, c], axis=1)], axis=1)  # (k,2,2)
     lo, hi = np.maximum(rho - r, 0.0) * math.cos(delta), rho + r  # (k,) each
-    values = normals @ np.asarray(origin, dtype=float)  # (k, 2): u_r · s, u_t · s
+    values = portable.matmul(normals, np.asarray(origin, dtype=float))  # (k, 2): u_r · s, u_t · s
     values[:, 0] += 0.5 * (lo + hi)
     radii = np.stack([0.5 * (hi - lo), hi * math.sin(delta)], axis=1)  # (k, 2)
     return [Strips(h, y, w) for h, y, w in zip(normals, values, radii, strict=True)]
