@@ -22,6 +22,37 @@ SETTINGS = settings(
 
 KINDS = ("well", "elongated", "near-parallel", "zero-and-parallel")
 
+EPS = float(np.finfo(np.float64).eps)
+
+
+def sum_rtol(count: int) -> float:
+    """How far apart, relatively, two sums of the same ``count`` nonnegative terms may be when
+    they add them in different orders (numpy's pairwise order, a compiled loop, another NumPy
+    build): each is within (count - 1)·eps/2 of the exact sum, so together within count·eps."""
+    return max(count, 1) * EPS
+
+
+def rank_decision_is_clear(generators: np.ndarray) -> bool:
+    """Whether the 2-D rank test of ``zonotope.full_rank`` and ``kernels.full_rank_2d``
+    (s_min·s_max > e·eps·s_max², from 2×2 minors) is decided by more than the rounding of two
+    implementations of it can move it.
+
+    Each computes s_min·s_max within eps·(p + q)/√2 of the exact value of its arrays (p, q the
+    squared row norms: every cross product a_i b_j - b_i a_j is within eps(|a_i b_j| +
+    |b_i a_j|), with or without FMA, and those bounds have a Euclidean norm <= 2 eps √(pq)),
+    plus e²·eps relative for the sum and the root; the threshold moves far less (e²·eps²).
+    Two of them may thus disagree only within 2 eps (p + q) + e² eps s_min·s_max of it. Fewer
+    than two columns, or all zero, is decided without rounding."""
+    a, b = generators
+    e = generators.shape[1]
+    p, q, r = float(np.dot(a, a)), float(np.dot(b, b)), float(np.dot(a, b))
+    if e < 2 or p + q == 0.0:
+        return True
+    s_max2 = 0.5 * (p + q) + np.sqrt(0.25 * (p - q) ** 2 + r * r)
+    cross = a[:, None] * b - b[:, None] * a
+    s_prod = np.sqrt(0.5 * (cross * cross).sum())
+    return bool(abs(s_prod - e * EPS * s_max2) > 2 * EPS * (p + q) + e * e * EPS * s_prod)
+
 
 def random_generators(rng: np.random.Generator, n: int, e: int, kind: str) -> np.ndarray:
     """(n, e) generators: well-conditioned or one of three ill-conditioned families."""

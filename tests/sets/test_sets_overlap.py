@@ -2,6 +2,7 @@
 many sets."""
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 from sets_strategies import SETTINGS, zonotopes
@@ -63,12 +64,17 @@ def test_zonotopes_disjoint_agrees_with_shapely(z1, z2, spread):
     assert zonotopes_disjoint(z2, z1) == (gap > 0)
 
 
+@pytest.mark.kernels
 @SETTINGS
 @given(zonotopes(2, max_generators=5), zonotopes(2, min_generators=0, max_generators=5),
        st.floats(0.0, 1.5), st.sampled_from([0.0, 1e-9, 1e-6]), st.booleans())
 def test_compiled_disjointness_is_the_reference(z1, z2, spread, tol, parallel):
     """The 2-D kernel gives the NumPy reference's answer, also at the touching distance ``tol``
-    and for parallel (rank-deficient) generators, where both take the LP."""
+    and for parallel (rank-deficient) generators, where both take the LP.
+
+    Exact even at touching: in 2-D the reference is ``Zonotope.contains`` on ⟨0, [G1, -G2]⟩,
+    which runs the same compiled ``full_rank_2d`` and ``contains_2d`` on the same arrays as
+    ``meet_2d`` does (and the same LP where they are rank-deficient)."""
     if parallel:  # every generator along one direction: [G1, -G2] is rank-deficient
         z1 = Zonotope(z1.center, np.outer([0.6, 0.8], np.abs(z1.generators).sum(axis=0)))
         z2 = Zonotope(z2.center, np.outer([0.6, 0.8], np.abs(z2.generators).sum(axis=0)))
