@@ -56,6 +56,7 @@ unit = st.floats(-1.0, 1.0)
 extreme = st.sampled_from([-1.0, 1.0])
 
 
+@pytest.mark.kernels
 @settings(SETTINGS, max_examples=600)
 @given(
     origin=st.tuples(st.floats(-300, 300), st.floats(-300, 300)),
@@ -79,6 +80,7 @@ def test_range_strips_hold_the_truth(origin, rho, theta, r, delta_deg, noise):
     assert strips.contains(truth, tol=TOL * (1.0 + float(np.abs(s).max()) + rho))
 
 
+@pytest.mark.kernels
 def test_range_strips_are_tight():
     """The ring sector's extreme points lie on the strips' edges (r = 0.5 m, δ = 10°)."""
     r, delta, rho_m = 0.5, math.radians(10.0), 20.0
@@ -89,6 +91,7 @@ def test_range_strips_are_tight():
     assert hi[1] == pytest.approx((rho_m + r) * math.sin(delta)) and lo[1] == -hi[1]
 
 
+@pytest.mark.kernels
 @pytest.mark.parametrize("noise", ["uniform", "worst-case"])
 def test_range_measurements_hold_the_truth_and_repeat_with_the_seed(noise):
     lidar = RangeBearing(30.0, 0.3, math.radians(3.0), noise)
@@ -102,6 +105,7 @@ def test_range_measurements_hold_the_truth_and_repeat_with_the_seed(noise):
     assert lidar.measure(pose, np.zeros((0, 2)), rng) == []
 
 
+@pytest.mark.kernels
 def test_a_range_sensor_sees_all_around_but_not_behind_the_truck():
     """On a unit beside the road: the pedestrian behind it (west) is seen, the one hidden by
     the parked truck is not, and one beyond its reach is not."""
