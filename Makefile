@@ -35,10 +35,15 @@ $(BENCHSTAMP): pyproject.toml $(LOCK) | $(BIN)/python
 	touch $@ $(STAMP)
 
 # The browser tests drive Debian's chromium (playwright never downloads a browser).
+# The second pytest runs the compiled kernels against their NumPy references again with
+# NumPy's AVX-512 code (SIMD sin, cos, arctan2 that may differ from libm in the last bit) and
+# numba's host CPU features switched off, as on a machine with neither (the `kernels` marker;
+# about 20 s, a minute the first time while numba compiles for the generic CPU).
 test: $(DEVSTAMP)
 	command -v chromium >/dev/null || (apt-get update && apt-get install -y chromium chromium-driver)
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q
+	NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR" NUMBA_CPU_NAME=generic $(BIN)/python -m pytest -q -m kernels
 
 bench: $(BENCHSTAMP)
 	$(BIN)/sse-cosim bench --out results/
