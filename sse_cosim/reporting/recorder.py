@@ -12,15 +12,23 @@ sender detected by the step of its newest message to that vehicle, lies in some 
 some refined region of that vehicle. The true ids the recorder reads from the observations
 serve these checks only.
 
+Checks stay independent of what they check: the recorder recomputes from what it writes. A
+set's position set (:class:`PositionSet`) is computed here from its state estimate's own
+arrays and the scenario's estimator settings, never taken from the estimator's memo
+(``MotionModel.position``), and the containment test reads the very arrays that go into
+``sets.jsonl`` (:func:`zonotope_2d_contains`, written here, not the sets library's).
+
 The recorder only reads :class:`~sse_cosim.pipeline.result.StepResult`; writing files is
 :mod:`sse_cosim.reporting.outputs`'s job.
 """
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from itertools import pairwise
 from typing import TYPE_CHECKING, Any
 
@@ -42,6 +50,115 @@ REFINED = "refined"  # a known pedestrian's zonotope refined with negative infor
 UNOBSERVED = "unobserved"  # walkable ground where an undetected pedestrian may be
 STOPPED_SPEED_MPS = 0.1  # the bus counts as stopped below this actual speed
 UNACCOUNTED = "unaccounted"  # a pedestrian in no refined region and not in the unobserved area
+CONTAINMENT_TOL_M = 1e-7  # slack of a set's containment check (m)
+FLAT_SINE = 0.5  # a set whose generators are all within 30° of each other counts as flat
+STATE_DIMS = {"position": 2, "constant-velocity": 4}  # state model -> state dimension
+
+
+HalfSpace = tuple[float, float, float]  # (d_x, d_y, b): the points x with |d·(x − c)| <= b
+
+
+@dataclass(frozen=True, eq=False)
+class PositionSet:
+    """A pedestrian's position set as the recorder writes it (a line of ``sets.jsonl``) and
+    checks it: ⟨center, generators⟩, ``center`` (2,), ``generators`` (2, e), read-only. The
+    line and the containment check read these same arrays."""
+
+    center: np.ndarray
+    generators: np.ndarray
+
+    @classmethod
+    def of(cls, estimate: Zonotope, jitter: float) -> PositionSet:
+        """The position set of a state estimate (its own arrays; :func:`position_arrays`)."""
+        center, generators = position_arrays(estimate.center, estimate.generators, jitter)
+        center.setflags(write=False)
+        generators.setflags(write=False)
+        return cls(center, generators)
+
+    @cached_property
+    def halfspaces(self) -> list[HalfSpace]:
+        """The set's half-spaces about its center, widened by :data:`CONTAINMENT_TOL_M`."""
+        return zonotope_2d_halfspaces(self.generators, CONTAINMENT_TOL_M)
+
+    def contains(self, point: np.ndarray) -> bool:
+        """Whether ``point`` (2,) lies in the set, to :data:`CONTAINMENT_TOL_M`."""
+        return _within(self.center, self.halfspaces, point)
+
+    def line(self) -> dict[str, list[Any]]:
+        """``{"center": 2 floats, "generators": 2 rows of e floats}`` (``sets.jsonl``)."""
+        return {"center": self.center.tolist(), "generators": self.generators.tolist()}
+
+    @cached_property
+    def zonotope(self) -> Zonotope:
+        """The same arrays as a :class:`Zonotope` (its area, plots, the replay)."""
+        return Zonotope.unchecked(self.center, self.generators)
+
+    def area(self) -> float:
+        """The set's area (m²)."""
+        return self.zonotope.volume()
+
+
+def position_arrays(center: np.ndarray, generators: np.ndarray,
+                    jitter: float) -> tuple[np.ndarray, np.ndarray]:
+    """The position set C Z ⊕ box(jitter) of a state set Z = ⟨c, G⟩, c (n,), G (n, e): the
+    estimator's documented claim (:mod:`sse_cosim.estimation.motion`), computed from Z's arrays.
+
+    C = [I 0] (2, n) picks the position rows, which come first in every state model (a
+    constant-velocity state has its velocity rows after them): C Z = ⟨c[:2], G[:2]⟩, exactly,
+    with no product. Returns ⟨C c, [C G, jitter I]⟩, shapes (2,), (2, e + 2), or ⟨C c, C G⟩,
+    (2,), (2, e), without jitter. A zero is written as 0.0 whatever its sign (``+ 0.0``): the
+    sign of a zero is no part of the set, and a product may give either.
+    """
+    position_center = center[:2] + 0.0
+    if jitter == 0.0:
+        return position_center, generators[:2] + 0.0
+    box = np.eye(2) * jitter
+    return position_center, np.concatenate([generators[:2], box], axis=1) + 0.0
+
+
+def zonotope_2d_halfspaces(generators: np.ndarray, tol: float) -> list[HalfSpace]:
+    """Half-spaces whose intersection is the 2-D zonotope ⟨c, G⟩, G (2, e), widened by ``tol``
+    (m): (d, Σ_i |d·g_i| + tol) for unit directions d.
+
+    The directions: the normal of every nonzero generator (a 2-D zonotope's facet normals:
+    exact for a set whose generators span the plane). A flat set (the sine between every two
+    generator directions below :data:`FLAT_SINE`), whose facets alone bound its length only to
+    tol over the sine of half its spread, is also bounded along its generators; a point (no
+    nonzero generator) along the axes (|x − c|∞ <= tol). Python floats, each operation rounded
+    as IEEE 754 prescribes: the same on every machine, and no square underflows (each
+    generator is scaled by its largest entry first).
+    """
+    columns = [(a, b) for a, b in zip(*generators.tolist(), strict=True) if a or b]
+    if not columns:
+        return [(1.0, 0.0, tol), (0.0, 1.0, tol)]
+    units = [_unit(a, b) for a, b in columns]
+    directions = [(-uy, ux) for ux, uy in units]
+    if not any(abs(ux * vy - uy * vx) >= FLAT_SINE
+               for i, (ux, uy) in enumerate(units) for vx, vy in units[i + 1:]):
+        directions += units  # a flat set
+    return [(dx, dy, sum(abs(dx * a + dy * b) for a, b in columns) + tol)
+            for dx, dy in directions]
+
+
+def zonotope_2d_contains(center: np.ndarray, generators: np.ndarray, point: np.ndarray,
+                         tol: float) -> bool:
+    """Whether ``point`` (2,) lies in the 2-D zonotope ⟨c, G⟩, ``center`` (2,), ``generators``
+    (2, e), up to ``tol`` (m): in every half-space of :func:`zonotope_2d_halfspaces`."""
+    return _within(center, zonotope_2d_halfspaces(generators, tol), point)
+
+
+def _within(center: np.ndarray, halfspaces: list[HalfSpace], point: np.ndarray) -> bool:
+    """Whether ``point`` (2,) lies in every half-space about ``center`` (2,)."""
+    x, y = float(point[0]) - float(center[0]), float(point[1]) - float(center[1])
+    return all(abs(dx * x + dy * y) <= bound for dx, dy, bound in halfspaces)
+
+
+def _unit(a: float, b: float) -> tuple[float, float]:
+    """(a, b) != 0 scaled to length 1 (by its largest entry first: no square underflows)."""
+    scale = max(abs(a), abs(b))
+    a, b = a / scale, b / scale
+    length = math.sqrt(a * a + b * b)
+    return a / length, b / length
 
 
 @dataclass(frozen=True)
@@ -112,7 +229,7 @@ class _LocalSet:
 
     node: str
     pedestrian: str
-    position: Zonotope
+    position: PositionSet
     detected: bool
 
 
@@ -138,11 +255,15 @@ class RunRecorder:
     flag_steps: Counter = field(default_factory=Counter)  # "<sensor or node>: <flag>" -> steps
     faults: FaultLog = field(init=False)
     anonymous: bool = field(init=False)  # sets of anonymous tracks: checked over all sets
+    jitter: float = field(init=False)  # the estimator's position jitter (m), its claim's box
+    state_dim: int = field(init=False)  # the estimator's state dimension (position rows first)
     first_seen: dict[str, dict[str, int]] = field(default_factory=dict)  # node -> pid -> step
 
     def __post_init__(self) -> None:
         self.faults = FaultLog(self.scenario)
         self.anonymous = self.scenario.estimator.association == "anonymous"
+        self.jitter = self.scenario.estimator.position_jitter_m
+        self.state_dim = STATE_DIMS[self.scenario.estimator.state_model]
 
     def __call__(self, result: StepResult) -> None:
         t = round(result.snapshot.time, 6)
@@ -153,7 +274,7 @@ class RunRecorder:
                             for pid, xy in truths.items()]
         local = self._check_local_sets(t, result, truths)
         if self.replay is not None:
-            self.replay.add(result, [(s.node, s.pedestrian, s.position, s.detected)
+            self.replay.add(result, [(s.node, s.pedestrian, s.position.zonotope, s.detected)
                                      for s in local])
         for ego in result.vehicles.values():
             self._vehicle_step(t, result, ego, truths, local)
@@ -179,10 +300,10 @@ class RunRecorder:
         if self.anonymous:
             fused, regions = self._check_anonymous(t, result, ego, truths, checks)
         else:
-            fused, regions = self._check_labelled(t, result, ego, truths, checks)
+            fused, regions = self._check_labelled(t, ego, truths, checks)
         for key, position in fused.items():
-            self._note_fusion(t, key, position, result, ego)
-        row["fused_area"] = _total(z.volume() for z in fused.values())
+            self._note_fusion(t, key, position, ego)
+        row["fused_area"] = _total(z.area() for z in fused.values())
         row["fused_contains_truth"] = _all(c.fused for c in checks.values())
         row["possible_area"] = _total(r.area for r in regions.values())
         row["possible_contains_truth"] = _all(c.refined for c in checks.values())
@@ -208,16 +329,17 @@ class RunRecorder:
         wanted = shared_fusion_now + self._wants_scene(t)
         if not (moments or wanted):
             return
-        frame = _frame(t, result, ego, local_sets, fused, truths)
+        frame = _frame(t, result, ego, local_sets,
+                       {key: z.zonotope for key, z in fused.items()}, truths)
         self.scenes += [frame] * wanted
         self.key_moments.frames.update(dict.fromkeys(moments, frame))
 
-    def _check_labelled(self, t: float, result: StepResult, ego: EgoStep,
-                        truths: dict[str, np.ndarray], checks: dict[str, _PedestrianCheck]
-                        ) -> tuple[dict[str, Zonotope], dict[str, shapely.Geometry]]:
+    def _check_labelled(self, t: float, ego: EgoStep, truths: dict[str, np.ndarray],
+                        checks: dict[str, _PedestrianCheck]
+                        ) -> tuple[dict[str, PositionSet], dict[str, shapely.Geometry]]:
         """Each pedestrian in its own fused set and refined region; those of the pedestrians in
         the scene (position sets) by id."""
-        fused = {pid: result.model.position(ego.estimate.fused[pid])
+        fused = {pid: self._position(ego.estimate.fused[pid])
                  for pid in truths if pid in ego.estimate.fused}
         for pid, position in fused.items():
             checks[pid].fused = self._check(t, FUSED, pid, [position], truths[pid])
@@ -229,10 +351,10 @@ class RunRecorder:
 
     def _check_anonymous(self, t: float, result: StepResult, ego: EgoStep,
                          truths: dict[str, np.ndarray], checks: dict[str, _PedestrianCheck]
-                         ) -> tuple[dict[str, Zonotope], dict[str, shapely.Geometry]]:
+                         ) -> tuple[dict[str, PositionSet], dict[str, shapely.Geometry]]:
         """Each pedestrian the vehicle knows of (module docstring) in some fused set and some
         refined region; every fused set (position sets) and refined region, by fused key."""
-        fused = {key: result.model.position(z) for key, z in ego.estimate.fused.items()}
+        fused = {key: self._position(z) for key, z in ego.estimate.fused.items()}
         known = self._detected_by(ego.vehicle, result.step)
         for sender, age in ego.shared.ages.items():
             known |= self._detected_by(sender, result.step - age)
@@ -261,17 +383,26 @@ class RunRecorder:
         local: list[_LocalSet] = []
         for node, tracks in result.tracks.items():
             if self.anonymous:
-                mine = [_LocalSet(node, key, result.model.position(track.estimate),
-                                  track.detected) for key, track in tracks.items()]
+                mine = [_LocalSet(node, key, self._position(track.estimate), track.detected)
+                        for key, track in tracks.items()]
                 for pid in sorted(self._detected_by(node, result.step) & truths.keys()):
                     self._check(t, node, pid, [s.position for s in mine], truths[pid])
                 local += mine
                 continue
             for pid in (pid for pid in truths if pid in tracks):
-                position = result.model.position(tracks[pid].estimate)
+                position = self._position(tracks[pid].estimate)
                 self._check(t, node, pid, [position], truths[pid])
                 local.append(_LocalSet(node, pid, position, tracks[pid].detected))
         return local
+
+    def _position(self, estimate: Zonotope) -> PositionSet:
+        """The position set of a state estimate that the recorder writes and checks, from the
+        estimate's arrays and the scenario's estimator settings (the estimator's claim C Z ⊕
+        box(jitter), not its memo)."""
+        if estimate.dim != self.state_dim:
+            raise ValueError(f"a {estimate.dim}-D estimate; the state model "
+                             f"{self.scenario.estimator.state_model!r} has {self.state_dim}")
+        return PositionSet.of(estimate, self.jitter)
 
     def _record_local_sets(self, t: float, row: dict[str, Any], result: StepResult,
                            vehicle: str, local: list[_LocalSet]) -> list[tuple[str, Zonotope]]:
@@ -284,21 +415,20 @@ class RunRecorder:
         for node in result.tracks:
             mine = [s for s in local if s.node == node]
             row[f"{node}_detected"] = any(s.detected for s in mine)
-            row[f"{node}_area"] = _total(s.position.volume() for s in mine)
-        return [(s.node, s.position) for s in local]
+            row[f"{node}_area"] = _total(s.position.area() for s in mine)
+        return [(s.node, s.position.zonotope) for s in local]
 
-    def _note_fusion(self, t: float, pid: str, position: Zonotope, result: StepResult,
-                     ego: EgoStep) -> None:
+    def _note_fusion(self, t: float, pid: str, position: PositionSet, ego: EgoStep) -> None:
         """Record a fused set (``pid``: its pedestrian, or its fused key): its line, whether it
         outgrew its smallest input, the first fusion and the first fusion of shared sets."""
         inputs = ego.estimate.inputs[pid]
-        smallest = min(result.model.position(z).volume() for z in inputs.values())
-        if position.volume() > smallest * (1 + 1e-9) + 1e-12:
+        smallest = min(self._position(z).area() for z in inputs.values())
+        if position.area() > smallest * (1 + 1e-9) + 1e-12:
             self.fusion_larger_than_input += 1
         self._set_line(t, ego.vehicle, FUSED, pid, "fused", position)
         if FUSED not in self.first_detection:
             self.first_detection[FUSED] = self._moment(t, ego)
-        self._note_shared_fusion(t, pid, position, result, ego)
+        self._note_shared_fusion(t, pid, position, ego)
 
     def _flags(self, row: dict[str, Any], result: StepResult, ego: EgoStep) -> None:
         """Flag columns (per sensor: left out; per node: excluded/conflict); the fault
@@ -316,11 +446,11 @@ class RunRecorder:
             self.faults.update(result.step, round(result.snapshot.time, 6), result.faults,
                                flags.sensors, flags.nodes, ego.shared.ages)
 
-    def _check(self, t: float, node: str, pid: str, positions: list[Zonotope],
+    def _check(self, t: float, node: str, pid: str, positions: list[PositionSet],
                truth: np.ndarray) -> bool:
         """Whether pedestrian ``pid``'s true position (shape (2,)) lies in one of
-        ``positions``."""
-        inside = any(bool(z.contains(truth, tol=1e-7)) for z in positions)
+        ``positions`` (their written arrays)."""
+        inside = any(z.contains(truth) for z in positions)
         return self._violation_unless(inside, t, node, pid, truth)
 
     def _check_region(self, t: float, pid: str, regions: list[shapely.Geometry],
@@ -353,16 +483,16 @@ class RunRecorder:
         self.regions.append(RegionRecord(t, UNOBSERVED, None, ego.unobserved, ego.vehicle))
 
     def _set_line(self, t: float, vehicle: str, node: str, track: str, kind: str,
-                  position: Zonotope) -> None:
+                  position: PositionSet) -> None:
         self.set_lines.append({"t": t, "vehicle": vehicle, "node": node, "track": track,
-                               "kind": kind, **position.to_json()})
+                               "kind": kind, **position.line()})
 
     @staticmethod
     def _moment(t: float, ego: EgoStep) -> dict[str, float]:
         return {"t": t, "bus_distance_to_crossing_m": ego.picture.distance_to_crossing}
 
-    def _note_shared_fusion(self, t: float, person_id: str, fused_position: Zonotope,
-                            result: StepResult, ego: EgoStep) -> None:
+    def _note_shared_fusion(self, t: float, person_id: str, fused_position: PositionSet,
+                            ego: EgoStep) -> None:
         """Record the first step at which the bus fuses two or more sets (paper Fig. 7)."""
         if self.first_shared_fusion is not None:
             return
@@ -371,8 +501,8 @@ class RunRecorder:
             return
         self.first_shared_fusion = {
             "t": t,
-            "input_areas_m2": {n: result.model.position(z).volume() for n, z in inputs.items()},
-            "fused_area_m2": fused_position.volume(),
+            "input_areas_m2": {n: self._position(z).area() for n, z in inputs.items()},
+            "fused_area_m2": fused_position.area(),
         }
 
     def _wants_scene(self, t: float) -> bool:
