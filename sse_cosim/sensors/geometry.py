@@ -5,7 +5,7 @@ oriented rectangles, handled in bulk as :class:`Boxes` (arrays, no shapely) by t
 vectorized tests (:func:`in_sector`, :func:`line_of_sight`); shapely is only used to build the
 sector and shadow polygons when a caller asks for regions. The per-step work (sight masks, box
 distances, shadow points, sector rings) runs compiled (:mod:`sse_cosim.sensors.kernels`), each
-kernel bit for bit with its NumPy reference here (``*_reference``).
+kernel checked within a stated rounding bound against its NumPy reference here (``*_reference``).
 
 Boundary semantics (closed sets): a segment that merely touches a footprint is blocked, a
 point on the sector's edge or arc is inside the sector. Polygons are inscribed approximations

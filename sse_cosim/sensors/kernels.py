@@ -3,8 +3,10 @@
 :func:`shadow_points` is :func:`~sse_cosim.sensors.geometry.shadow_points_reference` (the NumPy
 reference, whose docstring carries the construction) on plain float64 arrays, with its
 arithmetic: the same products and sums in the same order (the reference's two-term
-``einsum`` sums start from zero), the same ``arctan2``/``cos``/``sin``, so the points are equal
-bit for bit (``tests/sensors/test_sensors_geometry.py``).
+``einsum`` sums start from zero), the same ``arctan2``/``cos``/``sin`` where NumPy's are
+libm's, so the points agree to within the rounding of the angles, the bound
+``tests/sensors/test_sensors_geometry.py`` checks (NumPy's SIMD trigonometry may differ from
+libm's in the last bit).
 
 numba caches the machine code in ``__pycache__`` next to this file (ignored by git).
 """

@@ -1,12 +1,14 @@
 """Compiled kernels (numba, cached on disk) of the hot set operations, on plain float64 arrays.
 
 Each kernel has a NumPy reference beside its public function, and ``tests/sets`` checks one
-against the other on random and degenerate inputs:
+against the other on random and degenerate inputs, within a stated rounding bound (the
+same operations in the same order agree bit for bit, but NumPy's BLAS and SIMD code may
+round otherwise on another CPU, so no test asks for more):
 
 - :func:`area_2d` for :func:`~sse_cosim.sets.zonotope.generator_volume` in 2-D
-  (reference ``generator_volume_reference``): bit for bit, as it sums in numpy's order;
+  (reference ``generator_volume_reference``): it sums in numpy's order;
 - :func:`girard_reduce` for the ``girard`` order reduction (reference
-  ``girard_reduce_reference`` in :mod:`~sse_cosim.sets.reduction`): bit for bit;
+  ``girard_reduce_reference`` in :mod:`~sse_cosim.sets.reduction`): the same scores;
 - :func:`full_rank_2d` for :func:`~sse_cosim.sets.zonotope.full_rank` in 2-D and
   :func:`contains_2d` for :meth:`~sse_cosim.sets.zonotope.Zonotope.contains` of a full-rank
   2-D zonotope (reference ``contains_2d_reference``): the same sums in numpy's order, the
@@ -15,9 +17,9 @@ against the other on random and degenerate inputs:
 - :func:`meet_2d` for ``overlap.zonotopes_disjoint`` in 2-D (reference
   ``zonotopes_disjoint_reference``): the same kernels on the same arrays, so the same answer;
 - :func:`volume_gain_2d` for ``gains.volume_gain_vertices`` (reference
-  ``volume_gain_vertices_reference``): bit for bit;
+  ``volume_gain_vertices_reference``): the same candidates and choice, up to ties;
 - :func:`vertices_2d` for :meth:`~sse_cosim.sets.zonotope.Zonotope.vertices` (reference
-  ``vertices_2d_reference``): bit for bit;
+  ``vertices_2d_reference``): the same sort, merges and sums;
 - :func:`frobenius_gain` and :func:`intersect_frobenius` for the Frobenius gain of
   Proposition 1 (reference ``frobenius_gain_reference`` in :mod:`~sse_cosim.sets.gains`): the
   same least-squares minimizer by Householder QR instead of LAPACK's SVD solver, so equal up

@@ -11,6 +11,8 @@ import pytest
 
 from sse_cosim.sets import portable
 
+pytestmark = pytest.mark.kernels
+
 EPS = np.finfo(np.float64).eps
 PACKAGE = Path(portable.__file__).resolve().parents[1]
 
