@@ -26,7 +26,6 @@ SUMO would silently hold the vehicle to the limit.
 
 from __future__ import annotations
 
-import heapq
 import itertools
 import math
 from collections.abc import Sequence
@@ -47,6 +46,7 @@ from sse_cosim.scenario.model import (
     present,
 )
 from sse_cosim.world.roadmap import PARKED_VCLASS, RoadMap
+from sse_cosim.world.walkgraph import WalkGraph
 
 VEHICLE_VCLASS = "passenger"  # the class of the scenario's other moving vehicles
 PARKED_DURATION_S = 1.0e7  # "for ever": a parked vehicle's stop outlasts any run
@@ -95,8 +95,10 @@ def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: st
     for vid, vehicle in present(scenario.vehicles).items():
         _check_vehicle(net, vid, vehicle, source)
     dt = scenario.simulation.step_length_s
-    plans = {pid: _plan_pedestrian(net, pid, ped, roadmap, dt, source)
-             for pid, ped in present(scenario.pedestrians).items()}
+    pedestrians = present(scenario.pedestrians)
+    graph = WalkGraph(net) if pedestrians else None  # built once, for every pedestrian
+    plans = {pid: _plan_pedestrian(net, pid, ped, roadmap, dt, source, graph)
+             for pid, ped in pedestrians.items()}
     return ActorPlan(automated_lanes=lanes, pedestrians=plans)
 
 
@@ -317,14 +319,18 @@ def _sidewalk(net: sumolib.net.Net, edge_id: str, field: str, source: str) -> No
 
 
 def _plan_pedestrian(net: sumolib.net.Net, pid: str, ped: Pedestrian, roadmap: RoadMap,
-                     dt: float, source: str) -> PedestrianPlan:
+                     dt: float, source: str, graph: WalkGraph | None = None) -> PedestrianPlan:
+    """Check a pedestrian and plan its walk over the network's pedestrian ``graph`` (built
+    here unless given); every crossing of the network is a candidate, whatever part of the
+    network ``roadmap`` holds."""
     field = f"pedestrians.{pid}"
     _sidewalk(net, ped.start_edge, f"{field}.start_edge", source)
     _sidewalk(net, ped.end_edge, f"{field}.end_edge", source)
     _check_pos(net, ped.start_edge, ped.start_pos_m, f"{field}.start_pos_m", source)
     _check_pos(net, ped.end_edge, ped.end_pos_m, f"{field}.end_pos_m", source)
+    graph = WalkGraph(net) if graph is None else graph
     path = pedestrian_path(net, (ped.start_edge, ped.start_pos_m), (ped.end_edge, ped.end_pos_m),
-                           [c.id for c in roadmap.crossings])
+                           graph.crossings, graph)
     if path is None:
         raise UserError(source, f"{field}.end_edge", f"no walk from {ped.start_edge!r} over "
                         f"a zebra to {ped.end_edge!r}",
@@ -353,28 +359,56 @@ def _plan_pedestrian(net: sumolib.net.Net, pid: str, ped: Pedestrian, roadmap: R
 
 
 def pedestrian_path(net: sumolib.net.Net, start: tuple[str, float], end: tuple[str, float],
-                    crossings: Sequence[str]) -> list[str] | None:
+                    crossings: Sequence[str],
+                    graph: WalkGraph | None = None) -> list[str] | None:
     """The shortest walk from ``start`` to ``end`` (each an edge and a position on it, m) over
     exactly one of ``crossings``, as a list of edges; None if there is none.
 
-    Walking areas and crossings can be walked either way, so the pedestrian graph is
-    undirected; for each crossing and direction, the walk reaches one of the crossing's
+    Walking areas and crossings can be walked either way, so the pedestrian graph
+    (:class:`~sse_cosim.world.walkgraph.WalkGraph`, built once; pass ``graph`` to share it)
+    is undirected; for each crossing and direction, the walk reaches one of the crossing's
     walking areas without using any crossing, crosses, and goes on from the other one.
+
+    Two searches price every crossing: one from the start gives the first half of each walk
+    (the walk a search from the start to that walking area finds), one towards the end the
+    cost of each second half. Only the crossings whose walk can still be the shortest (the
+    position on the end edge left open) get a search for their second half; of those, the
+    first in ``crossings`` order whose walk is shortest wins, as when every crossing is tried.
     """
-    graph = _pedestrian_graph(net)
-    best: tuple[float, list[str]] | None = None
+    graph = WalkGraph(net) if graph is None else graph
+    avoid = frozenset(crossings)
+    firsts = graph.tree(start[0], avoid)
+    to_end = graph.costs_to(end[0], avoid)
+    end_length = graph.length[end[0]]
+    priced: list[tuple[float, str, str, str]] = []  # (lower bound of the walk, crossing, a, b)
     for crossing in crossings:
-        ends = [e for e in graph.get(crossing, {})
-                if net.getEdge(e).getFunction() == "walkingarea"]
+        ends = graph.walking_areas_of(crossing)
         for a, b in ((ends[0], ends[1]), (ends[1], ends[0])) if len(ends) == 2 else ():
-            first = _shortest(graph, start[0], a, avoid=crossings)
-            second = _shortest(graph, b, end[0], avoid=crossings)
-            if first is None or second is None:
+            if a not in firsts or b not in to_end:
                 continue
-            path = [*first[1], crossing, *second[1]]
-            length = walk_length(net, path, start[1], end[1])
-            if best is None or length < best[0]:
-                best = (length, path)
+            first = firsts[a]
+            forward = _walks_forward(net, first)
+            head = graph.length[start[0]] - start[1] if forward else start[1]
+            low = (head + sum(graph.length[e] for e in first[1:]) + graph.length[crossing]
+                   + graph.length[b] + to_end[b] - end_length)
+            priced.append((low, crossing, a, b))
+    if not priced:
+        return None
+    # the walk's length lies between its lower bound and that plus the end edge's length
+    # (where on it the walk ends); the tolerance covers the backward search's rounding
+    bound = min(low for low, *_ in priced) + end_length
+    bound += 1e-6 * (1.0 + abs(bound))
+    best: tuple[float, list[str]] | None = None
+    for low, crossing, a, b in priced:
+        if low > bound:
+            continue
+        second = graph.shortest(b, end[0], avoid)
+        if second is None:
+            continue
+        path = [*firsts[a], crossing, *second[1]]
+        length = walk_length(net, path, start[1], end[1])
+        if best is None or length < best[0]:
+            best = (length, path)
     return None if best is None else best[1]
 
 
@@ -428,35 +462,6 @@ def _walks_forward(net: sumolib.net.Net, path: Sequence[str]) -> bool:
     """Whether the walk leaves ``path[0]`` at its end (along the edge's direction)."""
     nxt = net.getEdge(path[1])
     return net.getEdge(path[0]).getToNode() in (nxt.getFromNode(), nxt.getToNode())
-
-
-def _pedestrian_graph(net: sumolib.net.Net) -> dict[str, dict[str, float]]:
-    graph: dict[str, dict[str, float]] = {}
-    for edge in net.getEdges(withInternal=True):
-        for to_edge, conns in edge.getOutgoing().items():
-            if any(c.getFromLane().allows("pedestrian") and c.getToLane().allows("pedestrian")
-                   for c in conns):
-                a, b = edge.getID(), to_edge.getID()
-                graph.setdefault(a, {})[b] = to_edge.getLength()
-                graph.setdefault(b, {})[a] = edge.getLength()
-    return graph
-
-
-def _shortest(graph: dict[str, dict[str, float]], start: str, goal: str,
-              avoid: Sequence[str]) -> tuple[float, list[str]] | None:
-    queue: list[tuple[float, str, list[str]]] = [(0.0, start, [start])]
-    seen: set[str] = set()
-    while queue:
-        cost, node, path = heapq.heappop(queue)
-        if node == goal:
-            return cost, path
-        if node in seen:
-            continue
-        seen.add(node)
-        for nxt, weight in graph.get(node, {}).items():
-            if nxt not in avoid and nxt not in seen:
-                heapq.heappush(queue, (cost + weight, nxt, [*path, nxt]))
-    return None
 
 
 # --- XML ----------------------------------------------------------------------------------
