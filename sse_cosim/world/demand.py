@@ -26,6 +26,7 @@ SUMO would silently hold the vehicle to the limit.
 
 from __future__ import annotations
 
+import difflib
 import itertools
 import math
 from collections.abc import Sequence
@@ -45,7 +46,13 @@ from sse_cosim.scenario.model import (
     Vehicle,
     present,
 )
-from sse_cosim.world.roadmap import PARKED_VCLASS, RoadMap
+from sse_cosim.world.roadmap import (
+    DRIVING_VCLASSES,
+    PARKED_VCLASS,
+    RoadMap,
+    is_driving_lane,
+    is_sidewalk,
+)
 from sse_cosim.world.walkgraph import WalkGraph
 
 VEHICLE_VCLASS = "passenger"  # the class of the scenario's other moving vehicles
@@ -55,6 +62,7 @@ ROUTE_FILE_NAME = "scenario.rou.xml"
 # configuration sets it, so that standing_point knows where a walk begins)
 STRIPE_WIDTH_M = 0.64
 _EPS = 1e-9  # tolerance of time comparisons in steps
+NEAREST_EDGES = 5  # how many edge ids a mistyped one is answered with
 
 
 @dataclass(frozen=True)
@@ -99,6 +107,10 @@ def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: st
     graph = WalkGraph(net) if pedestrians else None  # built once, for every pedestrian
     plans = {pid: _plan_pedestrian(net, pid, ped, roadmap, dt, source, graph)
              for pid, ped in pedestrians.items()}
+    routes = {vid: av.route_edges for vid, av in present(scenario.automated).items()}
+    for pid, ped_plan in plans.items():
+        _check_crossing_on_route(net, pid, scenario.pedestrians[pid], ped_plan.path, routes,
+                                 source)
     return ActorPlan(automated_lanes=lanes, pedestrians=plans)
 
 
@@ -198,10 +210,17 @@ def _read_net(net_path: Path) -> sumolib.net.Net:
 
 def _edge(net: sumolib.net.Net, edge_id: str, field: str, source: str) -> sumolib.net.edge.Edge:
     if not net.hasEdge(edge_id) or net.getEdge(edge_id).getFunction():
-        names = ", ".join(sorted(e.getID() for e in net.getEdges(withInternal=False)))
         raise UserError(source, field, f"the network has no edge {edge_id!r}",
-                        f"use one of {names}")
+                        f"use an edge id of the network; the nearest: "
+                        f"{', '.join(nearest_edges(net, edge_id))}")
     return net.getEdge(edge_id)
+
+
+def nearest_edges(net: sumolib.net.Net, edge_id: str, count: int = NEAREST_EDGES) -> list[str]:
+    """The ``count`` normal edge ids of ``net`` that read most like ``edge_id`` (difflib's
+    similarity), most alike first; a typo's answer stays short on a town's network."""
+    names = sorted(e.getID() for e in net.getEdges(withInternal=False))
+    return difflib.get_close_matches(edge_id, names, n=count, cutoff=0.0)
 
 
 def _check_pos(net: sumolib.net.Net, edge_id: str, pos: float, field: str, source: str) -> None:
@@ -272,10 +291,24 @@ def _check_automated(net: sumolib.net.Net, vid: str, av: AutomatedVehicle, sourc
     """Check an automated vehicle's route, speed and departure; its departure lane."""
     field, vclass = f"automated.{vid}", av.vehicle_class
     _check_route(net, av.route_edges, vclass, f"{field}.route_edges", source)
+    _check_driving_lanes(net, av.route_edges, f"{field}.route_edges", source)
     _check_speed(net, av.route_edges, vclass, av.nominal_speed_mps,
                  f"{field}.nominal_speed_mps", source)
     _check_pos(net, av.route_edges[0], av.depart_pos_m, f"{field}.depart_pos_m", source)
     return _vehicle_lane(net, av.route_edges[0], vclass, f"{field}.route_edges", source)
+
+
+def _check_driving_lanes(net: sumolib.net.Net, edges: list[str], field: str,
+                         source: str) -> None:
+    """Each edge of an automated vehicle's route has a driving lane (buses or cars, no
+    pedestrians), which the road map follows; a road shared with walkers has none."""
+    for edge_id in edges:
+        if not any(is_driving_lane(lane) for lane in net.getEdge(edge_id).getLanes()):
+            raise UserError(source, field, f"edge {edge_id!r} has no driving lane (a lane for "
+                            "buses or cars that pedestrians do not walk on): pedestrians walk "
+                            "on its road lanes, as on a network without sidewalks",
+                            "give the roads sidewalks: convert the network with netconvert "
+                            "--sidewalks.guess (docs/own_network.md)")
 
 
 def _check_vehicle(net: sumolib.net.Net, vid: str, vehicle: Vehicle, source: str) -> None:
@@ -295,11 +328,13 @@ def _check_parked(net: sumolib.net.Net, vid: str, parked: ParkedVehicle, source:
         raise UserError(source, f"{field}.lane_index", f"edge {parked.edge!r} has no lane "
                         f"{parked.lane_index} (lanes 0..{len(lanes) - 1})",
                         "use the parking strip's index (1)")
-    if not lanes[parked.lane_index].allows(PARKED_VCLASS):
-        strips = [ln.getIndex() for ln in lanes if ln.allows(PARKED_VCLASS)]
+    lane = lanes[parked.lane_index]
+    drivers = [c for c in DRIVING_VCLASSES if lane.allows(c)]
+    if drivers or not lane.allows(PARKED_VCLASS):
+        why = (f": it admits vClass {' and '.join(drivers)}, and a vehicle parked on a lane "
+               "that cars or buses drive on blocks them" if drivers else "")
         raise UserError(source, f"{field}.lane_index", f"lane {parked.lane_index} of edge "
-                        f"{parked.edge!r} is not a parking strip",
-                        f"park it on lane {', '.join(map(str, strips)) or '-'}")
+                        f"{parked.edge!r} is not a parking strip{why}", _parking_fix(edge, field))
     length = lanes[parked.lane_index].getLength()
     if not parked.length_m <= parked.end_pos_m <= length:
         raise UserError(source, f"{field}.end_pos_m", f"{parked.end_pos_m:g} m does not fit a "
@@ -308,13 +343,26 @@ def _check_parked(net: sumolib.net.Net, vid: str, parked: ParkedVehicle, source:
                         f"use a front position between {parked.length_m:g} and {length:g}")
 
 
+def _parking_fix(edge: sumolib.net.edge.Edge, field: str) -> str:
+    """Where to park instead: the edge's parking strips (lanes that admit vClass custom1 and
+    no bus or car), or how to add one."""
+    strips = [str(ln.getIndex()) for ln in edge.getLanes() if ln.allows(PARKED_VCLASS)
+              and not any(ln.allows(c) for c in DRIVING_VCLASSES)]
+    if strips:
+        return f"park it on lane {', '.join(strips)} (a parking strip)"
+    return (f"edge {edge.getID()!r} has no parking strip: park it on an edge that has one, or "
+            f'add one (a lane with allow="{PARKED_VCLASS}" beside the driving lanes, '
+            f"docs/own_network.md), or set {field}.present = false")
+
+
 # --- the pedestrian -----------------------------------------------------------------------
 
 
 def _sidewalk(net: sumolib.net.Net, edge_id: str, field: str, source: str) -> None:
     edge = _edge(net, edge_id, field, source)
-    if not any(lane.allows("pedestrian") for lane in edge.getLanes()):
-        raise UserError(source, field, f"edge {edge_id!r} has no sidewalk",
+    if not any(is_sidewalk(lane) for lane in edge.getLanes()):
+        raise UserError(source, field, f"edge {edge_id!r} has no sidewalk (a lane for "
+                        "pedestrians and no bus or car)",
                         "start and end the pedestrian on an edge with a sidewalk")
 
 
@@ -356,6 +404,29 @@ def _plan_pedestrian(net: sumolib.net.Net, pid: str, ped: Pedestrian, roadmap: R
         walk_start_s=round(start_step * dt, 6),
         crossing_time_s=wanted,
     )
+
+
+def _check_crossing_on_route(net: sumolib.net.Net, pid: str, ped: Pedestrian,
+                             path: Sequence[str], routes: dict[str, list[str]],
+                             source: str) -> None:
+    """The zebra of a pedestrian's walk crosses an automated vehicle's route (it steps onto it
+    at ``steps_onto_crossing_s``, the moment the scenario is about); none to check without
+    automated vehicles. A crossing crosses the edges SUMO lists as its ``crossingEdges``."""
+    if not routes:
+        return
+    crossing = next(e for e in path if net.getEdge(e).getFunction() == "crossing")
+    crossed = [e.getID() for e in net.getEdge(crossing).getCrossingEdges()]
+    if any(e in route for route in routes.values() for e in crossed):
+        return
+    field = f"pedestrians.{pid}"
+    names = ", ".join(f"automated.{vid}" for vid in routes)
+    raise UserError(source, f"{field}.end_edge", f"the walk from {ped.start_edge!r} to "
+                    f"{ped.end_edge!r} crosses at {crossing} (over "
+                    f"{', '.join(map(repr, crossed))}), on no automated vehicle's route "
+                    f"({names}), so it never steps onto the route at "
+                    f"{field}.steps_onto_crossing_s",
+                    "end the pedestrian on the far side of the route's street (an edge whose "
+                    "sidewalk is across the route from its start)")
 
 
 def pedestrian_path(net: sumolib.net.Net, start: tuple[str, float], end: tuple[str, float],

@@ -105,10 +105,11 @@ class RoadMap:
         """Length (m) of a vehicle route: its edges and the junction passages between them."""
         total = 0.0
         for i, edge_id in enumerate(edge_ids):
+            self.edge_driving_lane(edge_id)  # refuses an edge no vehicle drives on
             total += self.edge_lengths[edge_id]
             if i + 1 < len(edge_ids):
                 via = self.junction_lanes.get((edge_id, edge_ids[i + 1]))
-                total += 0.0 if via is None else self.internal_lanes[via].length
+                total += 0.0 if via is None else self._internal(via).length
         return total
 
     def route_line(self, edge_ids: Sequence[str]) -> shapely.LineString:
@@ -121,7 +122,7 @@ class RoadMap:
             if i + 1 < len(edge_ids):
                 via = self.junction_lanes.get((edge_id, edge_ids[i + 1]))
                 if via is not None:
-                    points.append(self.internal_lanes[via].shape)
+                    points.append(self._internal(via).shape)
         coords = np.concatenate(points)
         keep = np.r_[True, np.any(np.abs(np.diff(coords, axis=0)) > 1e-9, axis=1)]
         return shapely.LineString(coords[keep])
@@ -130,8 +131,23 @@ class RoadMap:
         """The driving lane of a normal edge (the innermost one if it has several)."""
         lanes = [g for g in self.driving_lanes.values() if g.edge_id == edge_id]
         if not lanes:
-            raise KeyError(edge_id)
+            raise self._missing(edge_id, "normal edge" if edge_id in self.edge_lengths
+                                else "edge", "a driving lane")
         return max(lanes, key=lambda g: g.index)
+
+    def _internal(self, lane_id: str) -> LaneGeometry:
+        """The internal driving lane ``lane_id`` (a junction passage of a route)."""
+        if lane_id not in self.internal_lanes:
+            raise self._missing(lane_id, "junction lane", "a driving lane's passage")
+        return self.internal_lanes[lane_id]
+
+    def _missing(self, item: str, kind: str, what: str) -> UserError:
+        """The one-line refusal of a lookup the network cannot answer: ``item`` (a ``kind``)
+        is no ``what`` here (a road pedestrians walk on has no driving lane)."""
+        return UserError(str(self.net_path), f"{kind} {item!r}", f"is not {what} of this "
+                         "network (buses and cars drive on lanes that no pedestrian walks on)",
+                         "give the roads sidewalks (netconvert --sidewalks.guess, "
+                         "docs/own_network.md) and route vehicles over driving lanes")
 
 
 def require_pedestrian_ground(roadmap: RoadMap, source: str, field: str) -> None:
