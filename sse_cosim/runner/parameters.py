@@ -8,7 +8,12 @@ from pathlib import Path
 from typing import Any
 
 from sse_cosim.errors import UserError
-from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
+from sse_cosim.scenario.loader import (
+    RELATIVE_PATH_FIELDS,
+    apply_overrides,
+    load_scenario_data,
+    validate_scenario,
+)
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.scenario.paths import expand_pattern, is_pattern, top_level_positions
 
@@ -37,7 +42,21 @@ def parse_assignment(text: str, option: str) -> tuple[str, Any]:
     if parts is None:
         raise UserError("command line", option, f"{text!r} is not PATH=VALUE",
                         "write it like sensors.bus_front.range_m=40")
-    return parts[0], parse_value(parts[1])
+    return parts[0], command_line_path(parts[0], parse_value(parts[1]))
+
+
+def command_line_path(path: str, value: Any) -> Any:
+    """``value`` of field ``path``; a path field's (``network.net_file``, ``sources_dir``,
+    ``route_files``) made absolute against the working directory, where the user typed it
+    (in a scenario file such a path is relative to that file), so that the message of a
+    missing file and ``scenario.json`` show where it was looked for."""
+    if tuple(path.split(".")) not in RELATIVE_PATH_FIELDS:
+        return value
+    if isinstance(value, str):
+        return str(Path(value).resolve())
+    if isinstance(value, list):
+        return [str(Path(v).resolve()) if isinstance(v, str) else v for v in value]
+    return value
 
 
 def load_with_assignments(

@@ -37,18 +37,21 @@ class Network(StrictModel):
     sources_dir: str | None = Field(
         None,
         description="Folder of the plain-XML network sources, relative to the file that sets it "
-        f"(built by netconvert; unset and without net_file: {DEFAULT_SOURCES_DIR!r}).",
+        "(to the working directory with --set); built by netconvert; unset and without "
+        f"net_file: {DEFAULT_SOURCES_DIR!r}.",
     )
     net_file: str | None = Field(
         None,
-        description="An existing SUMO network (.net.xml), relative to the file that sets it; "
+        description="An existing SUMO network (.net.xml), relative to the file that sets it (to "
+        "the working directory with --set); "
         "instead of sources_dir (docs/own_network.md).",
     )
     route_files: list[str] = Field(
         default_factory=list,
         description="SUMO route files (.rou.xml) loaded next to the scenario's own, relative to "
-        "the file that sets them: their vehicles occlude, their persons are pedestrians; every "
-        "type must set speedDev=\"0\" and sigma=\"0\".",
+        "the file that sets them (to the working directory with --set): their vehicles "
+        "occlude, their persons are pedestrians; every type must set speedDev=\"0\" and "
+        "sigma=\"0\".",
     )
 
     @model_validator(mode="before")

@@ -77,7 +77,8 @@ def check_net_file(path: Path, source: str) -> Path:
     """``path`` if it is a readable SUMO network (its root element is ``<net>``; gzipped when
     its name ends with ``.gz``, as osmWebWizard writes it)."""
     fix = ("point network.net_file at a SUMO .net.xml (relative to the scenario file that sets "
-           "it), or use network.sources_dir for plain-XML sources")
+           "it; given with --set, relative to the working directory), or use "
+           "network.sources_dir for plain-XML sources")
     if not path.is_file():
         raise UserError(source, "network.net_file", f"{str(path)!r} not found", fix)
     try:

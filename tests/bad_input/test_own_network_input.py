@@ -11,7 +11,9 @@ SUMO starts.
 
 from __future__ import annotations
 
+import os
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -191,3 +193,35 @@ def test_the_scene_itself_is_accepted(town, tmp_path):
     path = scenario(tmp_path, town)
     plan = plan_actors(load_scenario(path), town, load_roadmap(town), str(path))
     assert ":1_c2" in plan.pedestrians["pedestrian"].path
+
+
+def test_a_set_path_is_relative_to_the_working_directory(town, tmp_path):
+    """``--set network.net_file=...`` is read where the user types it, as the message says:
+    the scenario lives in ``sub/``, the net in the working directory."""
+    sub = tmp_path / "sub"
+    sub.mkdir()
+    path = scenario(sub, town, "[pedestrians.pedestrian]\npresent = false\n")
+    (tmp_path / "here.net.xml").write_bytes(town.read_bytes())
+    from sse_cosim.runner.parameters import load_with_assignments
+
+    cwd = Path.cwd()
+    try:
+        os.chdir(tmp_path)
+        resolved, _ = load_with_assignments(path, ["network.net_file=here.net.xml"])
+    finally:
+        os.chdir(cwd)
+    assert resolved.network.net_file == str(tmp_path / "here.net.xml")
+    # a missing one: the user's own command, one line naming --set, the field, the path
+    # looked for (in the working directory, not beside the scenario) and the rule
+    proc = subprocess.run([sys.executable, "-m", "sse_cosim", "run", str(path), "--out",
+                           str(tmp_path / "out"), "--set", "network.net_file=gone.net.xml"],
+                          capture_output=True, text=True, cwd=tmp_path, check=False,
+                          timeout=300)
+    assert proc.returncode == EXIT_BAD_INPUT, proc.stderr
+    assert "Traceback" not in proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr
+    for word in ("sse-cosim: --set network.net_file=gone.net.xml: network.net_file: "
+                 f"'{tmp_path / 'gone.net.xml'}' not found",
+                 "given with --set, relative to the working directory"):
+        assert word in lines[0], (word, lines[0])
