@@ -95,7 +95,7 @@ class ActorPlan:
 def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: str) -> ActorPlan:
     """Check the actors against the network (UserError naming ``source`` and the field) and plan
     the automated vehicles' lanes and the pedestrians' walks."""
-    net = _read_net(net_path)
+    net = _read_net(net_path) if roadmap.net is None else roadmap.net  # read once
     lanes = {vid: _check_automated(net, vid, av, source)
              for vid, av in present(scenario.automated).items()}
     for vid, parked in present(scenario.parked).items():

@@ -15,19 +15,28 @@ from __future__ import annotations
 
 import functools
 import os
+import sys
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
 import sumolib
 
 from sse_cosim.errors import UserError
+from sse_cosim.world.extent import SceneExtent, scene_extent
+
+if TYPE_CHECKING:
+    from sse_cosim.scenario.model import Scenario
 
 PARKED_VCLASS = "custom1"
 """vClass of parked vehicles; the parking strips admit it only."""
 DRIVING_VCLASSES = ("passenger", "bus")
+PROGRESS_ABOVE_BYTES = 5_000_000
+"""A network file larger than this (a town) reports its reading on stderr."""
 
 
 @dataclass(frozen=True)
@@ -66,7 +75,9 @@ class RoadMap:
     strips, ``sidewalk_lanes`` the sidewalks, ``internal_lanes`` the vehicle lanes inside
     junctions (ids start with ':'). ``edge_lengths`` covers the normal edges;
     ``junction_lanes[(from_edge, to_edge)]`` is the internal driving lane that leads through the
-    junction between two consecutive edges of a vehicle route.
+    junction between two consecutive edges of a vehicle route. A road map built for a
+    scene (:func:`load_scene_roadmap`) holds the edges near it only
+    (:mod:`sse_cosim.world.extent`), and ``net`` the network it was read from.
     """
 
     net_path: Path
@@ -78,6 +89,7 @@ class RoadMap:
     internal_lanes: dict[str, LaneGeometry]
     edge_lengths: dict[str, float]
     junction_lanes: dict[tuple[str, str], str] = field(default_factory=dict)
+    net: sumolib.net.Net | None = field(default=None, compare=False, repr=False)
 
     @functools.cached_property
     def crossing_area(self) -> shapely.Geometry:
@@ -209,12 +221,55 @@ def is_driving_lane(lane: sumolib.net.lane.Lane) -> bool:
     return not lane.allows("pedestrian") and any(lane.allows(c) for c in DRIVING_VCLASSES)
 
 
+def load_scene_roadmap(net_path: str | os.PathLike[str], scenario: Scenario) -> RoadMap:
+    """The RoadMap of the part of the ``.net.xml`` at ``net_path`` that ``scenario``'s scene
+    can use (:mod:`sse_cosim.world.extent`; the whole network with route files), holding the
+    network read (``net``) for the demand planner. Read anew on every call; on a large
+    network (a town) each stage says on stderr what it did and how long it took."""
+    path = Path(net_path).resolve()
+    if not path.is_file():
+        raise UserError(str(path), "", "network file not found",
+                        "build it with sse_cosim.world.network.build_network")
+    progress = _Progress(path)
+    net = _read_net(path, progress)
+    return _build(path, net, scene_extent(scenario, net), progress)
+
+
+class _Progress:
+    """Progress lines on stderr while a large network loads (quiet for small ones)."""
+
+    def __init__(self, path: Path) -> None:
+        self.size = path.stat().st_size
+        self.on = self.size > PROGRESS_ABOVE_BYTES
+        self.start = time.perf_counter()
+
+    def say(self, text: str) -> None:
+        if self.on:
+            print(f"{text} ({time.perf_counter() - self.start:.1f} s)", file=sys.stderr,
+                  flush=True)
+
+
 def _read(path: Path) -> RoadMap:
+    progress = _Progress(path)
+    return _build(path, _read_net(path, progress), None, progress)
+
+
+def _read_net(path: Path, progress: _Progress) -> sumolib.net.Net:
+    if progress.on:
+        print(f"reading network {path.name} ({progress.size / 1e6:.0f} MB)...",
+              file=sys.stderr, flush=True)
     try:
         net = sumolib.net.readNet(str(path), withInternal=True, withPedestrianConnections=True)
     except Exception as exc:  # sumolib raises plain exceptions on broken XML
         raise UserError(str(path), "", f"cannot read the network ({exc})",
                         "rebuild it from the sources (delete sumo_net/build/)") from None
+    progress.say(f"network: {len(net.getEdges(withInternal=False))} edges read")
+    return net
+
+
+def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
+           progress: _Progress) -> RoadMap:
+    """The RoadMap of ``net``'s edges in ``extent`` (all of them without one)."""
     driving: dict[str, LaneGeometry] = {}
     parking: dict[str, LaneGeometry] = {}
     sidewalk: dict[str, LaneGeometry] = {}
@@ -223,6 +278,8 @@ def _read(path: Path) -> RoadMap:
     crossings: list[Crossing] = []
     walking_areas: list[shapely.Polygon] = []
     for edge in net.getEdges(withInternal=True):
+        if extent is not None and not extent.holds(edge):
+            continue
         function = edge.getFunction()
         if function == "crossing":
             crossings.append(_crossing(edge))
@@ -249,6 +306,8 @@ def _read(path: Path) -> RoadMap:
                 driving[lane.getID()] = _geometry(lane)
     sidewalk_union = shapely.union_all(
         [g.polygon() for g in sidewalk.values()] + walking_areas)
+    progress.say(f"road map: {len(edge_lengths)} edges "
+                 f"{'in all' if extent is None else 'near the scene'}")
     return RoadMap(
         net_path=path,
         crossings=tuple(sorted(crossings, key=lambda c: c.id)),
@@ -258,7 +317,8 @@ def _read(path: Path) -> RoadMap:
         sidewalk_lanes=sidewalk,
         internal_lanes=internal,
         edge_lengths=edge_lengths,
-        junction_lanes=_junction_lanes(net),
+        junction_lanes=_junction_lanes(net, extent),
+        net=None if extent is None else net,
     )
 
 
@@ -269,10 +329,14 @@ def _crossing(edge: sumolib.net.edge.Edge) -> Crossing:
     return Crossing(edge.getID(), edge.getFromNode().getID(), area)
 
 
-def _junction_lanes(net: sumolib.net.Net) -> dict[tuple[str, str], str]:
-    """For consecutive normal edges: the internal driving lane between them (the innermost)."""
+def _junction_lanes(net: sumolib.net.Net,
+                    extent: SceneExtent | None = None) -> dict[tuple[str, str], str]:
+    """For consecutive normal edges (of ``extent``): the internal driving lane between them
+    (the innermost)."""
     result: dict[tuple[str, str], str] = {}
     for edge in net.getEdges(withInternal=False):
+        if extent is not None and not extent.holds(edge):
+            continue
         for to_edge, conns in edge.getOutgoing().items():
             if to_edge.getFunction():  # walking areas and crossings
                 continue

@@ -76,7 +76,7 @@ from sse_cosim.scenario.model import AutomatedVehicle, Scenario, present
 from sse_cosim.world import demand
 from sse_cosim.world.demand import ActorPlan, PedestrianPlan
 from sse_cosim.world.network import NetworkBuildError, scenario_net_path
-from sse_cosim.world.roadmap import RoadMap, load_roadmap, require_pedestrian_ground
+from sse_cosim.world.roadmap import RoadMap, load_scene_roadmap, require_pedestrian_ground
 from sse_cosim.world.route_files import RouteFiles, read_route_files
 from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
 
@@ -175,7 +175,7 @@ class SumoWorld:
         except NetworkBuildError as exc:
             raise SimulationError(self.scenario_name, "the road network does not build: "
                                   f"{exc.one_line()}") from exc
-        self._roadmap = load_roadmap(self._net_path)
+        self._roadmap = load_scene_roadmap(self._net_path, self.scenario)
         if present(self.scenario.pedestrians):
             require_pedestrian_ground(
                 self._roadmap, self.scenario_name,

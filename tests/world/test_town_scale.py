@@ -1,0 +1,134 @@
+"""The road map and the pedestrian's walk scale with the scene, not with the network: on a
+network within the scene's reach the scene's road map is the whole network's, edge for edge
+and bit for bit; on the whole converted town of Bad Hersfeld (../shared/networks) the road
+map holds the edges near the bus's route only and the walk is planned in a few searches."""
+
+from __future__ import annotations
+
+import gzip
+import shutil
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+import shapely
+from world_helpers import REPO, scenario
+
+from sse_cosim.scenario.loader import load_scenario
+from sse_cosim.world import demand
+from sse_cosim.world.extent import scene_extent
+from sse_cosim.world.network import build_network, netconvert_path
+from sse_cosim.world.roadmap import RoadMap, load_roadmap, load_scene_roadmap
+from sse_cosim.world.walkgraph import WalkGraph
+
+TOWN_OSM = REPO.parent / "shared" / "networks" / "bad_hersfeld.osm.xml.gz"
+# docs/own_network.md, section 3, with the street names kept
+CONVERT = ["--sidewalks.guess", "--crossings.guess", "--junctions.join", "--geometry.remove",
+           "--no-turnarounds", "--output.street-names"]
+# Goethestrasse: three edges of the bus's route, a zebra at node 338474020 on it
+ROUTE = ["30610462#1", "30610462#2", "30610462#3"]
+TOWN_SCENE = {
+    "network.net_file": None, "automated.bus.route_edges": ROUTE,
+    "automated.bus.depart_pos_m": 30.0, "automated.bus.nominal_speed_mps": 8.33,
+    "parked.truck.present": False,
+    "pedestrians.pedestrian.start_edge": "30610462#2",
+    "pedestrians.pedestrian.start_pos_m": 56.0,
+    "pedestrians.pedestrian.end_edge": "-30610462#2",
+    "pedestrians.pedestrian.end_pos_m": 5.0,
+    "pedestrians.pedestrian.steps_onto_crossing_s": 12.0,
+    "simulation.duration_s": 30.0,
+}
+
+
+def _same(a: RoadMap, b: RoadMap) -> None:
+    assert [c.id for c in a.crossings] == [c.id for c in b.crossings]
+    assert all(x.area.wkb == y.area.wkb for x, y in zip(a.crossings, b.crossings, strict=True))
+    assert shapely.to_wkb(a.sidewalks) == shapely.to_wkb(b.sidewalks)
+    for group in ("driving_lanes", "parking_lanes", "sidewalk_lanes", "internal_lanes"):
+        left, right = getattr(a, group), getattr(b, group)
+        assert list(left) == list(right)
+        assert all((left[k].shape == right[k].shape).all() for k in left)
+    assert a.edge_lengths == b.edge_lengths
+    assert a.junction_lanes == b.junction_lanes
+
+
+@pytest.mark.parametrize("name", ["s1_pedestrian", "s3_pedestrian", "s2_no_pedestrian"])
+def test_the_paper_roads_scene_map_is_the_whole_map(name: str) -> None:
+    sc = scenario(name)
+    net_path = build_network(REPO / "sumo_net")
+    scene = load_scene_roadmap(net_path, sc)
+    assert scene.net is not None
+    _same(scene, load_roadmap(net_path))
+
+
+def test_the_junctions_scene_map_is_the_whole_map() -> None:
+    sc = load_scenario(REPO / "scenarios" / "junction.toml")
+    net_path = build_network(REPO / "sumo_net" / "junction")
+    _same(load_scene_roadmap(net_path, sc), load_roadmap(net_path))
+
+
+def test_route_files_keep_the_whole_network() -> None:
+    sc = load_scenario(REPO / "tests" / "networks" / "given_net" / "scenario.toml")
+    net_path = REPO / "tests" / "networks" / "given_net" / "road.net.xml"
+    map_ = load_scene_roadmap(net_path, sc)
+    assert scene_extent(sc, map_.net) is None
+    _same(map_, load_roadmap(net_path))
+
+
+def test_a_short_scene_leaves_the_far_end_of_the_road_out() -> None:
+    """A bus on the first edge of the road with two zebras (tests/networks/two_zebras), no
+    pedestrian, a short run and short sensors: the second zebra and the road beyond it stay
+    out of the map, the first edge's lanes are the whole map's."""
+    sc = scenario("s1_no_pedestrian", **{
+        "automated.bus.route_edges": ["WC"], "parked.truck.present": False,
+        "simulation.duration_s": 1.0, "controller.interest_radius_m": 1.0,
+        "sensors.bus_front.range_m": 1.0, "sensors.bus_near.range_m": 1.0})
+    net_path = build_network(REPO / "tests" / "networks" / "two_zebras")
+    whole, scene = load_roadmap(net_path), load_scene_roadmap(net_path, sc)
+    assert set(scene.edge_lengths) == {"WC", "CW", "CD", "DC"} < set(whole.edge_lengths)
+    assert [c.id for c in scene.crossings] == [":C_c0"]
+    assert scene.route_length(["WC"]) == whole.route_length(["WC"])
+    assert (scene.edge_driving_lane("WC").shape == whole.edge_driving_lane("WC").shape).all()
+
+
+@pytest.fixture(scope="module")
+def town(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The whole town, converted with docs/own_network.md's command (about 5 s)."""
+    if not TOWN_OSM.is_file():
+        pytest.skip(f"{TOWN_OSM} is not there")
+    folder = tmp_path_factory.mktemp("town")
+    osm = folder / "town.osm"
+    with gzip.open(TOWN_OSM) as src, osm.open("wb") as dst:
+        shutil.copyfileobj(src, dst)
+    out = folder / "town.net.xml"
+    result = subprocess.run([str(netconvert_path()), "--osm-files", str(osm), *CONVERT,
+                             "--output-file", str(out)], capture_output=True, text=True,
+                            timeout=300, check=False)
+    assert result.returncode == 0 and out.is_file(), result.stderr[-2000:]
+    return out
+
+
+@pytest.mark.sumo
+def test_the_whole_town_maps_the_scene_and_plans_the_walk_in_seconds(
+        town: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    sc = scenario("s3_pedestrian", **{**TOWN_SCENE, "network.net_file": str(town)})
+    began = time.perf_counter()
+    roadmap = load_scene_roadmap(town, sc)
+    assert roadmap.net is not None
+    graph = WalkGraph(roadmap.net)
+    assert len(graph.crossings) > 2500  # every crossing of the town is a candidate
+    ped = sc.pedestrians["pedestrian"]
+    path = demand.pedestrian_path(roadmap.net, (ped.start_edge, ped.start_pos_m),
+                                  (ped.end_edge, ped.end_pos_m), graph.crossings, graph)
+    elapsed = time.perf_counter() - began
+    assert path == ["30610462#2", ":338474020_w0", ":338474020_c0", ":338474020_w1",
+                    "-30610462#2"]
+    assert graph.searches <= 4
+    assert elapsed < 20.0  # generous: about 5 s here, most of it sumolib reading 26 MB
+    # the map holds the scene's surroundings, not the town's 10,000 edges
+    assert 20 < len(roadmap.edge_lengths) < 1000
+    assert ":338474020_c0" in roadmap.crossing_ids
+    assert roadmap.route_length(ROUTE) > 190.0
+    err = capsys.readouterr().err
+    assert "reading network town.net.xml" in err and "edges near the scene" in err
