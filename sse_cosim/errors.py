@@ -35,3 +35,21 @@ class SimulationError(Exception):
         self.scenario = scenario
         self.problem = problem
         super().__init__(" ".join(f"{scenario}: simulation failed: {problem}".split()))
+
+
+class AssumptionBroken(SimulationError):
+    """The simulated world broke an assumption of the estimator that the scenario does not
+    list in ``breaks_assumptions``: the run stops before any set is checked against a truth
+    that left the model. Rendered as one line naming the scenario, what happened and the fix.
+    """
+
+    def __init__(self, scenario: str, assumption: str, problem: str, fix: str) -> None:
+        super().__init__(scenario, problem)
+        self.assumption = assumption
+        self.fix = fix
+        line = (f"{scenario}: the simulated world broke an assumption of the estimator "
+                f"({assumption}): {problem} -- {fix}")
+        self.args = (" ".join(line.split()),)
+
+    def __str__(self) -> str:
+        return str(self.args[0])

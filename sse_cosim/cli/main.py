@@ -7,11 +7,12 @@ import sys
 import click
 
 from sse_cosim import __version__
-from sse_cosim.errors import SimulationError, UserError
+from sse_cosim.errors import AssumptionBroken, SimulationError, UserError
 
 EXIT_BAD_INPUT = 2
 EXIT_SIMULATION_FAILED = 3
 EXIT_TARGET_MISSED = 4
+EXIT_ASSUMPTION_BROKEN = 5  # the simulated world broke an assumption of the estimator
 
 
 class TargetsMissed(click.ClickException):
@@ -61,6 +62,9 @@ def main(argv: list[str] | None = None) -> None:
     except UserError as exc:
         click.echo(f"sse-cosim: {exc.one_line()}", err=True)
         sys.exit(EXIT_BAD_INPUT)
+    except AssumptionBroken as exc:
+        click.echo(f"sse-cosim: {exc}", err=True)
+        sys.exit(EXIT_ASSUMPTION_BROKEN)
     except SimulationError as exc:
         click.echo(f"sse-cosim: {exc}", err=True)
         sys.exit(EXIT_SIMULATION_FAILED)

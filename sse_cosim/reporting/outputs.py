@@ -74,11 +74,13 @@ def read_outcome(key: str, folder: Path) -> TaskOutcome | None:
 def write_run(
     out_dir: Path, scenario: Scenario, recorder: RunRecorder, roadmap: RoadMap, source: str,
     route_completed: Mapping[str, bool], plots_wanted: bool = True, summary_only: bool = False,
+    extra: Mapping[str, Any] | None = None,
 ) -> dict:
     """Write every output of one run into ``out_dir``; returns the summary.
 
     ``route_completed``: per automated vehicle whether it reached the end of its route (the
-    simulation's outcome, which the recorder cannot see).
+    simulation's outcome, which the recorder cannot see); ``extra``: more of the simulation's
+    outcome for the summary (``assumption_breaks`` of a study that runs on with them).
     """
     out_dir.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out_dir / SCENARIO, {"source": source, **_portable(scenario, out_dir)})
@@ -102,7 +104,7 @@ def write_run(
             write_text_atomic(out_dir / replay.REPLAY, page)
         if plots_wanted and not trace.empty:
             _write_plots(out_dir, scenario, recorder, trace, roadmap)
-    summary = {"source": source, **recorder.summary(route_completed)}
+    summary = {"source": source, **recorder.summary(route_completed), **(extra or {})}
     write_json_atomic(out_dir / SUMMARY, summary)
     return summary
 

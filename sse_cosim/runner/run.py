@@ -44,5 +44,6 @@ def run_scenario(
     recorder = RunRecorder(scenario, tuple(scene_times),
                            replay=None if summary_only else ReplayLog())
     info = simulate(scenario, out_dir / "sumo", source, recorder)
+    extra = None if info.motion_breaks is None else {"assumption_breaks": info.motion_breaks}
     return write_run(out_dir, scenario, recorder, info.roadmap, source, info.arrived, plots,
-                     summary_only)
+                     summary_only, extra)

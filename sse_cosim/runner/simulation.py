@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -42,17 +43,20 @@ from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors import specs_from_scenario
 from sse_cosim.sensors.faults import FaultInjector
 from sse_cosim.world.roadmap import RoadMap
-from sse_cosim.world.sumo import SumoWorld
+from sse_cosim.world.sumo import MOTION_ASSUMPTION, SumoWorld
 
 
 @dataclass(frozen=True)
 class SimulationInfo:
     """How a run ended (steps recorded; per automated vehicle whether it reached the end of
-    its route) and the road map it ran on."""
+    its route), the road map it ran on, and -- for a study that lists ``pedestrian_speed`` in
+    ``breaks_assumptions`` -- the pedestrians' motion breaks it ran on with
+    (``SumoWorld.motion_breaks``; None otherwise)."""
 
     steps: int
     arrived: dict[str, bool]
     roadmap: RoadMap
+    motion_breaks: dict[str, Any] | None = None
 
 
 def simulate(
@@ -64,6 +68,9 @@ def simulate(
     SUMO's own files (routes, logs) go to ``run_dir``. Every automated vehicle having left
     the network (end of its route) or the scenario's duration ends the run. ``timer``
     (optional) is charged the time of each stage of each step (:mod:`sse_cosim.runner.timing`).
+    A pedestrian that leaves the estimator's motion model stops the run
+    (:class:`~sse_cosim.errors.AssumptionBroken`, raised by ``world.step()`` before the step's
+    snapshot reaches the estimator) unless the scenario lists ``pedestrian_speed``.
     """
     timer = timer or NoTimer()
     dt = scenario.simulation.step_length_s
@@ -85,7 +92,8 @@ def simulate(
             timer.start()
             snapshot = world.step()
             if world.all_arrived:  # (world.step() refuses a vehicle missing at its departure)
-                return SimulationInfo(step, _arrivals(world, automated), world.roadmap)
+                return SimulationInfo(step, _arrivals(world, automated), world.roadmap,
+                                      _motion_breaks(world))
             active = [ego for ego in egos if ego.id in snapshot.vehicles]
             timer.lap("sumo")
             observations = sense(snapshot, specs, faults, noise_rng)
@@ -105,7 +113,13 @@ def simulate(
             on_step(StepResult(step, snapshot, observations, tracks, model, faults.statuses(),
                                results))
             timer.end_step("output")
-        return SimulationInfo(n_steps, _arrivals(world, automated), world.roadmap)
+        return SimulationInfo(n_steps, _arrivals(world, automated), world.roadmap,
+                              _motion_breaks(world))
+
+
+def _motion_breaks(world: SumoWorld) -> dict[str, Any] | None:
+    declared = MOTION_ASSUMPTION in world.scenario.breaks_assumptions
+    return world.motion_breaks if declared else None
 
 
 def _arrivals(world: SumoWorld, automated: list[str]) -> dict[str, bool]:

@@ -2,8 +2,9 @@
 
 After each task it answers the task's key on its reply channel (the original stdout; anything
 else written to stdout, such as SUMO's messages, goes to stderr). A task's folder ends with
-``summary.json`` (success) or ``error.json`` (a one-line reason). After a failed task the
-worker exits, so the next task starts in a fresh process with nothing left behind.
+``summary.json`` (success) or ``error.json`` (a one-line reason; a run the world's check
+stopped also names the broken assumption, ``"assumption": "pedestrian_speed"``). After a
+failed task the worker exits, so the next task starts in a fresh process with nothing left behind.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import TextIO
 
-from sse_cosim.errors import SimulationError, UserError
+from sse_cosim.errors import AssumptionBroken, SimulationError, UserError
 from sse_cosim.files import write_json_atomic
 from sse_cosim.reporting.outputs import ERROR
 from sse_cosim.runner.run import run_scenario_file
@@ -30,7 +31,10 @@ def run_task(task: RunTask) -> int:
             scene_times=task.scene_times, plots=task.plots, summary_only=task.summary_only,
         )
     except (UserError, SimulationError) as exc:
-        write_json_atomic(Path(task.out_dir) / ERROR, {"key": task.key, "error": str(exc)})
+        record = {"key": task.key, "error": str(exc)}
+        if isinstance(exc, AssumptionBroken):  # stopped by the world's check: say which
+            record["assumption"] = exc.assumption
+        write_json_atomic(Path(task.out_dir) / ERROR, record)
         return 2
     except Exception as exc:  # a bug: keep the traceback in the folder, one line for the table
         write_json_atomic(

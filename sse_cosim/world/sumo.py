@@ -70,10 +70,11 @@ from types import TracebackType
 from typing import Any
 from xml.sax.saxutils import quoteattr
 
-from sse_cosim.errors import SimulationError, UserError
+from sse_cosim.errors import AssumptionBroken, SimulationError, UserError
 from sse_cosim.files import write_text_atomic
 from sse_cosim.scenario.model import AutomatedVehicle, Scenario, present
 from sse_cosim.world import demand
+from sse_cosim.world.assumptions import MotionBounds, MotionBreak, PedestrianMotionCheck
 from sse_cosim.world.demand import ActorPlan, PedestrianPlan
 from sse_cosim.world.network import NetworkBuildError, scenario_net_path
 from sse_cosim.world.roadmap import RoadMap, load_scene_roadmap, require_pedestrian_ground
@@ -95,6 +96,9 @@ _PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libs
                 libsumo.VAR_LANE_ID)
 _LIBSUMO_ERRORS: tuple[type[BaseException], ...] = (
     libsumo.TraCIException, libsumo.FatalTraCIError, RuntimeError)
+
+MOTION_ASSUMPTION = "pedestrian_speed"  # what breaks_assumptions lists for a motion break
+KEPT_BREAKS = 5  # the first breaks a study that lists MOTION_ASSUMPTION keeps (all counted)
 
 _open_world: SumoWorld | None = None
 
@@ -157,6 +161,15 @@ class SumoWorld:
         self._collisions: list[Collision] = []
         self._statics: dict[str, tuple[float, float, str]] = {}
         self._person_length: dict[str, float] = {}
+        estimator = scenario.estimator
+        self._motion_declared = MOTION_ASSUMPTION in scenario.breaks_assumptions
+        self._motion = PedestrianMotionCheck(
+            MotionBounds(estimator.max_pedestrian_speed_mps, estimator.position_jitter_m,
+                         self._dt), needed_jitter=not self._motion_declared)
+        self._motion_breaks: list[tuple[MotionBreak, str, str]] = []
+        self._motion_break_count = 0
+        self._person_lanes: dict[str, str] = {}  # each person's lane at the latest snapshot
+        self._previous_lanes: dict[str, str] = {}
 
     # --- context manager ------------------------------------------------------------------
 
@@ -219,7 +232,10 @@ class SumoWorld:
         """Advance SUMO by one step and return the new state.
 
         Raises :class:`UserError` when a vehicle is not on the road at its departure (SUMO
-        found no room to insert it where the scenario places it).
+        found no room to insert it where the scenario places it), and
+        :class:`AssumptionBroken` when a pedestrian's position leaves the estimator's motion
+        model (:meth:`_check_motion`) and the scenario does not list ``pedestrian_speed`` in
+        ``breaks_assumptions``.
         """
         self._require_open()
         try:
@@ -230,7 +246,50 @@ class SumoWorld:
                                   f"SUMO step at t={self._time + self._dt:.2f} s failed: "
                                   f"{_message(exc)}") from exc
         self._check_insertions()
+        self._check_motion(snapshot)
         return snapshot
+
+    def _check_motion(self, snapshot: Snapshot) -> None:
+        """Every pedestrian's true position keeps the estimator's motion model: a path with
+        steps of at most max_pedestrian_speed_mps * step length plus a jitter of at most
+        position_jitter_m (:mod:`sse_cosim.world.assumptions`). A break stops the run, naming
+        the pedestrian, the time, its lanes before and after and the fix -- unless the study
+        lists ``pedestrian_speed``: then it is counted (:attr:`motion_breaks`) and the run goes
+        on."""
+        found = self._motion.step(snapshot.time, {pid: person.position
+                                                  for pid, person in snapshot.persons.items()})
+        for brk in found:
+            before = self._previous_lanes.get(brk.person, "")
+            after = self._person_lanes.get(brk.person, "")
+            if self._motion_declared:
+                self._motion_break_count += 1
+                if len(self._motion_breaks) < KEPT_BREAKS:
+                    self._motion_breaks.append((brk, before, after))
+                continue
+            estimator = self.scenario.estimator
+            raise AssumptionBroken(
+                self.scenario_name, MOTION_ASSUMPTION,
+                f"pedestrian {brk.person!r} at t={brk.time:.2f} s moved {brk.step_m:.3f} m in "
+                f"one step (lane {_lane(before)} -> {_lane(after)}), to {brk.distance_m:.3f} m "
+                f"from every path point the model admits, {brk.beyond_m:.3f} m beyond "
+                f"estimator.position_jitter_m = {estimator.position_jitter_m:g} m (path steps "
+                f"of at most {estimator.max_pedestrian_speed_mps:g} m/s x {self._dt:g} s); "
+                "the run stops "
+                "before the estimator's sets are checked against a truth outside its model",
+                f"raise estimator.position_jitter_m to at least {brk.needed_jitter_m:.3f} m "
+                "(what its walk so far needs), "
+                f"or list '{MOTION_ASSUMPTION}' in breaks_assumptions")
+
+    @property
+    def motion_breaks(self) -> dict[str, Any]:
+        """The motion breaks of a study that lists ``pedestrian_speed``: ``{"count", "first"}``,
+        the first :data:`KEPT_BREAKS` as ``{"pedestrian", "t", "distance_m", "beyond_m",
+        "step_m", "lane_before", "lane_after"}`` (metres rounded to 1 mm)."""
+        return {"count": self._motion_break_count, "first": [
+            {"pedestrian": brk.person, "t": brk.time, "distance_m": round(brk.distance_m, 3),
+             "beyond_m": round(brk.beyond_m, 3), "step_m": round(brk.step_m, 3),
+             "lane_before": before, "lane_after": after}
+            for brk, before, after in self._motion_breaks]}
 
     def set_speed(self, vehicle_id: str, commanded_mps: float, emergency: bool = False) -> None:
         """Command automated vehicle ``vehicle_id``'s speed (m/s); ``emergency`` brakes at its
@@ -451,7 +510,10 @@ class SumoWorld:
             if vid in self._automated:
                 self._automated[vid].distance = float(values[libsumo.VAR_DISTANCE])
         persons: dict[str, PersonState] = {}
+        self._previous_lanes = self._person_lanes
+        self._person_lanes = {}
         for pid, values in libsumo.person.getAllSubscriptionResults().items():
+            self._person_lanes[pid] = str(values[libsumo.VAR_LANE_ID])
             persons[pid] = PersonState(
                 id=pid,
                 position=self._person_position(pid, values),
@@ -494,6 +556,11 @@ def _heading(nav_angle_deg: float) -> float:
     """SUMO's navigational angle (deg, 0 = north, clockwise) as a heading (rad, CCW from east),
     in [-pi, pi)."""
     return math.radians((90.0 - nav_angle_deg + 180.0) % 360.0 - 180.0)
+
+
+def _lane(lane_id: str) -> str:
+    """A person's lane id for a message; a person on no lane waits at its start."""
+    return repr(lane_id) if lane_id else "(none: waiting at its start)"
 
 
 def _message(exc: BaseException) -> str:
