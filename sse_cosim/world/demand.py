@@ -420,13 +420,21 @@ def _check_crossing_on_route(net: sumolib.net.Net, pid: str, ped: Pedestrian,
         return
     field = f"pedestrians.{pid}"
     names = ", ".join(f"automated.{vid}" for vid in routes)
+    on_route = sorted(e.getID() for e in net.getEdges(withInternal=True)
+                      if e.getFunction() == "crossing"
+                      and any(c.getID() in route for route in routes.values()
+                              for c in e.getCrossingEdges()))
+    zebras = ", ".join(on_route[:NEAREST_EDGES]) + (", ..." if len(on_route) > NEAREST_EDGES
+                                                     else "")
+    fix = ("end the pedestrian on the far side of the route's street (an edge whose sidewalk "
+           "is across the route from its start), so that its walk takes a zebra over the "
+           f"route: {zebras}" if on_route else f"the route has no zebra: route {names} over "
+           f"a street with one, or set {field}.present = false")
     raise UserError(source, f"{field}.end_edge", f"the walk from {ped.start_edge!r} to "
                     f"{ped.end_edge!r} crosses at {crossing} (over "
                     f"{', '.join(map(repr, crossed))}), on no automated vehicle's route "
                     f"({names}), so it never steps onto the route at "
-                    f"{field}.steps_onto_crossing_s",
-                    "end the pedestrian on the far side of the route's street (an edge whose "
-                    "sidewalk is across the route from its start)")
+                    f"{field}.steps_onto_crossing_s", fix)
 
 
 def pedestrian_path(net: sumolib.net.Net, start: tuple[str, float], end: tuple[str, float],
