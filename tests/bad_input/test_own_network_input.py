@@ -144,7 +144,8 @@ def test_a_walk_that_misses_the_route(town, tmp_path, capsys):
     refused(run_args(scenario(tmp_path, town, body), tmp_path), capsys,
             "bad.toml: pedestrians.pedestrian.end_edge: the walk from '10#0' to '10#1'",
             "crosses at :1_c1", "over '-11#0', '11#0'", "no automated vehicle's route",
-            "steps_onto_crossing_s", "end the pedestrian on the far side of the route's street")
+            "steps_onto_crossing_s", "end the pedestrian on the far side of the route's street",
+            "so that its walk takes a zebra over the route: :1_c0, :1_c2")
 
 
 def test_a_network_without_sidewalks(bare, tmp_path, capsys):
