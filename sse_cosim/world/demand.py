@@ -303,12 +303,15 @@ def _check_driving_lanes(net: sumolib.net.Net, edges: list[str], field: str,
     """Each edge of an automated vehicle's route has a driving lane (buses or cars, no
     pedestrians), which the road map follows; a road shared with walkers has none."""
     for edge_id in edges:
-        if not any(is_driving_lane(lane) for lane in net.getEdge(edge_id).getLanes()):
-            raise UserError(source, field, f"edge {edge_id!r} has no driving lane (a lane for "
-                            "buses or cars that pedestrians do not walk on): pedestrians walk "
-                            "on its road lanes, as on a network without sidewalks",
-                            "give the roads sidewalks: convert the network with netconvert "
-                            "--sidewalks.guess (docs/own_network.md)")
+        edge = net.getEdge(edge_id)
+        if not any(is_driving_lane(lane) for lane in edge.getLanes()):
+            kind = f" ({edge.getType()})" if edge.getType() else ""
+            raise UserError(source, field, f"edge {edge_id!r}{kind} has no driving lane (a lane "
+                            "for buses or cars that pedestrians do not walk on): pedestrians "
+                            "walk on its road lanes, as on a street without sidewalks",
+                            "route the vehicle over streets with sidewalks; a network without "
+                            "any gets them from netconvert --sidewalks.guess "
+                            "(docs/own_network.md)")
 
 
 def _check_vehicle(net: sumolib.net.Net, vid: str, vehicle: Vehicle, source: str) -> None:

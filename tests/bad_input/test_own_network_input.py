@@ -153,8 +153,9 @@ def test_a_network_without_sidewalks(bare, tmp_path, capsys):
     road lanes) -- a refusal, not a KeyError."""
     body = "[pedestrians.pedestrian]\npresent = false\n"
     refused(run_args(scenario(tmp_path, bare, body), tmp_path), capsys,
-            "bad.toml: automated.bus.route_edges: edge '10#0' has no driving lane",
-            "pedestrians walk on its road lanes", "netconvert --sidewalks.guess")
+            "bad.toml: automated.bus.route_edges: edge '10#0' (highway.residential) has no "
+            "driving lane", "pedestrians walk on its road lanes",
+            "route the vehicle over streets with sidewalks", "netconvert --sidewalks.guess")
 
 
 def test_the_road_map_refuses_a_lookup_it_cannot_answer(bare):
