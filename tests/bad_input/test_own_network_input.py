@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import pytest
@@ -227,3 +228,24 @@ def test_a_set_path_is_relative_to_the_working_directory(town, tmp_path):
                  f"'{tmp_path / 'gone.net.xml'}' not found",
                  "given with --set, relative to the working directory"):
         assert word in lines[0], (word, lines[0])
+
+
+def test_the_documented_parking_strip_is_accepted(town, tmp_path):
+    """docs/own_network.md's patch adds a parking strip to the converted net: the truck the
+    first case refuses stands there, and the bus keeps its route."""
+    text = (ROOT / "docs" / "own_network.md").read_text(encoding="utf-8")
+    start = text.index("  cat > strip.edg.xml")
+    block = textwrap.dedent(text[start:text.index("  ```", start)])
+    (tmp_path / "map.net.xml").write_bytes(town.read_bytes())
+    script = block.replace("netconvert ", f"{netconvert_path()} ", 1)
+    subprocess.run(["bash", "-ec", script], cwd=tmp_path, check=True, capture_output=True,
+                   timeout=120)
+    net = tmp_path / "map_strip.net.xml"
+    body = ('[parked.truck]\npresent = true\nedge = "10#0"\nlane_index = 1\n'
+            "end_pos_m = 60.0\n")
+    path = scenario(tmp_path, net, body)
+    from sse_cosim.scenario.loader import load_scenario
+    from sse_cosim.world.demand import plan_actors
+
+    plan = plan_actors(load_scenario(path), net, load_roadmap(net), str(path))
+    assert plan.automated_lanes["bus"] == 2
