@@ -311,7 +311,7 @@ class PedestrianMotionCheck:
 def _sorted_edges(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The nonzero edges (e, 2) of the closed convex polygon ``vertices`` (n, 2, counter-
     clockwise), their pseudo-angles (e,), and the vertex (2,) the first of them leaves, the
-    edges in counter-clockwise order from the one nearest east."""
+    edges in counter-clockwise order from the first at or after east."""
     if len(vertices) == 1:
         return np.empty((0, 2)), np.empty(0), vertices[0]
     edges = np.empty_like(vertices)
@@ -323,7 +323,9 @@ def _sorted_edges(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndar
     if len(edges) == 0:
         return edges, np.empty(0), vertices[0]
     keys = pseudo_angle(edges)
-    first = int(np.argmin(keys))
+    # the wrap of the angles: the edge after the largest drop (not argmin, which may pick the
+    # second of two collinear edges and shift the sum by the first)
+    first = int(np.argmax(np.roll(keys, 1) - keys))
     order = np.r_[first:len(edges), 0:first]
     return edges[order], keys[order], starts[first]
 

@@ -39,6 +39,23 @@ def test_minkowski_sum_of_squares_is_a_square():
     assert intersect(square, square + 3.0) is None
 
 
+def test_minkowski_sum_is_the_hull_of_the_vertex_sums_also_with_collinear_edges():
+    """Random convex polygons with every edge split at its middle (collinear edges, also
+    across the east direction where the merge starts) against shapely's hull of all sums."""
+    import shapely
+
+    rng = np.random.default_rng(3)
+    for _ in range(100):
+        hull = shapely.MultiPoint(rng.normal(size=(10, 2))).convex_hull
+        ring = shapely.get_coordinates(shapely.orient_polygons(hull).exterior)[:-1]
+        split = np.empty((2 * len(ring), 2))
+        split[0::2], split[1::2] = ring, 0.5 * (ring + np.roll(ring, -1, axis=0))
+        other = 0.3 * unit_polygon(COARSE_SIDES)
+        total = minkowski_sum(np.roll(split, rng.integers(len(split)), axis=0), other)
+        reference = shapely.MultiPoint((split[:, None, :] + other[None]).reshape(-1, 2))
+        assert shapely.Polygon(total).symmetric_difference(reference.convex_hull).area < 1e-12
+
+
 def test_fine_polygon_holds_the_coarse_one():
     coarse, fine = unit_polygon(COARSE_SIDES), unit_polygon(FINE_SIDES)
     assert all(np.abs(fine - v).sum(axis=1).min() == 0.0 for v in coarse)
@@ -136,3 +153,50 @@ def test_cost_per_step_of_a_crowd():
     per_step = (time.perf_counter() - start) / steps
     print(f"cost per step, 21 pedestrians: {per_step * 1e3:.2f} ms")
     assert per_step < 0.05
+
+
+def first_infeasible_prefix(positions: np.ndarray, speed: float, step: float,
+                            jitter: float) -> int | None:
+    """The first k such that positions[:k + 1] (k + 1, 2) admit no path (a convex program,
+    as tests/world/test_pedestrian_motion_model.py asks), or None."""
+    import cvxpy as cp
+
+    def feasible(n: int) -> bool:
+        path = cp.Variable((n, 2))
+        constraints = [cp.norm(path - positions[:n], axis=1) <= jitter]
+        if n > 1:
+            constraints.append(cp.norm(path[1:] - path[:-1], axis=1) <= speed * step)
+        problem = cp.Problem(cp.Minimize(0), constraints)
+        problem.solve(solver=cp.CLARABEL)
+        return problem.status == cp.OPTIMAL
+
+    if feasible(len(positions)):
+        return None
+    low, high = 1, len(positions)  # feasible(low), not feasible(high)
+    while high - low > 1:
+        middle = (low + high) // 2
+        low, high = (middle, high) if feasible(middle) else (low, middle)
+    return high - 1
+
+
+def test_the_check_agrees_with_a_convex_program_on_random_walks():
+    """Walks whose steps are up to 0.45 m (beyond v dt = 0.25 m, within v dt + eps): the first
+    break the check reports is the first prefix the convex program finds infeasible, on
+    every walk not within 1e-4 (relative) of the bounds (there the two may differ)."""
+    rng = np.random.default_rng(7)
+    compared = 0
+    for _ in range(12):
+        lengths = rng.uniform(0.0, 0.45, size=40)
+        angles = rng.uniform(-0.6, 0.6, size=40)  # mostly one way: drift builds up
+        steps = np.column_stack([lengths * np.cos(angles), lengths * np.sin(angles)])
+        positions = np.vstack([[0.0, 0.0], np.cumsum(steps, axis=0)])
+        exact = first_infeasible_prefix(positions, 2.5, 0.1, 0.3)
+        looser = first_infeasible_prefix(positions, 2.5 * 1.0001, 0.1, 0.3 * 1.0001)
+        tighter = first_infeasible_prefix(positions, 2.5 * 0.9999, 0.1, 0.3 * 0.9999)
+        if not (exact == looser == tighter):
+            continue  # within the tolerance band of the bounds
+        found = run(positions, needed=False)
+        first = None if not found else round(found[0].time / 0.1)
+        assert first == exact
+        compared += 1
+    assert compared >= 8
