@@ -61,7 +61,8 @@ def batch(paths: tuple[Path, ...], out_dir: Path, workers: int | None, executor:
 
     The last lines name every run with a collision or a containment violation and say
     whether its scenario breaks an assumption on purpose (breaks_assumptions, as the fault
-    studies do); exit status 4 if one does not, 3 if a run failed.
+    studies do); exit status 4 if one does not, 3 if a run failed (a run the world's motion
+    check stopped is a failed run: its error.json names the assumption).
     """
     from sse_cosim.reporting.outputs import RUNS_FOLDER
     from sse_cosim.reporting.paper import read_run_folders, write_paper_report
@@ -97,8 +98,10 @@ def _echo_outcomes(outcomes, written) -> None:
     for path in written:
         click.echo(f"wrote {path}")
     failed = [o.key for o in outcomes if not o.ok]
-    if failed:
-        raise click.ClickException(f"{len(failed)} run(s) failed: {', '.join(failed)}")
+    if failed:  # exit status 3, as the docstring, sweep and safety say (it was click's 1)
+        from sse_cosim.cli.sweep_commands import RunsFailed
+
+        raise RunsFailed(f"{len(failed)} run(s) failed: {', '.join(failed)}")
 
 
 def _check_guarantee(runs) -> None:

@@ -164,7 +164,10 @@ class Estimator(StrictModel):
     position_jitter_m: NonNegativeFloat = Field(
         0.3,
         description="How far the simulated position may stray from a speed-bounded path (m); "
-        "covers SUMO's pedestrian jumps at lane transitions (up to 0.7 m).",
+        "covers SUMO's pedestrian jumps at lane transitions (up to 0.7 m for one walker). Every "
+        "step checks that each pedestrian's true motion keeps it; a run that breaks it stops "
+        "(exit status 5) naming the jitter its walk needs, unless breaks_assumptions lists "
+        "'pedestrian_speed'.",
     )
     max_velocity_change_mps: PositiveFloat = Field(
         5.0,
@@ -412,8 +415,10 @@ class Scenario(StrictModel):
     breaks_assumptions: list[Assumption] = Field(
         default_factory=list,
         description="Assumptions of the estimator this study breaks on purpose (anything else "
-        "that would break one is an error): 'pedestrian_speed': the pedestrian walks faster than "
-        "estimator.max_pedestrian_speed_mps; 'sensor_bounds': sensors whose measurements leave "
+        "that would break one is an error): 'pedestrian_speed': a pedestrian walks faster than "
+        "estimator.max_pedestrian_speed_mps, or SUMO moves it farther off a speed-bounded path "
+        "than estimator.position_jitter_m (the run counts these breaks and goes on); "
+        "'sensor_bounds': sensors whose measurements leave "
         "their noise bounds or report what is not there (bias beyond the bound, stuck, phantom); "
         "'shared_estimates': connected nodes send estimates that do not hold their bounds "
         "(node shift and shrink faults).",
