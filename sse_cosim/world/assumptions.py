@@ -274,7 +274,12 @@ class PedestrianMotionCheck:
             walk.coarse = disc(walk.center, self.bounds.jitter_m, COARSE_SIDES)
             walk.center = None
         assert walk.coarse is not None
-        walk.coarse = advance(walk.coarse, local, self.bounds, COARSE_SIDES)
+        here = disc(local, self.bounds.jitter_m, COARSE_SIDES)
+        grown = minkowski_sum(walk.coarse, disc(np.zeros(2), self.bounds.step_m, COARSE_SIDES))
+        walk.coarse = intersect(grown, here)
+        if walk.coarse is here:  # the whole disc again: back to the cheap form
+            walk.coarse, walk.center = None, local
+            return None
         if walk.coarse is not None:
             return None
         # the coarse polygon is empty: follow the walk with the fine one up to now
