@@ -8,8 +8,11 @@ width plus a margin.
 A **conflict zone** is walkable ground that the bus's body sweeps, widened by a pedestrian's
 radius: the only places where a pedestrian who stays on walkable ground can touch the bus
 (every crossing on the route, and any other walkable ground the route runs over; on the
-paper's road, the zebra). Each zone has an extent ``[start_m, end_m]`` along the route: the
-front bumper reaches it at ``start_m`` and the rear has cleared it at ``end_m + length``.
+paper's road, the zebra). The body's sweep is SUMO's placement of the body along the route
+(:mod:`sse_cosim.control.swept`): on a straight road the centre line widened by half the
+width, on a corner wider (the rear swings out, the side cuts in). Each zone has an extent
+``[start_m, end_m]`` along the route: the body touches it only while the front bumper is
+between ``start_m`` and ``end_m + length``.
 
 Every step the picture says, per zone ahead, the **earliest arrival**: the soonest any
 pedestrian can be in the zone. Each known pedestrian's refined region and every walkable
@@ -40,6 +43,7 @@ import numpy as np
 import shapely
 
 from sse_cosim.control.kinematics import BusDynamics
+from sse_cosim.control.swept import RoutePath, SweepPiece, body_sweep, swept_region, touch_extent
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
 from sse_cosim.world.roadmap import RoadMap
 
@@ -92,8 +96,13 @@ class SceneContext:
         route_line = roadmap.route_line(route_edges)
         walkable = shapely.union(roadmap.sidewalks, roadmap.crossing_area)
         corridor = route_line.buffer(0.5 * bus.width_m + pedestrian_radius, cap_style="flat")
+        sweep = body_sweep(RoutePath.of_lanes(route_lanes(roadmap, route_edges)), bus.length_m,
+                           bus.width_m + 2.0 * pedestrian_radius)
+        corridor = _with_sweep(corridor, swept_region(sweep), walkable)
         crossings = _route_crossings(route_line, corridor, [c.area for c in roadmap.crossings])
-        swept = _swept_walkable(route_line, corridor, walkable)
+        swept = [(piece, *_touched(sweep, piece, start, end, bus.length_m))
+                 for piece, start, end in _swept_walkable(route_line, corridor, walkable)]
+        swept.sort(key=lambda piece: piece[1])
         window = _window(crossings, swept, config.interest_radius_m)
         beyond = shapely.difference(walkable, window)
         zones = tuple(
@@ -386,6 +395,44 @@ def _swept_walkable(route_line: shapely.LineString, corridor: shapely.Geometry,
         along = [route_line.project(shapely.Point(p)) for p in shapely.get_coordinates(part)]
         pieces.append((part, min(along), max(along)))
     return sorted(pieces, key=lambda piece: piece[1])
+
+
+def route_lanes(roadmap: RoadMap, route_edges: Sequence[str]) -> list[tuple[np.ndarray, float]]:
+    """The lanes a vehicle drives along ``route_edges``, as ``RoadMap.route_line`` joins
+    them: each lane's centre line (k, 2) and its length (m)."""
+    lanes = []
+    for i, edge_id in enumerate(route_edges):
+        lane = roadmap.edge_driving_lane(edge_id)
+        lanes.append((lane.shape, lane.length))
+        via = roadmap.junction_lanes.get((edge_id, route_edges[i + 1])) \
+            if i + 1 < len(route_edges) else None
+        if via is not None:
+            internal = roadmap.internal_lanes[via]
+            lanes.append((internal.shape, internal.length))
+    return lanes
+
+
+def _with_sweep(corridor: shapely.Geometry, sweep: shapely.Geometry,
+                walkable: shapely.Geometry) -> shapely.Geometry:
+    """The ground the body (widened by a pedestrian's radius) sweeps: the ``corridor`` around
+    the centre line, joined with the body's ``sweep`` where that reaches walkable ground the
+    corridor misses (on a corner: the rear swinging out, the side cutting in). On a straight
+    route the sweep adds none (beyond rounding, 1e-9 m) and the corridor stays as it was."""
+    beyond = shapely.difference(shapely.intersection(sweep, walkable), corridor.buffer(1e-9))
+    return corridor if beyond.area <= 0.0 else shapely.union(corridor, sweep)
+
+
+def _touched(sweep: Sequence[SweepPiece], piece: shapely.Geometry, start: float, end: float,
+             length: float) -> tuple[float, float]:
+    """``piece``'s extent along the route: from the projections of its vertices (``start``,
+    ``end``), widened to every front station at which the sweep touches it (a corner's body
+    reaches ground that does not project where the front is). Within 1e-9 m the projections
+    stand, so a straight route keeps the same numbers."""
+    touched = touch_extent(sweep, piece, length)
+    if touched is None:
+        return start, end
+    first, last = touched
+    return (start if first >= start - 1e-9 else first), (end if last <= end + 1e-9 else last)
 
 
 def _boundary_points(polygon: shapely.Geometry) -> np.ndarray:

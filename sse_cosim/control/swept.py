@@ -1,0 +1,270 @@
+"""The ground a vehicle's body sweeps along its route, as SUMO places the body: pure geometry.
+
+**The model (SUMO's own placement).** SUMO keeps a vehicle's front bumper on its lane's
+centre line, at lane position ``sigma`` counted along the route's lanes (each lane's ``length``
+attribute; a lane's shape is stretched to it, as ``MSLane::interpolateLanePosToGeometryPos``
+does). Its back is the point of the route ``length`` lane metres behind the front (the start
+of the first lane while the back is not yet on the network), and the body is the rectangle of
+the vehicle's length and width whose front edge is centred on the front point and whose axis
+runs along the chord from the back point to the front point (``MSVehicle::computeAngle``;
+``sse_cosim.world.sumo`` reports that rectangle as each vehicle's footprint). On a straight
+road the chord is the lane and the body is the centre line widened by half the width; on a
+corner the chord is shorter than the body, so the body's middle cuts the corner's inside and
+its rear end swings out beyond the centre line's half-width band.
+
+**The cover.** Between consecutive *breakpoints* (the lane positions of the route's vertices,
+of the vertices plus the length, and extra cuts that keep each piece short and its turn small)
+both the front point ``F`` and the back point move linearly, so the chord ``c = F - B`` moves
+linearly too and its direction turns monotonically, by some ``dpsi``. Every footprint with its
+front in such a piece ``[a, b]`` then lies in
+
+    hull{F_i + R(psi_j) corner_k : i, j in {a, b}, k = 1..4}  (+)  disc(r_max (1 - cos(dpsi/2))),
+
+with ``r_max`` the distance from the front point to a rear corner: a footprint point is
+``F + R(psi) q`` with ``F`` on the segment ``[F_a, F_b]`` and ``R(psi) q`` on the arc from
+``R(psi_a) q`` to ``R(psi_b) q``, which lies within its sagitta ``|q| (1 - cos(dpsi/2))`` of the
+chord between them; the segment plus that chord lie in the hull. A straight piece (no turn) is
+covered exactly. The disc is enclosed in an octagon around each hull point, so the cover is a
+convex polygon containing every footprint of the piece. Where the front jumps between two lanes
+whose ends do not meet, the hull of the footprints before and after the jump covers both.
+
+The union of the covers is therefore a sound over-approximation of every footprint the vehicle
+takes along the route (:func:`body_sweep`), and a piece of ground is touched only while the
+front is within the pieces whose cover meets it (:func:`touch_extent`).
+
+Shapes: points are (2,) arrays, polygons shapely geometries; no SUMO here.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from itertools import pairwise
+
+import numpy as np
+import shapely
+
+MAX_TURN_RAD = 0.01
+"""Largest turn of the body within one piece of the sweep (the cover's rounding: a 12 m bus's
+rear corner strays at most 0.15 mm from the hull)."""
+MAX_PIECE_M = 0.5
+"""Longest turning piece of the sweep along the route (m): how finely the front stations at
+which a piece of ground is touched are known on a corner (a straight piece knows them exactly,
+whatever its length)."""
+STRAIGHT_RAD = 1e-12
+"""A piece whose body turns by no more is straight (its footprints stray at most 1e-11 m from
+the rectangles of a body that does not turn)."""
+_OCTAGON_ANGLES = np.array([(k + 0.5) * math.pi / 4.0 for k in range(8)])
+"""Angles (rad) of the vertices of an octagon around the unit disc whose edges face the axes."""
+
+
+@dataclass(frozen=True)
+class RoutePath:
+    """A route's centre line as SUMO drives it: ``points`` (n, 2), their lane positions
+    ``sigma`` (n,) (m, each lane's ``length`` attribute) and their stations ``station`` (n,)
+    (m, geometric distance along the line, as ``shapely``'s ``project`` measures it)."""
+
+    points: np.ndarray
+    sigma: np.ndarray
+    station: np.ndarray
+
+    @classmethod
+    def of_lanes(cls, lanes: Sequence[tuple[np.ndarray, float]]) -> RoutePath:
+        """The path along ``lanes``, each a centre line (k, 2) and its length (m), in order;
+        a lane's start that repeats the previous lane's end is dropped."""
+        points: list[np.ndarray] = []
+        sigma: list[float] = []
+        offset = 0.0
+        for shape, length in lanes:
+            shape = np.asarray(shape, dtype=np.float64)
+            steps = np.sqrt(((shape[1:] - shape[:-1]) ** 2).sum(axis=1))  # (k - 1,)
+            along = np.concatenate([[0.0], np.cumsum(steps)])  # (k,)
+            geometric = float(along[-1])
+            scale = length / geometric if geometric > 0.0 else 0.0
+            for point, at in zip(shape, along, strict=True):
+                if points and float(np.max(np.abs(point - points[-1]))) <= 1e-9:
+                    continue
+                points.append(point)
+                sigma.append(offset + float(at) * scale)
+            offset += length
+        pts = np.array(points)  # (n, 2)
+        station = [0.0]
+        for p1, p2 in pairwise(pts):
+            station.append(station[-1] + ((p2[0] - p1[0]) ** 2 + (p2[1] - p1[1]) ** 2) ** 0.5)
+        return cls(pts, np.array(sigma), np.array(station))
+
+    def segment(self, sigma: float) -> int:
+        """The segment ``i`` (from point i to i + 1) holding lane position ``sigma``: the
+        first one whose end lies beyond it (the last one at the route's end)."""
+        index = int(np.searchsorted(self.sigma, sigma, side="right")) - 1
+        return min(max(index, 0), len(self.points) - 2)
+
+    def at(self, sigma: float, segment: int) -> tuple[np.ndarray, float]:
+        """The point (2,) at lane position ``sigma`` on ``segment``, and its station (m)."""
+        p1, p2 = self.points[segment], self.points[segment + 1]
+        s1, s2 = self.sigma[segment], self.sigma[segment + 1]
+        t = 0.0 if s2 <= s1 else (sigma - s1) / (s2 - s1)
+        point = p1 + t * (p2 - p1)
+        return point, float(self.station[segment] + t * (self.station[segment + 1]
+                                                         - self.station[segment]))
+
+
+@dataclass(frozen=True)
+class SweepPiece:
+    """The body's cover while its front is between stations ``start_m`` and ``end_m`` (m):
+    ``cover`` holds every footprint with its front there; ``straight``: the body does not turn
+    and its front moves along its axis ``axis`` (2,) from ``front`` (2,), so each footprint is
+    the rectangle behind the front and the stations at which it touches a point are exact."""
+
+    cover: shapely.Polygon
+    start_m: float
+    end_m: float
+    straight: bool
+    front: np.ndarray
+    axis: np.ndarray
+
+
+def footprint(front: np.ndarray, heading: np.ndarray, length: float,
+              width: float) -> np.ndarray:
+    """The rectangle behind ``front`` (2,) along the unit ``heading`` (2,): corners (4, 2)
+    counter-clockwise from the rear right (as ``Footprint.corners``)."""
+    left = np.array([-heading[1], heading[0]])
+    rear = front - length * heading
+    half = 0.5 * width * left
+    return np.array([rear - half, front - half, front + half, rear + half])
+
+
+def chord_footprint(path: RoutePath, sigma: float, length: float,
+                    width: float) -> np.ndarray:
+    """SUMO's footprint with the front at lane position ``sigma``: corners (4, 2) (module
+    docstring; a test compares it with SUMO's own)."""
+    front, _ = path.at(sigma, path.segment(sigma))
+    back = _back(path, sigma - length, path.segment(max(sigma - length, 0.0)))
+    return footprint(front, _direction(path, front - back), length, width)
+
+
+def body_sweep(path: RoutePath, length: float, width: float) -> list[SweepPiece]:
+    """The covers of every footprint of a body ``length`` x ``width`` (m) whose front runs the
+    whole ``path``, in route order (module docstring)."""
+    cuts = np.unique(np.concatenate([path.sigma, path.sigma + length]))
+    cuts = cuts[cuts <= path.sigma[-1]]
+    pieces = []
+    for a, b in pairwise(cuts):
+        middle = 0.5 * (a + b)
+        front_segment = path.segment(middle)
+        back_segment = path.segment(max(middle - length, 0.0))
+        turn = _turn(path, a, b, front_segment, back_segment, length)
+        parts = 1 if turn <= STRAIGHT_RAD \
+            else max(math.ceil(turn / MAX_TURN_RAD), math.ceil((b - a) / MAX_PIECE_M))
+        edges = [a + (b - a) * k / parts for k in range(parts)] + [b]
+        for lo, hi in pairwise(edges):
+            pieces.append(_piece(path, lo, hi, front_segment, back_segment, length, width))
+    for i in np.flatnonzero(np.diff(path.sigma) <= 0.0):  # the front jumps a gap
+        before = chord_footprint(path, float(path.sigma[i]) - 1e-12, length, width)
+        after = chord_footprint(path, float(path.sigma[i]), length, width)
+        cover = shapely.convex_hull(shapely.multipoints(np.vstack([before, after])))
+        pieces.append(SweepPiece(cover, float(path.station[i]), float(path.station[i + 1]),
+                                 False, path.points[i], np.zeros(2)))
+    return sorted(pieces, key=lambda p: p.start_m)
+
+
+def swept_region(pieces: Sequence[SweepPiece]) -> shapely.Geometry:
+    """The union of the pieces' covers: every footprint of the sweep lies in it."""
+    return shapely.union_all([p.cover for p in pieces])
+
+
+def touch_extent(pieces: Sequence[SweepPiece], area: shapely.Geometry,
+                 length: float) -> tuple[float, float] | None:
+    """``(start, end)`` (m): the body touches ``area`` only while its front is between
+    stations ``start`` and ``end + length`` (None if it never does). A straight piece gives
+    the exact first and last station (the area's extent along the body's axis), a turning
+    one its own ends."""
+    start, end = math.inf, -math.inf
+    touching = shapely.intersects(np.array([p.cover for p in pieces], dtype=object), area)
+    for piece in (p for p, touches in zip(pieces, touching, strict=True) if touches):
+        if piece.straight:
+            inside = shapely.intersection(piece.cover, area)
+            if inside.is_empty:
+                continue
+            along = _along(shapely.get_coordinates(inside), piece.front, piece.axis)
+            first = piece.start_m + max(0.0, float(along.min()))
+            last = min(piece.end_m, piece.start_m + float(along.max()) + length)
+        else:
+            first, last = piece.start_m, piece.end_m
+        start, end = min(start, first), max(end, last)
+    return None if start > end else (start, end - length)
+
+
+def _along(points: np.ndarray, origin: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """How far each of ``points`` (k, 2) lies along the unit ``axis`` (2,) from ``origin``
+    (2,), shape (k,)."""
+    return (points[:, 0] - origin[0]) * axis[0] + (points[:, 1] - origin[1]) * axis[1]
+
+
+def _back(path: RoutePath, sigma: float, segment: int) -> np.ndarray:
+    """The back point (2,) at lane position ``sigma``: the route's start while it is behind it."""
+    return path.points[0] if sigma <= 0.0 else path.at(sigma, segment)[0]
+
+
+def _direction(path: RoutePath, chord: np.ndarray) -> np.ndarray:
+    """The unit direction (2,) of ``chord`` (2,); the first segment's while it is zero (the
+    body at the route's start, as SUMO turns it along the lane there)."""
+    norm = math.hypot(float(chord[0]), float(chord[1]))
+    if norm == 0.0:
+        chord = path.points[1] - path.points[0]
+        norm = math.hypot(float(chord[0]), float(chord[1]))
+    return chord / norm
+
+
+def _chords(path: RoutePath, a: float, b: float, front_segment: int, back_segment: int,
+            length: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The front points and the chords' unit directions at ``a`` and ``b`` on the given
+    segments, each (2,)."""
+    front_a, _ = path.at(a, front_segment)
+    front_b, _ = path.at(b, front_segment)
+    back_a = _back(path, a - length, back_segment)
+    back_b = _back(path, b - length, back_segment)
+    chord_a, chord_b = front_a - back_a, front_b - back_b
+    if math.hypot(float(chord_a[0]), float(chord_a[1])) == 0.0:
+        chord_a = chord_b  # the route's start: the body lies along the first segment
+    return front_a, front_b, _direction(path, chord_a), _direction(path, chord_b)
+
+
+def _turn(path: RoutePath, a: float, b: float, front_segment: int, back_segment: int,
+          length: float) -> float:
+    """How far (rad) the body turns while its front moves from ``a`` to ``b``."""
+    _, _, u_a, u_b = _chords(path, a, b, front_segment, back_segment, length)
+    return abs(math.atan2(float(u_a[0] * u_b[1] - u_a[1] * u_b[0]),
+                          float(u_a[0] * u_b[0] + u_a[1] * u_b[1])))
+
+
+def _piece(path: RoutePath, a: float, b: float, front_segment: int, back_segment: int,
+           length: float, width: float) -> SweepPiece:
+    """The cover of the footprints with the front between lane positions ``a`` and ``b``."""
+    front_a, front_b, u_a, u_b = _chords(path, a, b, front_segment, back_segment, length)
+    _, start = path.at(a, front_segment)
+    _, end = path.at(b, front_segment)
+    turn = _turn(path, a, b, front_segment, back_segment, length)
+    corners = np.vstack([footprint(f, u, length, width)
+                         for f in (front_a, front_b) for u in (u_a, u_b)])  # (16, 2)
+    move = front_b - front_a
+    straight = turn <= STRAIGHT_RAD and abs(float(move[0] * u_a[1] - move[1] * u_a[0])) <= 1e-12 \
+        and float(move[0] * u_a[0] + move[1] * u_a[1]) >= 0.0
+    cover = shapely.convex_hull(shapely.multipoints(corners))
+    if turn > 0.0:
+        reach = math.hypot(length, 0.5 * width)
+        cover = _widen(cover, reach * (1.0 - math.cos(0.5 * turn)) + 1e-12, u_a)
+    return SweepPiece(cover, start, end, straight, front_a, u_a)
+
+
+def _widen(polygon: shapely.Geometry, margin: float, axis: np.ndarray) -> shapely.Polygon:
+    """The convex hull of ``polygon``'s vertices each surrounded by an octagon around the disc
+    of radius ``margin`` with two edges across the unit ``axis`` (2,) (so that a straight
+    piece widens by exactly ``margin`` to its sides): contains ``polygon`` (+) disc(margin)."""
+    heading = math.atan2(float(axis[1]), float(axis[0])) if np.any(axis) else 0.0
+    angles = heading + _OCTAGON_ANGLES  # (8,)
+    octagon = np.array([[math.cos(a), math.sin(a)] for a in angles]) / math.cos(math.pi / 8.0)
+    points = shapely.get_coordinates(polygon)  # (k, 2)
+    around = (points[:, None, :] + margin * octagon[None, :, :]).reshape(-1, 2)
+    return shapely.convex_hull(shapely.multipoints(around))

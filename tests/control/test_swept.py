@@ -1,0 +1,127 @@
+"""The body's swept path (control/swept.py) and the conflict zones built on it (no SUMO run):
+on a straight road the sweep is the old corridor, bit for bit in the zones; on the four-arm
+junction's right turn (sumo_net/junction/, WJ -> JS, a 5.75 m radius) a 12 m bus's rear swings
+out over the west zebra and its side cuts over the corner, and a pedestrian standing where only
+the swinging rear reaches is a conflict for the controller. tests/cosim/test_swept_corner.py
+checks the model against SUMO's own footprints.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+
+from sse_cosim.control.picture import SceneContext, assess, route_lanes
+from sse_cosim.control.swept import (
+    RoutePath,
+    body_sweep,
+    chord_footprint,
+    footprint,
+    swept_region,
+    touch_extent,
+)
+from sse_cosim.scenario.loader import load_scenario
+from sse_cosim.world.network import build_network
+from sse_cosim.world.roadmap import RoadMap, load_roadmap
+
+ROOT = Path(__file__).resolve().parents[2]
+JUNCTION = ROOT / "scenarios" / "junction.toml"
+TURN = ["WJ", "JS"]  # east along WJ, then right into JS
+LENGTH, WIDTH = 12.0, 2.55
+# on the west zebra (x -7.5 .. -3.5), left of the bus's lane (y = -1.75): the corridor around
+# the centre line (half the width plus the pedestrian's radius, 0.3 m) ends at y = -0.175, the
+# rear's left corner swings out to y = 0.43 at the zebra's edge
+SWING_SPOT = (-7.4, 0.2)
+
+
+@pytest.fixture(scope="module")
+def roadmap() -> RoadMap:
+    return load_roadmap(build_network(ROOT / "sumo_net" / "junction"))
+
+
+def turn_context(roadmap: RoadMap) -> SceneContext:
+    sc = load_scenario(JUNCTION, {"automated.bus_we.route_edges": TURN})
+    est = sc.estimator
+    return SceneContext.build(roadmap, TURN, sc.automated["bus_we"], sc.controller,
+                              est.max_pedestrian_speed_mps, est.position_jitter_m,
+                              sc.pedestrian_radius_m(), sc.simulation.step_length_s)
+
+
+def test_a_straight_route_sweeps_the_centre_line_widened_by_half_the_width() -> None:
+    path = RoutePath.of_lanes([(np.array([[0.0, -1.75], [100.0, -1.75]]), 100.0),
+                               (np.array([[100.0, -1.75], [300.0, -1.75]]), 200.0)])
+    pieces = body_sweep(path, LENGTH, WIDTH)
+    region = swept_region(pieces)
+    line = shapely.LineString(path.points)
+    corridor = line.buffer(0.5 * WIDTH, cap_style="flat")
+    behind = shapely.box(-LENGTH, -1.75 - 0.5 * WIDTH, 0.0, -1.75 + 0.5 * WIDTH)  # the start
+    assert shapely.symmetric_difference(region, shapely.union(corridor, behind)).area < 1e-9
+    assert all(p.straight for p in pieces)
+    zebra = shapely.box(198.0, -6.0, 202.0, 6.0)
+    assert touch_extent(pieces, zebra, LENGTH) == pytest.approx((198.0, 202.0), abs=1e-12)
+    assert chord_footprint(path, 150.0, LENGTH, WIDTH) == pytest.approx(
+        footprint(np.array([150.0, -1.75]), np.array([1.0, 0.0]), LENGTH, WIDTH))
+
+
+def test_the_straight_routes_of_the_junction_keep_their_zones(roadmap: RoadMap) -> None:
+    """bus_we and bus_sn drive straight across: their zones are the corridor's, as before."""
+    sc = load_scenario(JUNCTION)
+    for bus_id in ("bus_we", "bus_sn"):
+        bus = sc.automated[bus_id]
+        context = SceneContext.build(roadmap, bus.route_edges, bus, sc.controller, 2.5, 1.2,
+                                     sc.pedestrian_radius_m(), 0.1)
+        zones = [(z.polygon.area, z.start_m, z.end_m) for z in context.zones]
+        assert np.array(zones) == pytest.approx(np.array([(12.6, 172.5, 176.5),
+                                                          (12.6, 183.5, 187.5)]))
+
+
+def test_on_the_right_turn_the_sweep_covers_every_footprint(roadmap: RoadMap) -> None:
+    """Footprints with the front at 4,000 stations along the turn (not the pieces' ends) lie in
+    the swept region; the old band misses the rear corner by about a metre."""
+    path = RoutePath.of_lanes(route_lanes(roadmap, TURN))
+    pieces = body_sweep(path, LENGTH, WIDTH)
+    region = swept_region(pieces)
+    band = roadmap.route_line(TURN).buffer(0.5 * WIDTH, cap_style="flat")
+    sigmas = np.linspace(150.0, 200.0, 4001) + 1e-3 / 3.0
+    corners = np.vstack([chord_footprint(path, s, LENGTH, WIDTH) for s in sigmas])  # (4k, 2)
+    points = shapely.points(corners)
+    assert float(shapely.distance(region, points).max()) <= 1e-9
+    missed = float(shapely.distance(band, points).max())
+    assert 0.9 < missed < 1.1  # the old zone's miss: about 1.0 m
+
+
+def test_a_pedestrian_where_only_the_swinging_rear_reaches_is_a_conflict(
+        roadmap: RoadMap) -> None:
+    context = turn_context(roadmap)
+    spot = shapely.Point(SWING_SPOT)
+    radius = 0.3
+    old = context.route_line.buffer(0.5 * WIDTH + radius, cap_style="flat")
+    assert not old.intersects(spot)  # the old zones (corridor and walkable) left it out
+    # a footprint reaches the pedestrian there: the rear corner, while the bus turns
+    path = RoutePath.of_lanes(route_lanes(roadmap, TURN))
+    touching = [s for s in np.arange(150.0, 200.0, 0.05)
+                if shapely.Polygon(chord_footprint(path, s, LENGTH, WIDTH)).distance(spot)
+                <= radius]
+    assert touching
+    (zone,) = [z for z in context.zones if z.polygon.intersects(spot)]
+    stations = [float(np.interp(s, path.sigma, path.station)) for s in touching]
+    assert zone.start_m <= min(stations) and max(stations) <= zone.end_m + LENGTH
+    # a pedestrian standing there arrives in that zone at once: no pass is possible
+    front = shapely.get_coordinates(context.route_line.interpolate(150.0))[0]
+    seen = assess(context, front, 6.0, shapely.Polygon(), shapely.Polygon(),
+                  [spot.buffer(0.05)], [spot.buffer(0.05)])
+    outlook = next(o for o in seen.zones if context.zones[o.index] is zone)
+    assert outlook.arrival_s == 0.0 and outlook.in_view_arrival_s == 0.0
+    assert not seen.path_clear
+
+
+def test_on_the_right_turn_the_side_cutting_in_reaches_the_corner(roadmap: RoadMap) -> None:
+    """The body's side cuts over the sidewalk at the corner's inside: a zone there, which
+    the old corridor did not have."""
+    context = turn_context(roadmap)
+    corner = shapely.box(-7.5, -7.5, -3.5, -3.5)  # the walking area inside the turn
+    assert any(z.polygon.intersects(corner) and not z.polygon.within(roadmap.crossing_area)
+               for z in context.zones)
