@@ -50,7 +50,18 @@ Rules of one step at one node (each proof in a line or two; "X" is a track's pre
 - R6 end: a track with no possibility left (wholly visible, no candidate) holds no
   pedestrian; so does one whose position set misses the walkable ground (A5).
 - R7 merge: two tracks whose hull is at most :data:`MERGE_GROWTH` larger than the smaller
-  of them become that hull (it covers both; occupied if either was).
+  of them become that hull (it covers both; occupied if either was); two that no detection
+  touched this step, when it is at most that much larger than both areas together.
+- R8 one track per detection: a track that claims nothing (R2) and that a sensor S sees in
+  part with one candidate d left keeps R3's two possibilities apart instead of their hull:
+  X ∩ d and X hidden from S (every pedestrian of X is in one of them). All the X ∩ d of one
+  d, and d's new track (R5), become one track, their hull (it lies in d's set), with the
+  lowest id: the pedestrian at a view's or an occluder's edge keeps its track, where R5
+  started a new one every step. It is occupied if the new track is in it or d lies inside
+  one of the predictions (then d's pedestrian is in that X ∩ d). Each hidden possibility is
+  a track not known to be occupied, joined to one beside it (R7's sum test). And d needs no
+  new track if that track would claim (R2) a detection d' an existing track T claims: d's
+  pedestrian is then d''s (A2, as in R2), which is in T's set.
 
 Every rule keeps each pedestrian of a prediction in some new set, and each detected one is
 in a prediction or in a new track: by induction every pedestrian ever detected stays inside
@@ -212,22 +223,99 @@ def associate(
     views = [_candidates(scene, t.estimate) for t in predicted]
     claims = {d for t, view in zip(predicted, views, strict=True) for d in _claimed(t, view)}
     kept: list[LocalTrack] = []
+    pools: dict[int, list[tuple[LocalTrack, bool]]] = {}  # R8: d -> (visible piece, d inside)
+    hidden: list[LocalTrack] = []
     for track, view in zip(predicted, views, strict=True):
         # R4: only a track that claims nothing leaves out what the others claim
-        left_out = frozenset() if _claimed(track, view) else frozenset(claims)
-        updated = _correct(scene, track, view, left_out)
-        if updated is not None:
+        claimer = bool(_claimed(track, view))
+        left_out = frozenset() if claimer else frozenset(claims)
+        updated = _correct(scene, track, view, left_out, split=not claimer)
+        if isinstance(updated, _Split):
+            pools.setdefault(updated.detection, []).append(
+                (updated.visible, updated.detection in view.inside))
+            if updated.hidden is not None:
+                hidden.append(updated.hidden)
+        elif updated is not None:
             kept.append(updated)
     covered = claims | {d for view in views for d in view.inside}
     for d in range(len(detections)):
-        if d in covered:
+        members = [piece for piece, _ in pools.get(d, [])]
+        occupied = any(inside for _, inside in pools.get(d, []))
+        if d not in covered:
+            track, claimed = _start(scene, d, step, next_id)
+            covered |= claimed
+            if not claimed & claims:  # R5 (else d's pedestrian is a claimer's, R8)
+                if not members:
+                    next_id += 1
+                members.append(track)
+                occupied = True
+        if members:
+            kept.append(_pool(scene, members, occupied))
+    # R8: those whose id is free first, then the largest, so that a sliver joins the hidden
+    # set beside it, which keeps its id; a piece that joins none is a track of its own
+    free = {t.track_id for t in hidden} - {t.track_id for t in kept}
+    for piece in sorted(hidden, key=lambda t: (t.track_id not in free,
+                                                -model.position(t.estimate).volume(),
+                                                t.track_id)):
+        joined = _join_hidden(kept, piece, model, settings)
+        if joined is not None:
+            kept = joined
             continue
-        track, claimed = _start(scene, d, step, next_id)
-        next_id += 1
-        covered |= claimed
-        kept.append(track)
+        if any(t.track_id == piece.track_id for t in kept):
+            piece = replace(piece, track_id=next_id)
+            next_id += 1
+        kept.append(piece)
     return Association(tuple(sorted(_merge(kept, model, settings),
                                     key=lambda t: t.track_id)), next_id)
+
+
+@dataclass(frozen=True)
+class _Split:
+    """R8: a track seen in part by one sensor with one candidate ``detection``, as its two
+    possibilities: ``visible`` (the prediction cut with the detection, nothing known to be
+    in it) and ``hidden`` (cut to where that sensor cannot see; None if it ended, R6)."""
+
+    visible: LocalTrack
+    detection: int
+    hidden: LocalTrack | None
+
+
+def _pool(scene: _Scene, members: Sequence[LocalTrack], occupied: bool) -> LocalTrack:
+    """R8: one track holding every set of ``members`` (their hull; the lowest id), occupied
+    as given."""
+    first = min(members, key=lambda t: t.track_id)
+    joined = tuple(sorted({d for t in members for d in t.joined}))
+    if len(members) == 1:
+        return replace(first, occupied=occupied, joined=joined)
+    union = _hull([t.estimate for t in members], np.hstack([t.estimate.generators
+                                                             for t in members]))
+    settings = scene.settings
+    return replace(first, estimate=union.reduce(settings.max_generators,
+                                                settings.reduction_method),
+                   occupied=occupied, joined=joined)
+
+
+def _join_hidden(tracks: list[LocalTrack], piece: LocalTrack, model: MotionModel,
+                 settings: EstimatorSettings) -> list[LocalTrack] | None:
+    """R8: ``tracks`` with the hidden ``piece`` joined to the first track not known to be
+    occupied whose hull with it is at most :data:`MERGE_GROWTH` larger than the two sets'
+    areas together (the sliver a pedestrian at a shadow's edge leaves in the shadow, next to
+    the set of the shadow); that track keeps its id. None if there is no such track."""
+    box = model.position(piece.estimate).interval_hull()
+    area = model.position(piece.estimate).volume()
+    for i, track in enumerate(tracks):
+        if track.occupied or not _boxes_meet(box, model.position(track.estimate)
+                                             .interval_hull(), MEET_TOL):
+            continue
+        both = [track.estimate, piece.estimate]
+        union = _hull(both, np.hstack([z.generators for z in both]))
+        limit = (1.0 + MERGE_GROWTH) * (model.position(track.estimate).volume() + area)
+        if model.position(union).volume() <= limit:
+            merged = replace(track, estimate=union.reduce(settings.max_generators,
+                                                   settings.reduction_method),
+                             joined=tuple(sorted({*track.joined, *piece.joined})))
+            return [*tracks[:i], merged, *tracks[i + 1:]]
+    return None
 
 
 @dataclass(frozen=True)
@@ -277,13 +365,16 @@ def _claimed(track: LocalTrack, view: _View) -> list[int]:
             if len(view.candidates.get(s, ())) == 1]
 
 
-def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[int]
-             ) -> LocalTrack | None:
-    """R3, R4, R6 for one predicted track: the corrected track, or None if it ended.
+def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[int],
+             split: bool = False) -> LocalTrack | _Split | None:
+    """R3, R4, R6 (and with ``split``, R8) for one predicted track: the corrected track, its
+    two possibilities (R8), or None if it ended.
 
     Sensors with a single possibility (wholly visible, one candidate left) cut X together in
     one Proposition 1 step; the others then each replace X by the hull of their possibilities.
     Only sensors that see part of X take part (one that sees none of it may miss them all).
+    With ``split``, the last sensor that sees X in part and has one candidate left comes last
+    and its two possibilities are kept apart (R8) instead of their hull.
     """
     paths = scene.detections.paths
     occupied, certain, ambiguous = track.occupied, [], []
@@ -297,9 +388,30 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
             certain.append(used[0])
         else:
             return None  # R6: wholly visible, no pedestrian in it
+    parted = [i for i, (sensor, used) in enumerate(ambiguous)
+              if split and sensor in view.partly and len(used) == 1]
+    last = ambiguous.pop(parted[-1]) if parted else None
     estimate = track.estimate
     if certain:
         estimate = _cut(scene, estimate, Strips.stack([paths[d] for d in certain]))
+    estimate = _ambiguous(scene, track, estimate, view, ambiguous)
+    joined = certain + [d for _, used in ambiguous for d in used]
+    if last is None:
+        return _finish(scene, track, estimate, occupied, joined)
+    sensor, (d,) = last
+    visible = _finish(scene, track, _cut(scene, estimate, paths[d]), False, [*joined, d])
+    hidden = _finish(scene, track, _hidden(scene, estimate, track.estimate, sensor), False,
+                     joined)
+    if visible is None:  # off the ground: only the hidden possibility is left
+        return hidden
+    return _Split(visible, d, hidden)
+
+
+def _ambiguous(scene: _Scene, track: LocalTrack, estimate: Zonotope, view: _View,
+               ambiguous: Sequence[tuple[str, Sequence[int]]]) -> Zonotope:
+    """R3: ``estimate`` replaced, sensor by sensor, by the hull of that sensor's
+    possibilities (``ambiguous``: sensor, candidates used)."""
+    paths = scene.detections.paths
     for sensor, used in ambiguous:
         options = [_cut(scene, estimate, paths[d]) for d in used]
         if sensor in view.partly:
@@ -310,6 +422,13 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
         edges = [matmul(scene.model.position_matrix, estimate.generators),
                  *(scene.detections.parallelograms[d].generators for d in used)]
         estimate = _hull(options, np.hstack(edges))  # along the edges of every option
+    return estimate
+
+
+def _finish(scene: _Scene, track: LocalTrack, estimate: Zonotope, occupied: bool,
+            joined: Sequence[int]) -> LocalTrack | None:
+    """The corrected track: None off the walkable ground (R6), else cut to the state bounds
+    and reduced."""
     if scene.ground is not None and not scene.ground.intersects(
             _polygon(scene.model.position(estimate))):
         return None  # R6: off the walkable ground
@@ -317,7 +436,6 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
         estimate = intersect_strips(estimate, scene.model.state_bounds,
                                     scene.settings.gain_method)
     estimate = estimate.reduce(scene.settings.max_generators, scene.settings.reduction_method)
-    joined = certain + [d for _, used in ambiguous for d in used]
     return replace(track, estimate=estimate, occupied=occupied, joined=tuple(sorted(joined)))
 
 
@@ -329,6 +447,7 @@ def _start(scene: _Scene, d: int, step: int, track_id: int) -> tuple[LocalTrack,
     track = LocalTrack(track_id, start, step, True, (d,))
     view = _candidates(scene, start, skip=sensor)
     corrected = _correct(scene, track, view, frozenset())
+    assert not isinstance(corrected, _Split)  # only with split
     if corrected is None:  # only if A1-A2 fail: keep the detection's own set
         return track, set()
     return replace(corrected, joined=tuple(sorted({d, *corrected.joined}))), \
@@ -393,7 +512,9 @@ def _merge(tracks: list[LocalTrack], model: MotionModel, settings: EstimatorSett
             for j in range(i + 1, len(tracks)):
                 if not _boxes_meet(boxes[i], boxes[j]):
                     continue
-                union = _near_duplicate(tracks[i].estimate, tracks[j].estimate, model)
+                untouched = not tracks[i].joined and not tracks[j].joined
+                union = _near_duplicate(tracks[i].estimate, tracks[j].estimate, model,
+                                        untouched)
                 if union is None:
                     continue
                 first, second = tracks[i], tracks[j]
@@ -410,13 +531,17 @@ def _merge(tracks: list[LocalTrack], model: MotionModel, settings: EstimatorSett
     return tracks
 
 
-def _near_duplicate(first: Zonotope, second: Zonotope, model: MotionModel) -> Zonotope | None:
-    """Their hull when its position area is within :data:`MERGE_GROWTH` of the smaller one's."""
+def _near_duplicate(first: Zonotope, second: Zonotope, model: MotionModel,
+                    untouched: bool = False) -> Zonotope | None:
+    """Their hull when its position area is within :data:`MERGE_GROWTH` of the smaller one's,
+    or, for two sets no detection touched this step (``untouched``, R8), of the sum of both
+    areas (overlapping or side by side: the hull adds next to nothing to their union)."""
     areas = sorted(model.position(z).volume() for z in (first, second))
-    if areas[1] > (1.0 + MERGE_GROWTH) * areas[0]:
+    limit = (1.0 + MERGE_GROWTH) * (areas[0] + areas[1] if untouched else areas[0])
+    if areas[1] > limit:
         return None  # the hull is at least as large as the larger one
     union = _hull([first, second], np.hstack([first.generators, second.generators]))
-    return union if model.position(union).volume() <= (1.0 + MERGE_GROWTH) * areas[0] else None
+    return union if model.position(union).volume() <= limit else None
 
 
 def _boxes_meet(first: tuple[FloatArray, FloatArray], second: tuple[FloatArray, FloatArray],
