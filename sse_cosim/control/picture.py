@@ -98,7 +98,7 @@ class SceneContext:
         corridor = route_line.buffer(0.5 * bus.width_m + pedestrian_radius, cap_style="flat")
         sweep = body_sweep(RoutePath.of_lanes(route_lanes(roadmap, route_edges)), bus.length_m,
                            bus.width_m + 2.0 * pedestrian_radius)
-        corridor = _with_sweep(corridor, swept_region(sweep), walkable)
+        corridor = _with_sweep(corridor, _from_start(swept_region(sweep), route_line), walkable)
         crossings = _route_crossings(route_line, corridor, [c.area for c in roadmap.crossings])
         swept = [(piece, *_touched(sweep, piece, start, end, bus.length_m))
                  for piece, start, end in _swept_walkable(route_line, corridor, walkable)]
@@ -420,6 +420,20 @@ def _with_sweep(corridor: shapely.Geometry, sweep: shapely.Geometry,
     route the sweep adds none (beyond rounding, 1e-9 m) and the corridor stays as it was."""
     beyond = shapely.difference(shapely.intersection(sweep, walkable), corridor.buffer(1e-9))
     return corridor if beyond.area <= 0.0 else shapely.union(corridor, sweep)
+
+
+def _from_start(region: shapely.Geometry, route_line: shapely.LineString) -> shapely.Geometry:
+    """``region`` without the ground behind the route's start (across its first segment): a
+    bus placed less than its length into its first lane sticks out there, where the scenario
+    puts it, not where the controller drives it (as the corridor's flat end had it)."""
+    points = shapely.get_coordinates(route_line)  # (n, 2)
+    start, ahead = points[0], points[1] - points[0]
+    ahead = ahead / math.hypot(float(ahead[0]), float(ahead[1]))
+    far = route_line.length + region.length + 1.0
+    left = np.array([-ahead[1], ahead[0]]) * far
+    behind = shapely.Polygon([start + left, start - left, start - left - far * ahead,
+                              start + left - far * ahead])
+    return shapely.difference(region, behind)
 
 
 def _touched(sweep: Sequence[SweepPiece], piece: shapely.Geometry, start: float, end: float,
