@@ -22,12 +22,14 @@ pytestmark = pytest.mark.sumo
 ROOT = Path(__file__).resolve().parents[2]
 S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
 STANDING_S = 6.0  # it stands until it walks towards the zebra (steps on at 11.5 s)
+RUN_S = 16.0  # the bus has stopped before the zebra (15.9 s, as labelled)
+ORDER = ["nominal", "cautious", "slow", "very slow", "creep", "stop"]
 
 
 @pytest.fixture(scope="module")
 def standing(tmp_path_factory) -> tuple[dict, Path]:
     out = tmp_path_factory.mktemp("anonymous_standing")
-    overrides = {"estimator.association": "anonymous", "simulation.duration_s": STANDING_S}
+    overrides = {"estimator.association": "anonymous", "simulation.duration_s": RUN_S}
     return run_scenario_file(S3, out, overrides, plots=False), out
 
 
@@ -46,7 +48,7 @@ def test_a_pedestrian_standing_in_a_cameras_view_keeps_one_track(standing):
     summary, out = standing
     assert summary["containment_violations"] == 0, summary["violations"]
     truth = pd.read_csv(out / "truth.csv").set_index("t")
-    sets = local_sets(out, "rsu1")
+    sets = {t: tracks for t, tracks in local_sets(out, "rsu1").items() if t <= STANDING_S}
     assert min(sets) == 0.0 and max(sets) >= STANDING_S - 0.2  # in view all along
     holding = [{key for key, z in tracks.items()
                 if z.contains(truth.loc[t, ["x", "y"]].to_numpy(float), tol=1e-7)}
@@ -54,3 +56,13 @@ def test_a_pedestrian_standing_in_a_cameras_view_keeps_one_track(standing):
     assert set.intersection(*holding) == {"rsu1:0"}  # one track holds it at every step
     keys = {key for tracks in sets.values() for key in tracks}
     assert keys <= {"rsu1:0", "rsu1:1"}, keys  # and one more: the truck's shadow
+
+
+def test_the_bus_never_steps_back_up_a_level_as_it_nears_the_pedestrian(standing):
+    """No flipping between levels: each change is to a slower one (as labelled, whose
+    published run changes level at the same times up to 16 s)."""
+    _, out = standing
+    levels = pd.read_csv(out / "trace.csv")["level"]
+    changes = levels[levels != levels.shift()].tolist()
+    ranks = [ORDER.index(level) for level in changes]
+    assert ranks == sorted(ranks) and len(changes) == len(set(changes)), changes
