@@ -404,11 +404,9 @@ def route_lanes(roadmap: RoadMap, route_edges: Sequence[str]) -> list[tuple[np.n
     for i, edge_id in enumerate(route_edges):
         lane = roadmap.edge_driving_lane(edge_id)
         lanes.append((lane.shape, lane.length))
-        via = roadmap.junction_lanes.get((edge_id, route_edges[i + 1])) \
-            if i + 1 < len(route_edges) else None
-        if via is not None:
-            internal = roadmap.internal_lanes[via]
-            lanes.append((internal.shape, internal.length))
+        if i + 1 < len(route_edges):
+            lanes.extend((roadmap.internal_lanes[via].shape, roadmap.internal_lanes[via].length)
+                         for via in roadmap.junction_passage(edge_id, route_edges[i + 1]))
     return lanes
 
 

@@ -89,6 +89,9 @@ class RoadMap:
     internal_lanes: dict[str, LaneGeometry]
     edge_lengths: dict[str, float]
     junction_lanes: dict[tuple[str, str], str] = field(default_factory=dict)
+    # an internal lane -> the internal lane it leads into (a passage split at an internal
+    # junction: a left turn waiting inside the junction)
+    internal_next: dict[str, str] = field(default_factory=dict)
     net: sumolib.net.Net | None = field(default=None, compare=False, repr=False)
 
     @functools.cached_property
@@ -120,8 +123,8 @@ class RoadMap:
             self.edge_driving_lane(edge_id)  # refuses an edge no vehicle drives on
             total += self.edge_lengths[edge_id]
             if i + 1 < len(edge_ids):
-                via = self.junction_lanes.get((edge_id, edge_ids[i + 1]))
-                total += 0.0 if via is None else self._internal(via).length
+                total += sum(self._internal(via).length
+                             for via in self.junction_passage(edge_id, edge_ids[i + 1]))
         return total
 
     def route_line(self, edge_ids: Sequence[str]) -> shapely.LineString:
@@ -132,12 +135,21 @@ class RoadMap:
         for i, edge_id in enumerate(edge_ids):
             points.append(self.edge_driving_lane(edge_id).shape)
             if i + 1 < len(edge_ids):
-                via = self.junction_lanes.get((edge_id, edge_ids[i + 1]))
-                if via is not None:
-                    points.append(self._internal(via).shape)
+                points.extend(self._internal(via).shape
+                              for via in self.junction_passage(edge_id, edge_ids[i + 1]))
         coords = np.concatenate(points)
         keep = np.r_[True, np.any(np.abs(np.diff(coords, axis=0)) > 1e-9, axis=1)]
         return shapely.LineString(coords[keep])
+
+    def junction_passage(self, from_edge: str, to_edge: str) -> list[str]:
+        """The internal driving lanes a vehicle drives from ``from_edge`` to ``to_edge``, in
+        order: ``junction_lanes``'s, then each one it leads into (none without a passage)."""
+        via = self.junction_lanes.get((from_edge, to_edge))
+        passage = []
+        while via is not None and via not in passage:
+            passage.append(via)
+            via = self.internal_next.get(via)
+        return passage
 
     def edge_driving_lane(self, edge_id: str) -> LaneGeometry:
         """The driving lane of a normal edge (the innermost one if it has several)."""
@@ -274,6 +286,7 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
     parking: dict[str, LaneGeometry] = {}
     sidewalk: dict[str, LaneGeometry] = {}
     internal: dict[str, LaneGeometry] = {}
+    internal_next: dict[str, str] = {}
     edge_lengths: dict[str, float] = {}
     crossings: list[Crossing] = []
     walking_areas: list[shapely.Polygon] = []
@@ -295,6 +308,8 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
             for lane in edge.getLanes():
                 if is_driving_lane(lane):
                     internal[lane.getID()] = _geometry(lane)
+                    internal_next.update((lane.getID(), c.getViaLaneID())
+                                         for c in lane.getOutgoing() if c.getViaLaneID())
             continue
         edge_lengths[edge.getID()] = float(edge.getLength())
         for lane in edge.getLanes():
@@ -318,6 +333,7 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
         internal_lanes=internal,
         edge_lengths=edge_lengths,
         junction_lanes=_junction_lanes(net, extent),
+        internal_next=internal_next,
         net=None if extent is None else net,
     )
 

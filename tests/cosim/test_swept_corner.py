@@ -135,3 +135,61 @@ def test_a_pedestrian_waiting_where_the_body_cuts_the_corner_is_given_way_to(
     waiting = trace[trace["t"] < 20.0]
     assert waiting["bus_x"].max() < -10.0  # stood before the corner while the pedestrian waited
     assert trace["bus_y"].iloc[-1] < -20.0  # and turned into JS after it had crossed
+
+
+# A priority junction whose left turns from the main road wait inside it: netconvert splits
+# each such passage at an internal junction into two internal lanes, both driven by SUMO.
+LEFT_NODES = """<nodes>
+    <node id="J" x="0" y="0" type="priority"/>
+    <node id="W" x="-100" y="0"/><node id="E" x="100" y="0"/>
+    <node id="S" x="0" y="-100"/><node id="N" x="0" y="100"/>
+</nodes>
+"""
+LEFT_ARMS = [("W", "J", 2, 2), ("J", "W", 2, 2), ("E", "J", 2, 2), ("J", "E", 2, 2),
+             ("S", "J", 1, 1), ("J", "S", 1, 1), ("N", "J", 1, 1), ("J", "N", 1, 1)]
+LEFT_EDGES = "<edges>\n" + "".join(
+    f'    <edge id="{a}{b}" from="{a}" to="{b}" numLanes="{n}" priority="{p}" speed="13.89"'
+    ' disallow="pedestrian"/>\n'
+    for a, b, n, p in LEFT_ARMS) + "</edges>\n"
+LEFT_OPTIONS = """<netconvertConfiguration>
+    <processing><offset.disable-normalization value="true"/></processing>
+    <junctions><no-turnarounds value="true"/></junctions>
+</netconvertConfiguration>
+"""
+
+
+def test_a_left_turn_split_inside_the_junction_is_swept_on_both_internal_lanes(
+        tmp_path: Path) -> None:
+    sources = tmp_path / "left"
+    sources.mkdir()
+    (sources / "left.nod.xml").write_text(LEFT_NODES)
+    (sources / "left.edg.xml").write_text(LEFT_EDGES)
+    (sources / "netconvert.cfg").write_text(LEFT_OPTIONS)
+    route = ["WJ", "JN"]
+    scenario = SCENARIO.replace(str(ROOT / "sumo_net" / "junction"), str(sources)).replace(
+        repr(TURN), repr(route)).replace("depart_pos_m = 120.0", "depart_pos_m = 60.0").replace(
+        "nominal_speed_mps = 6.6", "nominal_speed_mps = 5.0")
+    (tmp_path / "left.toml").write_text(scenario)
+    sc = load_scenario(tmp_path / "left.toml")
+    bus = sc.automated["bus"]
+    with SumoWorld(sc, tmp_path, "left") as world:
+        roadmap = world.roadmap
+        passage = roadmap.junction_passage(*route)
+        assert len(passage) == 2  # split at the internal junction
+        corners = []
+        for _ in range(round(sc.simulation.duration_s / sc.simulation.step_length_s)):
+            vehicle = world.step().vehicles.get("bus")
+            if vehicle is not None:
+                corners.append(vehicle.footprint.corners())
+    path = RoutePath.of_lanes(route_lanes(roadmap, route))
+    region = swept_region(body_sweep(path, bus.length_m, bus.width_m))
+    points = shapely.points(np.vstack(corners))
+    assert float(shapely.distance(region, points).max()) <= 1e-6
+    assert (corners[-1][1] - corners[-1][0])[1] > 0  # it turned north
+    line = roadmap.route_line(route)
+    assert line.length == pytest.approx(path.station[-1])
+    for rectangle in corners:
+        front = 0.5 * (rectangle[1] + rectangle[2])
+        sigma = float(np.interp(line.project(shapely.Point(front)), path.station, path.sigma))
+        assert np.abs(chord_footprint(path, sigma, bus.length_m, bus.width_m)
+                      - rectangle).max() <= 1e-6
