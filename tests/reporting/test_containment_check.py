@@ -79,7 +79,7 @@ def break_memo(monkeypatch: pytest.MonkeyPatch, memo: IdentityMemo,
 
 @pytest.fixture
 def scenario_and_model() -> tuple[Scenario, MotionModel]:
-    scenario = load_scenario(SCENARIO)  # position state, jitter 0.3 m
+    scenario = load_scenario(SCENARIO)  # position state, the paper road's jitter
     return scenario, MotionModel.from_config(scenario.estimator,
                                              scenario.simulation.step_length_s)
 
@@ -104,9 +104,10 @@ def test_a_stale_memo_entry_does_not_hide_a_set_that_lost_its_pedestrian(
     assert {(v["t"], v["node"]) for v in summary["violations"]} == {(0.1, NODE), (0.1, "fused")}
     written = [line for line in recorder.set_lines if line["t"] == 0.1]
     assert [line["kind"] for line in written] == ["local", "fused"]
+    jitter = scenario.estimator.position_jitter_m
     for line in written:  # what is written is what was checked: the lost set, with its box
         assert line["center"] == [213.0, -7.0]
-        assert line["generators"] == [[0.5, 0.0, 0.3, 0.0], [0.0, 0.5, 0.0, 0.3]]
+        assert line["generators"] == [[0.5, 0.0, jitter, 0.0], [0.0, 0.5, 0.0, jitter]]
         assert not Zonotope.from_json(line).contains(np.array([183.1, -7.0]), tol=1e-7)
 
 
