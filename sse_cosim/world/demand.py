@@ -186,11 +186,18 @@ def _driving(vid: str, depart_s: float, lane: int, depart_pos_m: float, speed_mp
             f"    </vehicle>")
 
 
+def pedestrian_vtype(type_id: str, walking_speed_mps: float, radius_m: float) -> str:
+    """The vType element of a pedestrian walking at ``walking_speed_mps`` (exactly: no speed
+    factor, no deviation) with a body of ``radius_m`` (SUMO's length and width: its
+    diameter)."""
+    size = 2.0 * radius_m
+    return _element("vType", id=type_id, vClass="pedestrian", length=size, width=size,
+                    desiredMaxSpeed=walking_speed_mps, maxSpeed=walking_speed_mps,
+                    speedFactor=1, speedDev=0)
+
+
 def _pedestrian(pid: str, ped: Pedestrian, plan: PedestrianPlan) -> Entry:
-    size = 2.0 * ped.radius_m
-    vtype = _element("vType", id=pid, vClass="pedestrian", length=size, width=size,
-                     desiredMaxSpeed=ped.walking_speed_mps, maxSpeed=ped.walking_speed_mps,
-                     speedFactor=1, speedDev=0)
+    vtype = pedestrian_vtype(pid, ped.walking_speed_mps, ped.radius_m)
     return vtype, 0.0, (
         f'    <person id={quoteattr(pid)} type={quoteattr(pid)} depart="0" '
         f'departPos="{_num(ped.start_pos_m)}">\n'

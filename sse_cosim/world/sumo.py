@@ -1,4 +1,5 @@
-"""The SUMO world: the only module of the project that imports ``libsumo``.
+"""The SUMO world: a scenario's run in SUMO. Only the world's SUMO modules (this one,
+:mod:`sse_cosim.world.sumo_setup` and :mod:`sse_cosim.world.walk_probe`) import ``libsumo``.
 
 ``SumoWorld(scenario, run_dir, scenario_name)`` is a context manager. Entering it takes the
 scenario's network (``network.net_file`` as it is, or built from ``network.sources_dir``:
@@ -60,18 +61,14 @@ warn``, junctions included) and kept in ``collisions``.
 from __future__ import annotations
 
 import contextlib
-import io
 import logging
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import Any
-from xml.sax.saxutils import quoteattr
 
 from sse_cosim.errors import AssumptionBroken, SimulationError, UserError
-from sse_cosim.files import write_text_atomic
 from sse_cosim.scenario.model import AutomatedVehicle, Scenario, present
 from sse_cosim.world import demand
 from sse_cosim.world.assumptions import MotionBounds, MotionBreak, PedestrianMotionCheck
@@ -80,22 +77,26 @@ from sse_cosim.world.network import NetworkBuildError, scenario_net_path
 from sse_cosim.world.roadmap import RoadMap, load_scene_roadmap, require_pedestrian_ground
 from sse_cosim.world.route_files import RouteFiles, read_route_files
 from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
-
-with contextlib.redirect_stdout(io.StringIO()):
-    # libsumo's import prints a note about the installed pyarrow's version; keep stdout clean.
-    import libsumo
+from sse_cosim.world.sumo_setup import (
+    CONFIG_FILE_NAME as CONFIG_FILE_NAME,  # re-exported: where a run's configuration is
+)
+from sse_cosim.world.sumo_setup import (
+    LIBSUMO_ERRORS,
+    LOG_FILE_NAME,
+    heading,
+    libsumo,
+    message,
+    person_centre,
+    write_config,
+)
 
 log = logging.getLogger(__name__)
 
 AUTOMATED_SPEED_MODE = 31
-CONFIG_FILE_NAME = "sumo.sumocfg"
-LOG_FILE_NAME = "sumo.log"
 _VEHICLE_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED)
 _AUTOMATED_VARS = (*_VEHICLE_VARS, libsumo.VAR_DISTANCE)
 _PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libsumo.VAR_ROAD_ID,
                 libsumo.VAR_LANE_ID)
-_LIBSUMO_ERRORS: tuple[type[BaseException], ...] = (
-    libsumo.TraCIException, libsumo.FatalTraCIError, RuntimeError)
 
 MOTION_ASSUMPTION = "pedestrian_speed"  # what breaks_assumptions lists for a motion break
 KEPT_BREAKS = 5  # the first breaks a study that lists MOTION_ASSUMPTION keeps (all counted)
@@ -201,10 +202,10 @@ class SumoWorld:
         config = self._write_files()
         try:
             libsumo.start(["sumo", "-c", str(config)])
-        except _LIBSUMO_ERRORS as exc:
-            with contextlib.suppress(*_LIBSUMO_ERRORS):
+        except LIBSUMO_ERRORS as exc:
+            with contextlib.suppress(*LIBSUMO_ERRORS):
                 libsumo.close()
-            raise SimulationError(self.scenario_name, f"SUMO did not start: {_message(exc)} "
+            raise SimulationError(self.scenario_name, f"SUMO did not start: {message(exc)} "
                                   f"(see {self.run_dir / LOG_FILE_NAME})") from exc
         _open_world = self
         self._open = True
@@ -223,8 +224,8 @@ class SumoWorld:
         _open_world = None
         try:
             libsumo.close()
-        except _LIBSUMO_ERRORS as exc:
-            log.warning("%s: closing SUMO failed: %s", self.scenario_name, _message(exc))
+        except LIBSUMO_ERRORS as exc:
+            log.warning("%s: closing SUMO failed: %s", self.scenario_name, message(exc))
 
     # --- stepping -------------------------------------------------------------------------
 
@@ -241,10 +242,10 @@ class SumoWorld:
         try:
             libsumo.simulationStep()
             snapshot = self._snapshot()
-        except _LIBSUMO_ERRORS as exc:
+        except LIBSUMO_ERRORS as exc:
             raise SimulationError(self.scenario_name,
                                   f"SUMO step at t={self._time + self._dt:.2f} s failed: "
-                                  f"{_message(exc)}") from exc
+                                  f"{message(exc)}") from exc
         self._check_insertions()
         self._check_motion(snapshot)
         return snapshot
@@ -310,9 +311,9 @@ class SumoWorld:
             return
         try:
             self._apply_command(vehicle_id)
-        except _LIBSUMO_ERRORS as exc:
+        except LIBSUMO_ERRORS as exc:
             raise SimulationError(self.scenario_name, f"setting the speed of {vehicle_id!r} "
-                                  f"failed: {_message(exc)}") from exc
+                                  f"failed: {message(exc)}") from exc
 
     def _apply_command(self, vehicle_id: str) -> None:
         state = self._automated[vehicle_id]
@@ -447,38 +448,10 @@ class SumoWorld:
         routes = demand.write_route_file(self.scenario, self._plan,
                                          self.run_dir / demand.ROUTE_FILE_NAME)
         sim = self.scenario.simulation
-        # relative to this file, where SUMO resolves them: no machine path in a results folder
-        route_files = [routes.name, *(self._relative(p) for p in self._route_files.paths)]
-        options = {
-            "input": {"net-file": self._relative(self._net_path),
-                      "route-files": ",".join(route_files)},
-            "time": {"begin": "0", "step-length": f"{sim.step_length_s:.10g}"},
-            "processing": {
-                "time-to-teleport": "-1",
-                "collision.action": "warn",
-                "collision.check-junctions": "true",
-                "pedestrian.model": "striping",
-                "pedestrian.striping.dawdling": "0",
-                "pedestrian.striping.stripe-width": f"{demand.STRIPE_WIDTH_M:g}",
-            },
-            "report": {"no-step-log": "true", "duration-log.disable": "true",
-                       "error-log": LOG_FILE_NAME},
-            "random_number": {"seed": str(sim.seed)},
-        }
-        lines = ['<?xml version="1.0" encoding="UTF-8"?>',
-                 f"<!-- SUMO configuration of scenario {self.scenario_name!r}, written by "
-                 "sse_cosim.world; replay with: sumo-gui -c sumo.sumocfg -->",
-                 "<configuration>"]
-        for section, values in options.items():
-            lines.append(f"    <{section}>")
-            lines += [f"        <{k} value={quoteattr(v)}/>" for k, v in values.items()]
-            lines.append(f"    </{section}>")
-        lines += ["</configuration>", ""]
-        return write_text_atomic(self.run_dir / CONFIG_FILE_NAME, "\n".join(lines))
-
-    def _relative(self, path: Path) -> str:
-        """``path`` relative to the run folder (where SUMO resolves the configuration's)."""
-        return os.path.relpath(path.resolve(), self.run_dir.resolve())
+        return write_config(self.run_dir, self._net_path, [routes, *self._route_files.paths],
+                            sim.step_length_s, sim.seed,
+                            f"SUMO configuration of scenario {self.scenario_name!r}, written by "
+                            "sse_cosim.world; replay with: sumo-gui -c sumo.sumocfg")
 
     def _snapshot(self) -> Snapshot:
         sim = libsumo.simulation
@@ -502,10 +475,10 @@ class SumoWorld:
         for vid, values in libsumo.vehicle.getAllSubscriptionResults().items():
             x, y = values[libsumo.VAR_POSITION]
             length, width, type_id = self._static(vid)
-            heading = _heading(values[libsumo.VAR_ANGLE])
             vehicles[vid] = VehicleState(
                 id=vid, kind=self._kinds.get(vid, "other"),
-                footprint=Footprint(Pose(float(x), float(y), heading), length, width),
+                footprint=Footprint(Pose(float(x), float(y), heading(values[libsumo.VAR_ANGLE])),
+                                    length, width),
                 speed=float(values[libsumo.VAR_SPEED]), type_id=type_id)
             if vid in self._automated:
                 self._automated[vid].distance = float(values[libsumo.VAR_DISTANCE])
@@ -529,9 +502,7 @@ class SumoWorld:
         if not values[libsumo.VAR_LANE_ID] and plan is not None:
             return plan.standing_xy
         x, y = values[libsumo.VAR_POSITION]
-        heading = _heading(values[libsumo.VAR_ANGLE])
-        half = 0.5 * self._person_size(pid)
-        return float(x) - half * math.cos(heading), float(y) - half * math.sin(heading)
+        return person_centre(x, y, values[libsumo.VAR_ANGLE], self._person_size(pid))
 
     def _static(self, vid: str) -> tuple[float, float, str]:
         """A vehicle's length, width (m) and type id, which do not change during a run."""
@@ -552,17 +523,6 @@ class SumoWorld:
         return length
 
 
-def _heading(nav_angle_deg: float) -> float:
-    """SUMO's navigational angle (deg, 0 = north, clockwise) as a heading (rad, CCW from east),
-    in [-pi, pi)."""
-    return math.radians((90.0 - nav_angle_deg + 180.0) % 360.0 - 180.0)
-
-
 def _lane(lane_id: str) -> str:
     """A person's lane id for a message; a person on no lane waits at its start."""
     return repr(lane_id) if lane_id else "(none: waiting at its start)"
-
-
-def _message(exc: BaseException) -> str:
-    text = " ".join(str(exc).split())
-    return text or type(exc).__name__

@@ -1,0 +1,218 @@
+"""Lone walkers in a short SUMO session: where SUMO's pedestrian model really puts a walker.
+
+``walk_alone(net_path, walkers, step_s, work_dir)`` runs the given walkers -- and nothing else --
+on a network and returns each one's trace: its centre and its lane at every step it walked.
+The session is a run's session (:mod:`sse_cosim.world.sumo_setup`: the same SUMO options, the
+same step length, the same reading of a person's centre), and each walker has the vType a
+scenario's pedestrian gets (:func:`sse_cosim.world.demand.pedestrian_vtype`), so a walker moves
+in a probe exactly as a scenario's pedestrian on the same walk -- as long as nothing else is
+near it (in a run, vehicles and other persons may hold it up).
+
+Times are a run's snapshot times: the state after SUMO's step to ``t + step_s`` is time ``t``,
+as SUMO's own outputs (FCD) and :class:`sse_cosim.world.sumo.SumoWorld` give it; a walker that
+departs at ``depart_s`` is first seen at ``depart_s``.
+
+libsumo holds one simulation per process: a probe refuses to start while one is open
+(:class:`SimulationError`) and always closes its own, so a run or another probe can follow in
+the same process. Its files (``walkers.rou.xml``, ``sumo.sumocfg``, ``sumo.log``) go into
+``work_dir``, a folder the caller owns.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from sse_cosim.errors import SimulationError
+from sse_cosim.files import write_text_atomic
+from sse_cosim.scenario.model import Pedestrian
+from sse_cosim.world.demand import pedestrian_vtype
+from sse_cosim.world.sumo_setup import (
+    LIBSUMO_ERRORS,
+    LOG_FILE_NAME,
+    libsumo,
+    message,
+    person_centre,
+    write_config,
+)
+
+PROBE = "walk probe"  # what its errors name instead of a scenario
+ROUTE_FILE_NAME = "walkers.rou.xml"
+# walkers draw no random numbers (no dawdling, no speed deviation): any seed gives the same run
+PROBE_SEED = 1
+DEFAULT_RADIUS_M = float(Pedestrian.model_fields["radius_m"].default)
+_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_LANE_ID)
+_EPS = 1e-9
+
+
+@dataclass(frozen=True)
+class Walker:
+    """One walker: the walk as in ``<walk edges="...">`` (sidewalks, walking areas,
+    crossings), from ``depart_pos_m`` on ``edges[0]`` to ``arrival_pos_m`` on ``edges[-1]`` at
+    ``speed_mps``, departing at ``depart_s``; ``radius_m`` is its body (a scenario
+    pedestrian's by default)."""
+
+    id: str
+    edges: tuple[str, ...]
+    depart_pos_m: float
+    arrival_pos_m: float
+    speed_mps: float
+    depart_s: float = 0.0
+    radius_m: float = DEFAULT_RADIUS_M
+
+
+@dataclass(frozen=True)
+class WalkTrace:
+    """A walker's trace: ``times_s`` (k,) every step it was on the network, walking; ``xy``
+    (k, 2) its centre then (network coordinates, as a run's snapshot reads it); ``lanes`` (k,)
+    the SUMO lane it was on."""
+
+    times_s: np.ndarray
+    xy: np.ndarray
+    lanes: tuple[str, ...]
+
+    def first_time_on(self, edge_ids: frozenset[str] | set[str]) -> float | None:
+        """The first time (s) it was on a lane of one of ``edge_ids``; None if never."""
+        for t, lane in zip(self.times_s, self.lanes, strict=True):
+            if lane.rpartition("_")[0] in edge_ids:
+                return float(t)
+        return None
+
+
+def walk_alone(net_path: Path, walkers: Sequence[Walker], step_s: float, work_dir: Path,
+               until_s: float | None = None) -> dict[str, WalkTrace]:
+    """Run the walkers (and nothing else) on the network; every walker's trace by id.
+
+    SUMO steps until every walker has arrived, or until the state at time ``until_s`` if
+    given. Raises :class:`SimulationError` (one line) when a SUMO simulation is already open in
+    this process, when SUMO cannot route a walker (naming it, see ``work_dir/sumo.log``), and
+    when a walker is not on the network at its departure.
+    """
+    ids = [w.id for w in walkers]
+    if len(set(ids)) != len(ids):
+        raise ValueError(f"walker ids must be unique: {sorted(ids)}")
+    if libsumo.isLoaded():
+        raise SimulationError(PROBE, "another SUMO simulation is already open in this process; "
+                              "libsumo runs one at a time -- close it first")
+    if not walkers:
+        return {}
+    work_dir.mkdir(parents=True, exist_ok=True)
+    routes = write_text_atomic(work_dir / ROUTE_FILE_NAME, _route_text(walkers))
+    config = write_config(work_dir, net_path, [routes], step_s, PROBE_SEED,
+                          f"SUMO configuration of {len(walkers)} lone walkers, written by "
+                          "sse_cosim.world.walk_probe")
+    try:
+        libsumo.start(["sumo", "-c", str(config)])
+    except LIBSUMO_ERRORS as exc:
+        _close()
+        raise SimulationError(PROBE, f"SUMO did not start{_named(exc, walkers)}: {message(exc)} "
+                              f"(see {work_dir / LOG_FILE_NAME})") from exc
+    try:
+        _check_positions(walkers)
+        return _walk(walkers, step_s, until_s)
+    except LIBSUMO_ERRORS as exc:
+        raise SimulationError(PROBE, f"SUMO failed{_named(exc, walkers)}: {message(exc)} "
+                              f"(see {work_dir / LOG_FILE_NAME})") from exc
+    finally:
+        _close()
+
+
+def _walk(walkers: Sequence[Walker], step_s: float,
+          until_s: float | None) -> dict[str, WalkTrace]:
+    """Step the open session and collect the traces (see :func:`walk_alone`)."""
+    radius = {w.id: w.radius_m for w in walkers}
+    waiting = sorted(walkers, key=lambda w: w.depart_s)  # not yet seen on the network
+    seen: set[str] = set()
+    times: dict[str, list[float]] = {w.id: [] for w in walkers}
+    xy: dict[str, list[tuple[float, float]]] = {w.id: [] for w in walkers}
+    lanes: dict[str, list[str]] = {w.id: [] for w in walkers}
+    sim = libsumo.simulation
+    while sim.getMinExpectedNumber() > 0:
+        libsumo.simulationStep()
+        t = round(sim.getTime() - step_s, 6)
+        for pid in sim.getDepartedPersonIDList():
+            libsumo.person.subscribe(pid, _VARS)
+            seen.add(pid)
+        while waiting and waiting[0].depart_s <= t + _EPS:
+            walker = waiting.pop(0)
+            if walker.id not in seen:
+                raise SimulationError(PROBE, f"walker {walker.id!r} is not on the network at "
+                                      f"its departure ({walker.depart_s:g} s): SUMO did not "
+                                      f"insert it at {walker.depart_pos_m:g} m on edge "
+                                      f"{walker.edges[0]!r}")
+        for pid, values in libsumo.person.getAllSubscriptionResults().items():
+            lane = str(values[libsumo.VAR_LANE_ID])
+            if not lane:
+                continue  # not walking (SUMO has none of these in a probe: no stops)
+            x, y = values[libsumo.VAR_POSITION]
+            times[pid].append(t)
+            xy[pid].append(person_centre(x, y, values[libsumo.VAR_ANGLE], 2.0 * radius[pid]))
+            lanes[pid].append(lane)
+        if until_s is not None and t >= until_s - _EPS:
+            break
+    return {pid: WalkTrace(np.asarray(times[pid], dtype=float),
+                           np.asarray(xy[pid], dtype=float).reshape(-1, 2), tuple(lanes[pid]))
+            for pid in times}
+
+
+def _check_positions(walkers: Sequence[Walker]) -> None:
+    """Each walker departs and arrives on its edges (SUMO would move a position beyond an edge's
+    end to the end, with only a warning)."""
+    for w in walkers:
+        for edge, pos, what in ((w.edges[0], w.depart_pos_m, "depart_pos_m"),
+                                (w.edges[-1], w.arrival_pos_m, "arrival_pos_m")):
+            length = float(libsumo.lane.getLength(f"{edge}_0"))
+            if not 0.0 <= pos <= length + _EPS:
+                raise SimulationError(PROBE, f"walker {w.id!r}: {what} = {pos:g} m lies off "
+                                      f"edge {edge!r} (0 to {length:g} m)")
+
+
+def _route_text(walkers: Sequence[Walker]) -> str:
+    """The route file: one vType per distinct (speed, radius), the walkers in departure
+    order."""
+    types: dict[tuple[float, float], str] = {}
+    for w in walkers:
+        types.setdefault((w.speed_mps, w.radius_m), f"walker{len(types)}")
+    persons = [
+        f'    <person id={quoteattr(w.id)} type="{types[(w.speed_mps, w.radius_m)]}" '
+        f'depart="{w.depart_s:.10g}" departPos="{w.depart_pos_m:.10g}">\n'
+        f'        <walk edges={quoteattr(" ".join(w.edges))} '
+        f'arrivalPos="{w.arrival_pos_m:.10g}"/>\n'
+        "    </person>"
+        for w in sorted(walkers, key=lambda w: w.depart_s)]
+    return "\n".join([
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        "<!-- Lone walkers, generated by sse_cosim.world.walk_probe; do not edit. -->",
+        "<routes>",
+        *(pedestrian_vtype(tid, speed, r) for (speed, r), tid in types.items()),
+        *persons,
+        "</routes>",
+        "",
+    ])
+
+
+def _named(exc: BaseException, walkers: Sequence[Walker]) -> str:
+    """`` for walker 'x'`` when SUMO's message names walker ``x`` or an edge of its walk (the
+    first such walker)."""
+    quoted = re.findall(r"'([^']*)'", str(exc))
+    for name in quoted:
+        if any(w.id == name for w in walkers):
+            return f" for walker {name!r}"
+    for name in quoted:
+        for w in walkers:
+            if name in w.edges:
+                return f" for walker {w.id!r} (its walk lists edge {name!r})"
+    return ""
+
+
+def _close() -> None:
+    """Close the session; a failure to close leaves nothing to do."""
+    try:
+        libsumo.close()
+    except LIBSUMO_ERRORS:
+        return
