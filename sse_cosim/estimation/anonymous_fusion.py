@@ -10,17 +10,21 @@ next), so nothing downstream may carry a fused track's history across steps.
 
 Negative information for a fused track F (the regions seen without its pedestrians,
 :class:`~sse_cosim.estimation.occupancy.ClearRegion`): node b's view R, taken ``age`` steps
-ago, is clear for F when no track of b (as b sent it, predicted to now) meets F's path set.
+ago, is clear for F when no track of b that joined a detection at that step (its
+``detected`` tracks, as b sent them, predicted to now) meets F's path set.
 
 Proof. Let P be a pedestrian whose path point s_k lies in F, and suppose P's position
 p_{k-age} was in R. Then b's sensors detected P at step k - age (assumption A2 of
-:mod:`~sse_cosim.estimation.association`), so P's state then lay in one of b's tracks (the
-first level's invariant: every pedestrian b has detected stays inside a track set of b), and
-that track's prediction to step k holds P's state at k (A3): it meets F at s_k. So if no
-track of b meets F, no pedestrian of F was in R at step k - age, which is what a clear region
-states. The vehicle's own node is one such b (age 0, its sensors' regions now). The test uses
-every track of b, hidden or not, and errs towards "meets" (tolerance), so it never declares
-a region clear by rounding.
+:mod:`~sse_cosim.estimation.association`), so P's state then lay in one of b's tracks that
+joined a detection at that step (the first level's invariant, in the form the association
+module proves it: a pedestrian detected now is in a track corrected with a detection now),
+and that track's prediction to step k holds P's state at k (A3): it meets F at s_k. So if
+no detected track of b meets F, no pedestrian of F was in R at step k - age, which is what a
+clear region states. The vehicle's own node is one such b (age 0, its sensors' regions now).
+A track that joined no detection (where a pedestrian may have hidden, or one whose pedestrians
+left every view) does not keep a view from being clear: every pedestrian in view is in a
+detected track too, so the test needs only those. It errs towards "meets" (tolerance), so it
+never declares a region clear by rounding.
 """
 
 from __future__ import annotations
@@ -47,12 +51,14 @@ from sse_cosim.sets import Zonotope, zonotopes_disjoint
 
 @dataclass(frozen=True)
 class _Node:
-    """One node's tracks at the fusing step by key, its view and that view's age (steps)."""
+    """One node's tracks at the fusing step by key, its view, that view's age (steps) and the
+    keys of the tracks that joined a detection when the view was taken."""
 
     node: str
     tracks: dict[str, Zonotope]
     view: shapely.Geometry
     age: int
+    detected: frozenset[str]
 
 
 class AnonymousFusionCentre(BaseFusionCentre):
@@ -69,8 +75,10 @@ class AnonymousFusionCentre(BaseFusionCentre):
         union of the vehicle's sensors' visible regions now; ``detected``: the keys of the
         node tracks some node detects now (a fused track is in view if one of them is in it).
         """
-        own = {key: t.estimate for key, t in tracks.get(self.node, {}).items()}
-        nodes = [_Node(self.node, own, own_view, 0), *_senders(shared)]
+        mine = tracks.get(self.node, {})
+        own = {key: t.estimate for key, t in mine.items()}
+        seen = frozenset(key for key, t in mine.items() if t.detected)
+        nodes = [_Node(self.node, own, own_view, 0, seen), *_senders(shared)]
         fused = associate_nodes([self._node_tracks(n) for n in nodes], self.model,
                                 self._fuse)
         ranked = {n.node: sorted(n.tracks) for n in nodes}
@@ -102,10 +110,12 @@ class AnonymousFusionCentre(BaseFusionCentre):
         return fuse_sets(sets, self.fusion_method, self.settings, self.model)
 
     def _clear(self, fused: Zonotope, nodes: Sequence[_Node]) -> list[ClearRegion]:
-        """The views of the nodes none of whose tracks meets ``fused`` (module docstring)."""
+        """The views of the nodes none of whose detected tracks meets ``fused`` (module
+        docstring)."""
         path = self.model.path_set(fused)
         return [ClearRegion(n.view, n.age) for n in nodes if not n.view.is_empty
-                and not any(self._meet(path, z) for z in n.tracks.values())]
+                and not any(self._meet(path, n.tracks[key]) for key in sorted(n.detected)
+                            if key in n.tracks)]
 
     def _meet(self, path: Zonotope, estimate: Zonotope) -> bool:
         """Whether the path set ``path`` meets ``estimate``'s (boxes first, then exactly; both
@@ -118,10 +128,12 @@ class AnonymousFusionCentre(BaseFusionCentre):
 
 
 def _senders(shared: SharedPicture) -> list[_Node]:
-    """Every sender's tracks in its newest message (predicted to now), view and age."""
+    """Every sender's tracks in its newest message (predicted to now), view, age and the keys
+    of the tracks it detected then."""
     tracks: dict[str, dict[str, Zonotope]] = {sender: {} for sender in shared.regions}
     for key, by_sender in shared.estimates.items():
         for sender, estimate in by_sender.items():
             tracks[sender][key] = estimate
-    return [_Node(sender, tracks[sender], shared.regions[sender], shared.ages[sender])
+    return [_Node(sender, tracks[sender], shared.regions[sender], shared.ages[sender],
+                  shared.detected.get(sender, frozenset()))
             for sender in sorted(shared.regions)]

@@ -66,6 +66,13 @@ Rules of one step at one node (each proof in a line or two; "X" is a track's pre
 Every rule keeps each pedestrian of a prediction in some new set, and each detected one is
 in a prediction or in a new track: by induction every pedestrian ever detected stays inside
 a track set (``tests/estimation/test_association.py`` checks it on random crossings).
+Moreover a pedestrian detected now (by d) is in a track that joined a detection now (its
+``joined`` is not empty): in a prediction X, d is X's candidate (R1) and joins the corrected
+set, the piece X ∩ d of R8, or, if left out (R4), the claimer's set, which joined it (R2);
+in none, it is in d's new track or the claimer's (R5, R8); merges and pools keep what their
+parts joined (R7, R8). So every pedestrian in view of a node's sensors is in one of its
+tracks that joined a detection, and a view is clear of a set that none of those meets
+(:mod:`~sse_cosim.estimation.anonymous_fusion`), whatever the tracks that joined nothing.
 
 Across nodes (:func:`associate_nodes`): track A of node a and track B of node b hold exactly
 the same pedestrians when A lies wholly in b's visible region (so each of A's pedestrians is

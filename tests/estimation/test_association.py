@@ -389,8 +389,8 @@ def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined
     fused (AnonymousFusionCentre, over a V2X link with latency), refined with the clear regions
     of each fused track: every pedestrian the vehicle or the sender (by the step of its newest
     message) has detected is in some fused set and in some refined region (fails if a view is
-    taken as clear for a track that meets one of the viewer's tracks); every pedestrian the
-    vehicle detects now is in a fused set it counts as in view."""
+    taken as clear for a track that meets one of the viewer's detected tracks); every
+    pedestrian the vehicle detects now is in a fused set it counts as in view."""
     rng = np.random.default_rng(seed)
     model = motion_model()
     sensors = {"bus": [random_sensor(rng, "bus_a"), random_sensor(rng, "bus_b")],
@@ -411,7 +411,9 @@ def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined
                             {s.name: s.region for s in mine})
             tracks[node] = observers[node].step(k, scan)
         link.send(Message("rsu", k, {key: t.estimate for key, t in tracks["rsu"].items()},
-                          views["rsu"]), 0.0)
+                          views["rsu"],
+                          frozenset(key for key, t in tracks["rsu"].items() if t.detected)),
+                  0.0)
         link.deliver(k)
         shared = link.picture(k, model)
         estimate, clear = centre.step(tracks, shared, views["bus"],
