@@ -13,8 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
+from swept_checks import assert_in_the_way
 
-from sse_cosim.control.picture import SceneContext, assess, route_lanes
+from sse_cosim.control.picture import SceneContext, route_lanes
 from sse_cosim.control.swept import (
     RoutePath,
     body_sweep,
@@ -98,24 +99,15 @@ def test_a_pedestrian_where_only_the_swinging_rear_reaches_is_a_conflict(
     context = turn_context(roadmap)
     spot = shapely.Point(SWING_SPOT)
     radius = 0.3
-    old = context.route_line.buffer(0.5 * WIDTH + radius, cap_style="flat")
-    assert not old.intersects(spot)  # the old zones (corridor and walkable) left it out
-    # a footprint reaches the pedestrian there: the rear corner, while the bus turns
+    # a footprint reaches the pedestrian there: the rear corner, while the bus turns; the old
+    # zones (corridor and walkable) left it out, and a pedestrian standing there arrives in
+    # its zone at once: no pass is possible
     path = RoutePath.of_lanes(route_lanes(roadmap, TURN))
-    touching = [s for s in np.arange(150.0, 200.0, 0.05)
+    touching = [float(np.interp(s, path.sigma, path.station))
+                for s in np.arange(150.0, 200.0, 0.05)
                 if shapely.Polygon(chord_footprint(path, s, LENGTH, WIDTH)).distance(spot)
                 <= radius]
-    assert touching
-    (zone,) = [z for z in context.zones if z.polygon.intersects(spot)]
-    stations = [float(np.interp(s, path.sigma, path.station)) for s in touching]
-    assert zone.start_m <= min(stations) and max(stations) <= zone.end_m + LENGTH
-    # a pedestrian standing there arrives in that zone at once: no pass is possible
-    front = shapely.get_coordinates(context.route_line.interpolate(150.0))[0]
-    seen = assess(context, front, 6.0, shapely.Polygon(), shapely.Polygon(),
-                  [spot.buffer(0.05)], [spot.buffer(0.05)])
-    outlook = next(o for o in seen.zones if context.zones[o.index] is zone)
-    assert outlook.arrival_s == 0.0 and outlook.in_view_arrival_s == 0.0
-    assert not seen.path_clear
+    assert_in_the_way(context, spot, radius, touching, 150.0)
 
 
 def test_on_the_right_turn_the_side_cutting_in_reaches_the_corner(roadmap: RoadMap) -> None:

@@ -18,12 +18,12 @@ import numpy as np
 import pandas as pd
 import pytest
 import shapely
+from swept_checks import assert_in_sweep, assert_placed_as_modelled, bus_footprints
 
 from sse_cosim.control.picture import route_lanes
-from sse_cosim.control.swept import RoutePath, body_sweep, chord_footprint, swept_region
+from sse_cosim.control.swept import RoutePath, chord_footprint
 from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.scenario.loader import load_scenario
-from sse_cosim.world.sumo import SumoWorld
 
 ROOT = Path(__file__).resolve().parents[2]
 TURN = ["WJ", "JS"]
@@ -50,38 +50,26 @@ def footprints(tmp_path_factory: pytest.TempPathFactory) -> tuple[list, object, 
     (run_dir / "right_turn.toml").write_text(SCENARIO)
     sc = load_scenario(run_dir / "right_turn.toml")
     bus = sc.automated["bus"]
-    with SumoWorld(sc, run_dir, "right_turn") as world:
-        corners = []
-        for _ in range(round(sc.simulation.duration_s / sc.simulation.step_length_s)):
-            vehicle = world.step().vehicles.get("bus")
-            if vehicle is not None:
-                corners.append(vehicle.footprint.corners())
-        return corners, world.roadmap, bus.length_m, bus.width_m
+    corners, roadmap = bus_footprints(sc, run_dir, "right_turn")
+    return corners, roadmap, bus.length_m, bus.width_m
 
 
 def test_every_footprint_lies_in_the_swept_region(footprints) -> None:
     corners, roadmap, length, width = footprints
-    path = RoutePath.of_lanes(route_lanes(roadmap, TURN))
-    region = swept_region(body_sweep(path, length, width))
-    points = shapely.points(np.vstack(corners))
     assert len(corners) > 100
-    assert float(shapely.distance(region, points).max()) <= 1e-6
+    assert_in_sweep(corners, RoutePath.of_lanes(route_lanes(roadmap, TURN)), length, width)
     # the bus did turn: from east to south
     first, last = corners[0], corners[-1]
     assert (first[1] - first[0])[0] > 0 and (last[1] - last[0])[1] < 0
     band = roadmap.route_line(TURN).buffer(0.5 * width, cap_style="flat")
-    missed = float(shapely.distance(band, points).max())
+    missed = float(shapely.distance(band, shapely.points(np.vstack(corners))).max())
     assert 0.9 < missed < 1.1  # 1.01 m: the rear's outer corner swinging out
 
 
 def test_the_model_places_the_body_as_sumo_does(footprints) -> None:
     corners, roadmap, length, width = footprints
     path = RoutePath.of_lanes(route_lanes(roadmap, TURN))
-    line = roadmap.route_line(TURN)
-    for rectangle in corners:
-        front = 0.5 * (rectangle[1] + rectangle[2])
-        sigma = float(np.interp(line.project(shapely.Point(front)), path.station, path.sigma))
-        assert np.abs(chord_footprint(path, sigma, length, width) - rectangle).max() <= 1e-6
+    assert_placed_as_modelled(corners, roadmap.route_line(TURN), path, length, width)
 
 
 WAITING = SCENARIO.replace('duration_s = 16.0', 'duration_s = 60.0') + """
@@ -172,24 +160,11 @@ def test_a_left_turn_split_inside_the_junction_is_swept_on_both_internal_lanes(
     (tmp_path / "left.toml").write_text(scenario)
     sc = load_scenario(tmp_path / "left.toml")
     bus = sc.automated["bus"]
-    with SumoWorld(sc, tmp_path, "left") as world:
-        roadmap = world.roadmap
-        passage = roadmap.junction_passage(*route)
-        assert len(passage) == 2  # split at the internal junction
-        corners = []
-        for _ in range(round(sc.simulation.duration_s / sc.simulation.step_length_s)):
-            vehicle = world.step().vehicles.get("bus")
-            if vehicle is not None:
-                corners.append(vehicle.footprint.corners())
+    corners, roadmap = bus_footprints(sc, tmp_path, "left")
+    passage = roadmap.junction_passage(*route)
+    assert len(passage) == 2  # split at the internal junction
     path = RoutePath.of_lanes(route_lanes(roadmap, route))
-    region = swept_region(body_sweep(path, bus.length_m, bus.width_m))
-    points = shapely.points(np.vstack(corners))
-    assert float(shapely.distance(region, points).max()) <= 1e-6
+    assert_in_sweep(corners, path, bus.length_m, bus.width_m)
     assert (corners[-1][1] - corners[-1][0])[1] > 0  # it turned north
-    line = roadmap.route_line(route)
-    assert line.length == pytest.approx(path.station[-1])
-    for rectangle in corners:
-        front = 0.5 * (rectangle[1] + rectangle[2])
-        sigma = float(np.interp(line.project(shapely.Point(front)), path.station, path.sigma))
-        assert np.abs(chord_footprint(path, sigma, bus.length_m, bus.width_m)
-                      - rectangle).max() <= 1e-6
+    assert_placed_as_modelled(corners, roadmap.route_line(route), path, bus.length_m,
+                              bus.width_m)
