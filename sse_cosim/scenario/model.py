@@ -135,8 +135,14 @@ class Pedestrian(StrictModel):
         "unless breaks_assumptions lists 'pedestrian_speed'."
     )
     steps_onto_crossing_s: NonNegativeFloat = Field(
-        11.5, description="Time at which it steps onto the crossing (s). It stands at its start "
-        "from t = 0 and starts walking in time; a time its walk cannot make is an error."
+        11.5, description="Time at which it steps onto the crossing (s), within one simulation "
+        "step. It stands at its start from t = 0 and starts walking in time, timed by a lone "
+        "SUMO walker on its walk; it does not wait for vehicles at the kerb. A time its walk "
+        "cannot make is an error naming the earliest one."
+    )
+    crossing: str | None = Field(
+        None, description="SUMO id of the crossing its walk takes (e.g. ':C_c0'), where the walk "
+        "has a choice; left out: the crossing of the shortest walk."
     )
     radius_m: PositiveFloat = Field(0.3, description="Body radius used for collisions (m).")
 

@@ -8,17 +8,32 @@ run. The checks run per actor; an error names the field with the actor's id
 (``pedestrians.p3.start_pos_m``).
 
 Each pedestrian walks an explicit path: its start sidewalk, the walking area, a zebra, the
-walking area on the far side, its end sidewalk; of the network's crossings, the one that makes
-the walk shortest. (Left to SUMO's router, a pedestrian whose end lies far down the opposite
-sidewalk would rather cross at the dead end of the road.)
+walking area on the far side, its end sidewalk; the zebra its ``crossing`` names, or else, of
+the network's crossings, the one that makes the walk shortest. (Left to SUMO's router, a
+pedestrian whose end lies far down the opposite sidewalk would rather cross at the dead end of
+the road.)
 
 Every pedestrian exists from t=0: the estimator assumes that an undetected pedestrian has been
 somewhere on walkable ground since the start, so it may not appear later where sensors already
 saw nobody. Its plan is a stop at its start position until its walk starts, then the walk,
-timed so that it steps onto the zebra at its ``steps_onto_crossing_s`` (the walking distance
-to the zebra is the rest of its start sidewalk plus the walking area's length, both from the
-network); a time the walk cannot make is an error. SUMO draws a waiting person beside the
-sidewalk, so :class:`PedestrianPlan` says where it stands: where its walk will begin.
+timed so that it steps onto the zebra at its ``steps_onto_crossing_s`` within half a step:
+
+* **Timing.** How long the walk from the start to the zebra takes is SUMO's own time, not a
+  length divided by a speed: SUMO's walker crosses a walking area on its own path, which is
+  shorter than the walking area's ``length`` attribute (2.64 m against 2.82 m on the paper
+  road, several metres on a converted town's corners). A :data:`WalkTimer` (the world passes
+  :class:`sse_cosim.world.walk_probe.ProbeTimer`: each pedestrian alone on its walk in a short
+  SUMO session, before the run) gives the steps from the walk's start to the first step on
+  the zebra's lane; the walk starts that long before ``steps_onto_crossing_s``, rounded to the
+  nearest step. A time the walk cannot make is an error naming the earliest one.
+* **Priority.** A pedestrian does not wait at the kerb for vehicles, also where the crossing
+  is not prioritised (netconvert's ``--crossings.guess`` makes every crossing it adds one):
+  its vType ignores every approaching vehicle (:func:`pedestrian_vtype`), so it steps out in
+  front of the bus as the scenario says. The world checks during the run that it did
+  (:class:`sse_cosim.world.sumo.SumoWorld`).
+
+SUMO draws a waiting person beside the sidewalk, so :class:`PedestrianPlan` says where it
+stands: where its walk will begin.
 
 Every vehicle keeps its speed: a speed above the limit of a lane on its route is an error, as
 SUMO would silently hold the vehicle to the limit.
@@ -29,7 +44,7 @@ from __future__ import annotations
 import difflib
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -63,24 +78,56 @@ ROUTE_FILE_NAME = "scenario.rou.xml"
 STRIPE_WIDTH_M = 0.64
 _EPS = 1e-9  # tolerance of time comparisons in steps
 NEAREST_EDGES = 5  # how many edge ids a mistyped one is answered with
+# A pedestrian's vType ignores approaching vehicles whose speed is at most this (SUMO's
+# jmIgnoreFoeSpeed, with jmIgnoreFoeProb 1): every road vehicle.
+IGNORE_FOE_SPEED_MPS = 1000.0
 
 
 @dataclass(frozen=True)
 class PedestrianPlan:
     """When and where the pedestrian waits and walks.
 
-    ``path`` lists the edges it walks (sidewalks, walking areas, the crossing);
-    ``distance_to_crossing_m`` the walk from its start to the zebra; ``standing_xy`` its centre
-    (network coordinates) while it waits at its start, which is where its walk begins; from
-    t=0 until ``walk_start_s`` it stands there, from the next step on it walks, and it steps
-    onto the zebra at ``crossing_time_s`` (the configured time).
+    ``path`` lists the edges it walks (sidewalks, walking areas, the crossing), ``crossing``
+    its zebra; ``distance_to_crossing_m`` the walk from its start to the zebra along the
+    network's lengths; ``standing_xy`` its centre (network coordinates) while it waits at its
+    start, which is where its walk begins; from t=0 until ``walk_start_s`` it stands there,
+    then it walks, and SUMO's walker takes ``walk_to_crossing_s`` (whole steps) to step onto
+    the zebra: at ``steps_on_s = walk_start_s + walk_to_crossing_s``, within half a step of
+    ``crossing_time_s`` (the configured time).
     """
 
     path: tuple[str, ...]
+    crossing: str
     distance_to_crossing_m: float
     standing_xy: tuple[float, float]
     walk_start_s: float
+    walk_to_crossing_s: float
     crossing_time_s: float
+
+    @property
+    def steps_on_s(self) -> float:
+        """When SUMO's walker steps onto the zebra (s): its walk's start plus its walk."""
+        return round(self.walk_start_s + self.walk_to_crossing_s, 6)
+
+
+@dataclass(frozen=True)
+class WalkToCrossing:
+    """A pedestrian's planned walk, for a :data:`WalkTimer`: ``path`` from ``start_pos_m`` on
+    its first edge to ``end_pos_m`` on its last (``length_m`` long along the network), over
+    ``crossing``, at ``speed_mps``, with a body of ``radius_m``."""
+
+    path: tuple[str, ...]
+    start_pos_m: float
+    end_pos_m: float
+    length_m: float
+    crossing: str
+    speed_mps: float
+    radius_m: float
+
+
+# How long each pedestrian's walk takes from its start to its first step on its crossing (s,
+# whole steps of ``step_s``), by pedestrian id: SUMO's time (sse_cosim.world.walk_probe).
+WalkTimer = Callable[[Mapping[str, WalkToCrossing], float], dict[str, float]]
 
 
 @dataclass(frozen=True)
@@ -92,9 +139,11 @@ class ActorPlan:
     pedestrians: dict[str, PedestrianPlan]
 
 
-def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: str) -> ActorPlan:
+def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: str,
+                timer: WalkTimer | None = None) -> ActorPlan:
     """Check the actors against the network (UserError naming ``source`` and the field) and plan
-    the automated vehicles' lanes and the pedestrians' walks."""
+    the automated vehicles' lanes and the pedestrians' walks, timed by ``timer`` (default: a
+    :class:`~sse_cosim.world.walk_probe.ProbeTimer` of the network in a temporary folder)."""
     net = _read_net(net_path) if roadmap.net is None else roadmap.net  # read once
     lanes = {vid: _check_automated(net, vid, av, source)
              for vid, av in present(scenario.automated).items()}
@@ -105,12 +154,20 @@ def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: st
     dt = scenario.simulation.step_length_s
     pedestrians = present(scenario.pedestrians)
     graph = WalkGraph(net) if pedestrians else None  # built once, for every pedestrian
-    plans = {pid: _plan_pedestrian(net, pid, ped, roadmap, dt, source, graph)
+    walks = {pid: _pedestrian_walk(net, pid, ped, source, graph)
              for pid, ped in pedestrians.items()}
     routes = {vid: av.route_edges for vid, av in present(scenario.automated).items()}
-    for pid, ped_plan in plans.items():
-        _check_crossing_on_route(net, pid, scenario.pedestrians[pid], ped_plan.path, routes,
-                                 source)
+    for pid, walk in walks.items():
+        _check_crossing_on_route(net, pid, scenario.pedestrians[pid], walk.path, routes, source)
+    plans: dict[str, PedestrianPlan] = {}
+    if walks:
+        if timer is None:
+            from sse_cosim.world.walk_probe import ProbeTimer  # imported here: it imports demand
+
+            timer = ProbeTimer(net_path)
+        times = timer(walks, dt)
+        plans = {pid: _time_pedestrian(net, pid, pedestrians[pid], walk, times[pid], dt, source)
+                 for pid, walk in walks.items()}
     return ActorPlan(automated_lanes=lanes, pedestrians=plans)
 
 
@@ -189,11 +246,15 @@ def _driving(vid: str, depart_s: float, lane: int, depart_pos_m: float, speed_mp
 def pedestrian_vtype(type_id: str, walking_speed_mps: float, radius_m: float) -> str:
     """The vType element of a pedestrian walking at ``walking_speed_mps`` (exactly: no speed
     factor, no deviation) with a body of ``radius_m`` (SUMO's length and width: its
-    diameter)."""
+    diameter). It ignores approaching vehicles at crossings (``jmIgnoreFoeProb="1"``, for
+    every vehicle up to :data:`IGNORE_FOE_SPEED_MPS`): it steps onto an unprioritised
+    crossing when its walk gets there, as on a zebra, instead of waiting at the kerb for a
+    gap. It still stops at a red pedestrian light."""
     size = 2.0 * radius_m
     return _element("vType", id=type_id, vClass="pedestrian", length=size, width=size,
                     desiredMaxSpeed=walking_speed_mps, maxSpeed=walking_speed_mps,
-                    speedFactor=1, speedDev=0)
+                    speedFactor=1, speedDev=0, jmIgnoreFoeProb=1,
+                    jmIgnoreFoeSpeed=IGNORE_FOE_SPEED_MPS)
 
 
 def _pedestrian(pid: str, ped: Pedestrian, plan: PedestrianPlan) -> Entry:
@@ -376,42 +437,66 @@ def _sidewalk(net: sumolib.net.Net, edge_id: str, field: str, source: str) -> No
                         "start and end the pedestrian on an edge with a sidewalk")
 
 
-def _plan_pedestrian(net: sumolib.net.Net, pid: str, ped: Pedestrian, roadmap: RoadMap,
-                     dt: float, source: str, graph: WalkGraph | None = None) -> PedestrianPlan:
+def _pedestrian_walk(net: sumolib.net.Net, pid: str, ped: Pedestrian, source: str,
+                     graph: WalkGraph | None = None) -> WalkToCrossing:
     """Check a pedestrian and plan its walk over the network's pedestrian ``graph`` (built
-    here unless given); every crossing of the network is a candidate, whatever part of the
-    network ``roadmap`` holds."""
+    here unless given): over its ``crossing`` if it names one, else the shortest walk over
+    any crossing of the network."""
     field = f"pedestrians.{pid}"
     _sidewalk(net, ped.start_edge, f"{field}.start_edge", source)
     _sidewalk(net, ped.end_edge, f"{field}.end_edge", source)
     _check_pos(net, ped.start_edge, ped.start_pos_m, f"{field}.start_pos_m", source)
     _check_pos(net, ped.end_edge, ped.end_pos_m, f"{field}.end_pos_m", source)
     graph = WalkGraph(net) if graph is None else graph
+    crossings = graph.crossings
+    if ped.crossing is not None:
+        if ped.crossing not in crossings:
+            nearest = difflib.get_close_matches(ped.crossing, sorted(crossings),
+                                                n=NEAREST_EDGES, cutoff=0.0)
+            raise UserError(source, f"{field}.crossing", f"the network has no crossing "
+                            f"{ped.crossing!r}", "name a crossing of the network; the nearest: "
+                            f"{', '.join(nearest) or '(none: the network has no crossing)'}")
+        crossings = [ped.crossing]
     path = pedestrian_path(net, (ped.start_edge, ped.start_pos_m), (ped.end_edge, ped.end_pos_m),
-                           graph.crossings, graph)
+                           crossings, graph)
     if path is None:
-        raise UserError(source, f"{field}.end_edge", f"no walk from {ped.start_edge!r} over "
-                        f"a zebra to {ped.end_edge!r}",
+        over = f" over {ped.crossing}" if ped.crossing is not None else " over a zebra"
+        raise UserError(source, f"{field}.crossing" if ped.crossing else f"{field}.end_edge",
+                        f"no walk from {ped.start_edge!r}{over} to {ped.end_edge!r}",
+                        f"name a crossing between them in {field}.crossing, or leave it out"
+                        if ped.crossing else
                         "end the pedestrian on a sidewalk across the road from its start")
-    distance = distance_to_crossing(net, path, ped.start_pos_m)
-    walk_s = distance / ped.walking_speed_mps
+    crossing = next(e for e in path if net.getEdge(e).getFunction() == "crossing")
+    return WalkToCrossing(path=tuple(path), start_pos_m=ped.start_pos_m, end_pos_m=ped.end_pos_m,
+                          length_m=walk_length(net, path, ped.start_pos_m, ped.end_pos_m),
+                          crossing=crossing, speed_mps=ped.walking_speed_mps,
+                          radius_m=ped.radius_m)
+
+
+def _time_pedestrian(net: sumolib.net.Net, pid: str, ped: Pedestrian, walk: WalkToCrossing,
+                     walk_s: float, dt: float, source: str) -> PedestrianPlan:
+    """The plan of a pedestrian whose walk takes ``walk_s`` (whole steps) from its start to
+    its first step on the crossing: it starts walking at the step nearest to
+    ``steps_onto_crossing_s - walk_s``; a negative one is an error naming the earliest time."""
+    field = f"pedestrians.{pid}"
     wanted = ped.steps_onto_crossing_s
-    # the last step from which it is still on time (never late by rounding)
-    start_step = math.floor((wanted - walk_s) / dt + _EPS)
+    start_step = math.floor((wanted - walk_s) / dt + 0.5 + _EPS)
     if start_step < 0:
-        earliest = math.ceil(walk_s / dt - _EPS) * dt
+        earliest = round(walk_s, 6)
         raise UserError(source, f"{field}.steps_onto_crossing_s",
-                        f"{wanted:g} s cannot be reached: the walk of {distance:.1f} m from "
-                        f"{field}.start_pos_m to the crossing takes {walk_s:.2f} s at "
-                        f"{ped.walking_speed_mps:g} m/s, so it steps onto the crossing at "
-                        f"{earliest:.6g} s at the earliest",
+                        f"{wanted:g} s cannot be reached: SUMO's walker takes {walk_s:.6g} s at "
+                        f"{ped.walking_speed_mps:g} m/s from {field}.start_pos_m to the crossing "
+                        f"{walk.crossing}, so it steps onto it at {earliest:.6g} s at the "
+                        "earliest",
                         f"use {earliest:.6g} s or later, or a {field}.start_pos_m nearer the "
                         "crossing")
     return PedestrianPlan(
-        path=tuple(path),
-        distance_to_crossing_m=distance,
-        standing_xy=standing_point(net, path, ped.start_pos_m, ped.radius_m),
+        path=walk.path,
+        crossing=walk.crossing,
+        distance_to_crossing_m=distance_to_crossing(net, walk.path, ped.start_pos_m),
+        standing_xy=standing_point(net, walk.path, ped.start_pos_m, ped.radius_m),
         walk_start_s=round(start_step * dt, 6),
+        walk_to_crossing_s=round(walk_s, 6),
         crossing_time_s=wanted,
     )
 

@@ -28,7 +28,12 @@ says, or the run is refused.
 
 Every pedestrian exists from t=0 and stands at its start until its walk starts (see
 :mod:`sse_cosim.world.demand`); meanwhile the snapshot places it at its plan's standing point
-on the sidewalk, where its walk then begins, not where SUMO draws a waiting person.
+on the sidewalk, where its walk then begins, not where SUMO draws a waiting person. Its walk is
+timed before SUMO starts by a lone walker on the same walk
+(:class:`sse_cosim.world.walk_probe.ProbeTimer`), so it steps onto its crossing at its
+``steps_onto_crossing_s`` within one step; ``step()`` checks that it did and raises
+:class:`SimulationError` (one line: the pedestrian, the planned and the actual time, the fix)
+when SUMO held it up or let it on early -- never a silent mismatch.
 
 Speed mode. Every automated vehicle drives under speed mode 31 (SUMO's default, set
 explicitly): SUMO keeps the safe speed towards leaders, the vehicle's maximum acceleration and
@@ -89,6 +94,7 @@ from sse_cosim.world.sumo_setup import (
     person_centre,
     write_config,
 )
+from sse_cosim.world.walk_probe import ProbeTimer
 
 log = logging.getLogger(__name__)
 
@@ -100,6 +106,7 @@ _PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libs
 
 MOTION_ASSUMPTION = "pedestrian_speed"  # what breaks_assumptions lists for a motion break
 KEPT_BREAKS = 5  # the first breaks a study that lists MOTION_ASSUMPTION keeps (all counted)
+_TIME_EPS = 1e-6  # tolerance of time comparisons (s)
 
 _open_world: SumoWorld | None = None
 
@@ -171,6 +178,7 @@ class SumoWorld:
         self._motion_break_count = 0
         self._person_lanes: dict[str, str] = {}  # each person's lane at the latest snapshot
         self._previous_lanes: dict[str, str] = {}
+        self._stepped_on: set[str] = set()  # pedestrians that stepped onto their crossing
 
     # --- context manager ------------------------------------------------------------------
 
@@ -198,7 +206,8 @@ class SumoWorld:
                                              self.scenario_name)
         self._check_carrier_types()
         self._plan = demand.plan_actors(self.scenario, self._net_path, self._roadmap,
-                                        source=self.scenario_name)
+                                        source=self.scenario_name,
+                                        timer=ProbeTimer(self._net_path))
         config = self._write_files()
         try:
             libsumo.start(["sumo", "-c", str(config)])
@@ -247,6 +256,7 @@ class SumoWorld:
                                   f"SUMO step at t={self._time + self._dt:.2f} s failed: "
                                   f"{message(exc)}") from exc
         self._check_insertions()
+        self._check_steps_onto_crossings(snapshot.time)
         self._check_motion(snapshot)
         return snapshot
 
@@ -411,6 +421,30 @@ class SumoWorld:
                                 f"no file in network.route_files declares the type {carrier!r}",
                                 "name a vType of the route files, or carry the sensor on a "
                                 "node (sensors.<name>.node)")
+
+    def _check_steps_onto_crossings(self, time: float) -> None:
+        """Every planned pedestrian steps onto its crossing within one step of its
+        ``steps_onto_crossing_s``; SUMO holding it up (a person or vehicle in its way, a red
+        light) or letting it step on early stops the run (:class:`SimulationError`)."""
+        for pid, plan in self.pedestrian_plans.items():
+            if pid in self._stepped_on:
+                continue
+            wanted = plan.crossing_time_s
+            on = self._person_lanes.get(pid, "").rpartition("_")[0] == plan.crossing
+            if on:
+                self._stepped_on.add(pid)
+            if abs(time - wanted) <= self._dt + _TIME_EPS or (not on and time < wanted):
+                continue
+            when = f"stepped onto it at {time:.2f} s" if on else \
+                f"had not stepped onto it by {time:.2f} s"
+            raise SimulationError(
+                self.scenario_name, f"pedestrian {pid!r} was to step onto its crossing "
+                f"{plan.crossing} at {wanted:g} s (pedestrians.{pid}.steps_onto_crossing_s, "
+                f"walking from {plan.walk_start_s:g} s) and {when}, more than one step "
+                f"({self._dt:g} s) off: something in SUMO held it up or its walk differs from "
+                "the lone walker's that timed it -- clear its walk (persons or vehicles in its "
+                f"way, a pedestrian light), or change pedestrians.{pid}.steps_onto_crossing_s "
+                f"or pedestrians.{pid}.start_pos_m")
 
     def _check_insertions(self) -> None:
         """Every automated and moving vehicle is on the road from its departure on; SUMO

@@ -16,12 +16,18 @@ libsumo holds one simulation per process: a probe refuses to start while one is 
 (:class:`SimulationError`) and always closes its own, so a run or another probe can follow in
 the same process. Its files (``walkers.rou.xml``, ``sumo.sumocfg``, ``sumo.log``) go into
 ``work_dir``, a folder the caller owns.
+
+:class:`ProbeTimer` times the scenario's pedestrians with it (a
+:data:`~sse_cosim.world.demand.WalkTimer`): how long SUMO's walker takes from the start of its
+walk to its first step on its crossing, which is how the world starts each walk in time.
 """
 
 from __future__ import annotations
 
+import math
 import re
-from collections.abc import Sequence
+import tempfile
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -31,7 +37,7 @@ import numpy as np
 from sse_cosim.errors import SimulationError
 from sse_cosim.files import write_text_atomic
 from sse_cosim.scenario.model import Pedestrian
-from sse_cosim.world.demand import pedestrian_vtype
+from sse_cosim.world.demand import WalkToCrossing, pedestrian_vtype
 from sse_cosim.world.sumo_setup import (
     LIBSUMO_ERRORS,
     LOG_FILE_NAME,
@@ -48,6 +54,7 @@ PROBE_SEED = 1
 DEFAULT_RADIUS_M = float(Pedestrian.model_fields["radius_m"].default)
 _VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_LANE_ID)
 _EPS = 1e-9
+SLOT_SLACK_S = 5.0  # a timed walker's slot outlasts 1.5 times its walk at its speed by this
 
 
 @dataclass(frozen=True)
@@ -120,6 +127,53 @@ def walk_alone(net_path: Path, walkers: Sequence[Walker], step_s: float, work_di
                               f"(see {work_dir / LOG_FILE_NAME})") from exc
     finally:
         _close()
+
+
+class ProbeTimer:
+    """Times pedestrians' walks on the network at ``net_path`` with lone SUMO walkers (a
+    :data:`~sse_cosim.world.demand.WalkTimer`).
+
+    One session walks every pedestrian's walk, one after the other in slots of 1.5 times its
+    walk at its speed plus :data:`SLOT_SLACK_S` (so each walks alone; a walker still on the
+    network when the next departs is an error), each with the pedestrian's speed and size.
+    A walk's time is the first step its walker is on the crossing's lane less its departure:
+    a whole number of steps. The session's files go into ``work_dir`` (kept), or a temporary
+    folder (removed) if None.
+    """
+
+    def __init__(self, net_path: Path, work_dir: Path | None = None) -> None:
+        self.net_path = Path(net_path)
+        self.work_dir = work_dir
+
+    def __call__(self, walks: Mapping[str, WalkToCrossing], step_s: float) -> dict[str, float]:
+        walkers: list[Walker] = []
+        depart = 0.0
+        for pid, walk in walks.items():
+            walkers.append(Walker(pid, walk.path, walk.start_pos_m, walk.end_pos_m,
+                                  walk.speed_mps, depart, walk.radius_m))
+            slot = 1.5 * walk.length_m / walk.speed_mps + SLOT_SLACK_S
+            depart = round(depart + math.ceil(slot / step_s - _EPS) * step_s, 6)
+        if self.work_dir is not None:
+            traces = walk_alone(self.net_path, walkers, step_s, self.work_dir)
+        else:
+            with tempfile.TemporaryDirectory(prefix="sse-cosim-walk-probe-") as folder:
+                traces = walk_alone(self.net_path, walkers, step_s, Path(folder))
+        times: dict[str, float] = {}
+        for walker, following in zip(walkers, [*walkers[1:], None], strict=True):
+            trace = traces[walker.id]
+            crossing = walks[walker.id].crossing
+            if following is not None and trace.times_s[-1] >= following.depart_s - _EPS:
+                raise SimulationError(PROBE, f"the lone walker of pedestrian {walker.id!r} was "
+                                      f"still walking at {following.depart_s:g} s, when the "
+                                      f"next ({following.id!r}) departed: the timing would not "
+                                      "be of a walker alone")
+            on = trace.first_time_on({crossing})
+            if on is None:
+                raise SimulationError(PROBE, f"the lone walker of pedestrian {walker.id!r} never "
+                                      f"stepped onto its crossing {crossing} (its lanes: "
+                                      f"{', '.join(dict.fromkeys(trace.lanes))})")
+            times[walker.id] = round(on - walker.depart_s, 6)
+        return times
 
 
 def _walk(walkers: Sequence[Walker], step_s: float,

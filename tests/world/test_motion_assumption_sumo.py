@@ -29,7 +29,7 @@ def test_a_jump_beyond_a_small_jitter_stops_the_run_with_one_line(tmp_path, caps
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err
     for words in ("broke an assumption of the estimator", "pedestrian 'pedestrian'",
-                  "t=9.60 s", "'WC_0' -> ':C_w1_0'", "estimator.position_jitter_m",
+                  "t=9.80 s", "'WC_0' -> ':C_w1_0'", "estimator.position_jitter_m",
                   "raise estimator.position_jitter_m to at least 0.07",
                   "list 'pedestrian_speed' in breaks_assumptions"):
         assert words in err, (words, err)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -48,10 +47,18 @@ def test_pedestrian_crosses_the_zebra(net_path: Path) -> None:
 def test_pedestrian_walk_start_derived_from_crossing_time(net_path: Path) -> None:
     plan = _plan(net_path, **{f"{PED}.steps_onto_crossing_s": 20.0}).pedestrians["pedestrian"]
     assert plan is not None
-    # the last 0.1 s step from which it is on time
-    latest = 20.0 - _walk_time()
-    assert latest - 0.1 < plan.walk_start_s <= latest
-    assert plan.crossing_time_s == 20.0
+    # SUMO's walker (timed alone) takes whole steps, fewer than the lengths say: its path over
+    # the walking area is shorter than the walking area's length
+    steps = plan.walk_to_crossing_s / 0.1
+    assert steps == pytest.approx(round(steps)) and plan.walk_to_crossing_s < _walk_time()
+    assert plan.walk_start_s == pytest.approx(20.0 - plan.walk_to_crossing_s)
+    assert plan.steps_on_s == pytest.approx(20.0) and plan.crossing_time_s == 20.0
+
+
+def _walk_steps(net_path: Path) -> float:
+    """SUMO's time (s) of the walk from the start to the zebra."""
+    plan = _plan(net_path, **{f"{PED}.steps_onto_crossing_s": 30.0}).pedestrians["pedestrian"]
+    return plan.walk_to_crossing_s
 
 
 @pytest.mark.parametrize(("overrides", "expected"), [
@@ -74,8 +81,7 @@ def test_pedestrian_stands_where_its_walk_begins(net_path: Path, overrides: dict
 
 def test_earliest_crossing_time_is_accepted(net_path: Path) -> None:
     """The earliest time the refusal names is one the plan takes: it walks at t=0."""
-    walk_time = _walk_time()
-    earliest = math.ceil(walk_time / 0.1) * 0.1
+    earliest = _walk_steps(net_path)
     plan = _plan(net_path, **{f"{PED}.steps_onto_crossing_s": earliest})
     plan = plan.pedestrians["pedestrian"]
     assert plan is not None and plan.walk_start_s == 0.0
@@ -83,12 +89,12 @@ def test_earliest_crossing_time_is_accepted(net_path: Path) -> None:
 
 def test_unreachable_crossing_time_is_refused(net_path: Path) -> None:
     # asked to reach the zebra 3 s before it can walk there
-    walk_time = _walk_time()
+    walk_time = _walk_steps(net_path)
     with pytest.raises(UserError) as info:
         _plan(net_path, **{"pedestrians.pedestrian.steps_onto_crossing_s": walk_time - 3.0})
     err = info.value
     assert (err.source, err.field) == (SOURCE, "pedestrians.pedestrian.steps_onto_crossing_s")
-    earliest = f"{math.ceil(walk_time / 0.1) * 0.1:.6g} s"
+    earliest = f"{walk_time:.6g} s"
     assert f"at {earliest} at the earliest" in err.problem
     assert f"use {earliest} or later" in err.fix and f"{PED}.start_pos_m" in err.fix
 

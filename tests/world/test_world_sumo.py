@@ -22,9 +22,9 @@ from sse_cosim.world.snapshot import PersonState
 pytestmark = pytest.mark.sumo
 
 PARKING_STRIP_Y = (-6.0, -3.5)  # the eastbound parking strip (sumo_net/README.md)
-# SUMO's path over the walking area (2.64 m) is shorter than the walking area's length the plan
-# counts (2.82 m): the pedestrian steps onto the zebra up to two 0.1 s steps early
-STEPS_EARLY = 0.2 + 1e-6
+# the walk is timed by SUMO's own walker: the pedestrian steps onto the zebra at the step
+# nearest to the configured time
+ON_TIME = 0.05 + 1e-6
 
 
 def truck_corners(end_pos_m: float, length_m: float) -> np.ndarray:
@@ -100,7 +100,7 @@ def test_pedestrian_walks_over_the_zebra(name: str,
     on = [t for t, p in tracks if p.on_crossing]
     assert on, "the pedestrian never stepped onto the crossing"
     ped = sc.pedestrians["pedestrian"]
-    assert on[0] == pytest.approx(ped.steps_onto_crossing_s, abs=STEPS_EARLY)
+    assert on[0] == pytest.approx(ped.steps_onto_crossing_s, abs=ON_TIME)
     assert all(run.roadmap.crossing_area.buffer(0.5).contains(_point(p))
                for _, p in tracks if p.on_crossing)
     after = [p for t, p in tracks if t > on[-1]]
@@ -128,11 +128,11 @@ def test_pedestrian_waits_at_its_start_until_its_walk_starts(overrides: dict,
                                       "simulation.duration_s": 21.0, **overrides})
     run = run_world(sc, tmp_path)
     plan = run.pedestrian_plans["pedestrian"]
-    assert plan.walk_start_s == pytest.approx(5.9)  # 20 s - 16.82 m / 1.2 m/s, on the grid
+    assert plan.walk_start_s == pytest.approx(20.0 - plan.walk_to_crossing_s)
     assert all("pedestrian" in s.persons for s in run.snapshots)
     track = [(s.time, s.persons["pedestrian"]) for s in run.snapshots]
     waiting = [p for t, p in track if t <= plan.walk_start_s + 1e-9]
-    assert len(waiting) == 60  # t = 0.0 ... 5.9
+    assert len(waiting) == round(plan.walk_start_s / 0.1) + 1  # t = 0.0 ... walk_start_s
     assert {p.position for p in waiting} == {plan.standing_xy}
     assert all(p.speed == 0.0 and not p.on_crossing for p in waiting)
     assert run.roadmap.sidewalks.contains(shapely.Point(plan.standing_xy))
@@ -142,7 +142,7 @@ def test_pedestrian_waits_at_its_start_until_its_walk_starts(overrides: dict,
     assert math.dist(plan.standing_xy, walking[0].position) == pytest.approx(step)
     assert walking[0].position[1] == pytest.approx(plan.standing_xy[1])
     on = [t for t, p in track if p.on_crossing]
-    assert on[0] == pytest.approx(20.0, abs=STEPS_EARLY)
+    assert on[0] == pytest.approx(20.0, abs=ON_TIME)
 
 
 def test_a_car_without_room_at_its_departure_is_a_user_error(tmp_path: Path) -> None:
