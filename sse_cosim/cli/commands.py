@@ -134,14 +134,41 @@ def fields() -> None:
 
 
 @cli.command()
-@click.argument("sources", type=click.Path(path_type=Path, file_okay=False),
-                default=Path("sumo_net"))
-def network(sources: Path) -> None:
-    """Build the road network from the plain-XML SOURCES folder (default: sumo_net/).
+@click.argument("network_path", metavar="SOURCES_OR_NET",
+                type=click.Path(path_type=Path, exists=True), default=Path("sumo_net"))
+@click.option("--step-length-s", type=click.FloatRange(min=0.001), default=None,
+              help="Step length (s) the walkers are measured at [default: a scenario's, 0.1].")
+@click.option("--speed-mps", type=click.FloatRange(min=0.01), default=None,
+              help="Speed bound (m/s) the walkers walk at [default: the estimator's, 2.5].")
+def network(network_path: Path, step_length_s: float | None, speed_mps: float | None) -> None:
+    """Build the road network and measure the position jitter its walkers need.
 
-    Runs netconvert (from the eclipse-sumo package) and caches the .net.xml under
-    SOURCES/build/; a run rebuilds it by itself when a source changes. Prints its path.
+    SOURCES_OR_NET is a folder of plain-XML sources (default: sumo_net/; netconvert from the
+    eclipse-sumo package builds it and caches the .net.xml under SOURCES/build/, and a run
+    rebuilds it by itself when a source changes) or an existing SUMO .net.xml. Prints the
+    network's path, then the jitter SUMO's lone walkers need at the speed bound on every
+    walking area of the network, with the junction and the step that need the most
+    (sse_cosim/world/walker_jitter.py; measured once per network and setting, then read from
+    the cache). A run whose scenario leaves estimator.position_jitter_m out takes the value
+    measured on its scene's part of the network.
     """
-    from sse_cosim.world.network import build_network
+    import sumolib
 
-    click.echo(build_network(sources))
+    from sse_cosim.scenario.model import Estimator, Pedestrian, Simulation
+    from sse_cosim.world import walker_jitter
+    from sse_cosim.world.network import build_network, check_net_file
+    from sse_cosim.world.sumo import sumo_version
+
+    if network_path.is_dir():
+        net_path = build_network(network_path)
+    else:
+        net_path = check_net_file(network_path, str(network_path))
+    click.echo(net_path)
+    step = step_length_s or Simulation.model_fields["step_length_s"].default
+    speed = speed_mps or Estimator.model_fields["max_pedestrian_speed_mps"].default
+    net = sumolib.net.readNet(str(net_path), withInternal=True, withPedestrianConnections=True)
+    measured = walker_jitter.measure(net_path, net, None, speed, step,
+                                     Pedestrian.model_fields["radius_m"].default, sumo_version())
+    click.echo(f"walker jitter: {measured.jitter_m:.3f} m at {speed:g} m/s and {step:g} s steps "
+               f"over {measured.junctions} junctions with walking areas; the most "
+               f"{measured.where()}")

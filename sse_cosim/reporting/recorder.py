@@ -260,10 +260,17 @@ class RunRecorder:
     first_seen: dict[str, dict[str, int]] = field(default_factory=dict)  # node -> pid -> step
 
     def __post_init__(self) -> None:
-        self.faults = FaultLog(self.scenario)
-        self.anonymous = self.scenario.estimator.association == "anonymous"
-        self.jitter = self.scenario.estimator.position_jitter_m
-        self.state_dim = STATE_DIMS[self.scenario.estimator.state_model]
+        self.start(self.scenario)
+
+    def start(self, scenario: Scenario) -> None:
+        """Record ``scenario`` as run: the one the world resolved (its measured jitter) is
+        given here before the first step."""
+        self.scenario = scenario
+        self.faults = FaultLog(scenario)
+        self.anonymous = scenario.estimator.association == "anonymous"
+        jitter = scenario.estimator.position_jitter_m
+        self.jitter = float("nan") if jitter is None else jitter  # nan: not resolved yet
+        self.state_dim = STATE_DIMS[scenario.estimator.state_model]
 
     def __call__(self, result: StepResult) -> None:
         t = round(result.snapshot.time, 6)

@@ -43,7 +43,7 @@ def run_scenario(
     source = portable_path(source)
     recorder = RunRecorder(scenario, tuple(scene_times),
                            replay=None if summary_only else ReplayLog())
-    info = simulate(scenario, out_dir / "sumo", source, recorder)
+    info = simulate(scenario, out_dir / "sumo", source, recorder, on_start=recorder.start)
     extra = None if info.motion_breaks is None else {"assumption_breaks": info.motion_breaks}
-    return write_run(out_dir, scenario, recorder, info.roadmap, source, info.arrived, plots,
-                     summary_only, extra)
+    return write_run(out_dir, info.scenario, recorder, info.roadmap, source, info.arrived,
+                     plots, summary_only, extra)

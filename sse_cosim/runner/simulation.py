@@ -26,6 +26,7 @@ the links of further automated vehicles from the next ones. SUMO is touched thro
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -49,43 +50,52 @@ from sse_cosim.world.sumo import MOTION_ASSUMPTION, SumoWorld
 @dataclass(frozen=True)
 class SimulationInfo:
     """How a run ended (steps recorded; per automated vehicle whether it reached the end of
-    its route), the road map it ran on, and -- for a study that lists ``pedestrian_speed`` in
-    ``breaks_assumptions`` -- the pedestrians' motion breaks it ran on with
+    its route), the road map and the scenario it ran with, and -- for a study that lists
+    ``pedestrian_speed`` in ``breaks_assumptions`` -- the pedestrians' motion breaks it ran on
     (``SumoWorld.motion_breaks``; None otherwise)."""
 
     steps: int
     arrived: dict[str, bool]
     roadmap: RoadMap
+    scenario: Scenario  # as run: with what the world resolved (the measured jitter)
     motion_breaks: dict[str, Any] | None = None
 
 
 def simulate(
     scenario: Scenario, run_dir: Path, scenario_name: str, on_step: StepCallback,
     timer: StageTimer | NoTimer | None = None,
+    on_start: Callable[[Scenario], None] | None = None,
 ) -> SimulationInfo:
     """Run ``scenario`` in SUMO, calling ``on_step`` after every step.
 
     SUMO's own files (routes, logs) go to ``run_dir``. Every automated vehicle having left
     the network (end of its route) or the scenario's duration ends the run. ``timer``
     (optional) is charged the time of each stage of each step (:mod:`sse_cosim.runner.timing`).
-    A pedestrian that leaves the estimator's motion model stops the run
-    (:class:`~sse_cosim.errors.AssumptionBroken`, raised by ``world.step()`` before the step's
-    snapshot reaches the estimator) unless the scenario lists ``pedestrian_speed``.
+    The world resolves what the scenario leaves to the network (the position jitter its
+    walkers need, :mod:`sse_cosim.world.walker_jitter`); the estimator runs with that
+    scenario, which ``on_start`` (optional) receives before the first step and
+    :class:`SimulationInfo` returns. A pedestrian that leaves the estimator's motion model
+    stops the run (:class:`~sse_cosim.errors.AssumptionBroken`, raised by ``world.step()``
+    before the step's snapshot reaches the estimator) unless the scenario lists
+    ``pedestrian_speed``.
     """
     timer = timer or NoTimer()
-    dt = scenario.simulation.step_length_s
-    automated = list(present(scenario.automated))
-    streams = np.random.SeedSequence(scenario.simulation.seed).spawn(2 + len(automated))
-    noise_rng, first_link_rng, fault_rng, *link_rngs = map(np.random.default_rng, streams)
-    config = scenario.estimator
-    model = MotionModel.from_config(config, dt)
-    settings = EstimatorSettings(config.gain_method, config.reduction_method,
-                                 config.max_generators)
-    specs = specs_from_scenario(scenario)
-    faults = FaultInjector(scenario, specs, fault_rng)
-    observers = first_level(config.association, scenario.node_ids(), model, settings)
-    n_steps = round(scenario.simulation.duration_s / dt)
     with SumoWorld(scenario, run_dir, scenario_name) as world:
+        scenario = world.scenario
+        if on_start is not None:
+            on_start(scenario)
+        dt = scenario.simulation.step_length_s
+        automated = list(present(scenario.automated))
+        streams = np.random.SeedSequence(scenario.simulation.seed).spawn(2 + len(automated))
+        noise_rng, first_link_rng, fault_rng, *link_rngs = map(np.random.default_rng, streams)
+        config = scenario.estimator
+        model = MotionModel.from_config(config, dt)
+        settings = EstimatorSettings(config.gain_method, config.reduction_method,
+                                     config.max_generators)
+        specs = specs_from_scenario(scenario)
+        faults = FaultInjector(scenario, specs, fault_rng)
+        observers = first_level(config.association, scenario.node_ids(), model, settings)
+        n_steps = round(scenario.simulation.duration_s / dt)
         egos = [Ego(vid, scenario, world.roadmap, model, settings, specs, rng)
                 for vid, rng in zip(automated, [first_link_rng, *link_rngs], strict=True)]
         for step in range(n_steps):
@@ -93,7 +103,7 @@ def simulate(
             snapshot = world.step()
             if world.all_arrived:  # (world.step() refuses a vehicle missing at its departure)
                 return SimulationInfo(step, _arrivals(world, automated), world.roadmap,
-                                      _motion_breaks(world))
+                                      scenario, _motion_breaks(world))
             active = [ego for ego in egos if ego.id in snapshot.vehicles]
             timer.lap("sumo")
             observations = sense(snapshot, specs, faults, noise_rng)
@@ -113,7 +123,7 @@ def simulate(
             on_step(StepResult(step, snapshot, observations, tracks, model, faults.statuses(),
                                results))
             timer.end_step("output")
-        return SimulationInfo(n_steps, _arrivals(world, automated), world.roadmap,
+        return SimulationInfo(n_steps, _arrivals(world, automated), world.roadmap, scenario,
                               _motion_breaks(world))
 
 

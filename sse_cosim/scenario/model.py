@@ -167,13 +167,16 @@ class Estimator(StrictModel):
     max_pedestrian_speed_mps: PositiveFloat = Field(
         2.5, description="Speed bound (m/s): the process noise |dx|, |dy| <= bound * step length."
     )
-    position_jitter_m: NonNegativeFloat = Field(
-        0.3,
+    position_jitter_m: NonNegativeFloat | None = Field(
+        None,
         description="How far the simulated position may stray from a speed-bounded path (m); "
-        "covers SUMO's pedestrian jumps at lane transitions (up to 0.7 m for one walker). Every "
-        "step checks that each pedestrian's true motion keeps it; a run that breaks it stops "
-        "(exit status 5) naming the jitter its walk needs, unless breaks_assumptions lists "
-        "'pedestrian_speed'.",
+        "covers SUMO's pedestrian jumps at lane transitions. Left out: the value measured for "
+        "the network, step length and speed bound (a lone SUMO walker at the speed bound through "
+        "every passage of every walking area of the scene, cached with the network; "
+        "`sse-cosim network` reports it). A value below the measured one is refused unless "
+        "breaks_assumptions lists 'pedestrian_speed'. Every step checks that each pedestrian's "
+        "true motion keeps it; a run that breaks it stops (exit status 5) naming the jitter its "
+        "walk needs, unless breaks_assumptions lists 'pedestrian_speed'.",
     )
     max_velocity_change_mps: PositiveFloat = Field(
         5.0,

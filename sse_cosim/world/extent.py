@@ -8,7 +8,10 @@ pedestrian's start and end edges and every road-side unit, each widened by a mar
     max_pedestrian_speed_mps * duration_s   (how far any pedestrian walks in the run)
   + interest_radius_m                       (the controller's tracked window)
   + the longest sensor range                (what any sensor can see beyond the route)
-  + 2 * position_jitter_m + SLACK_M.
+  + 2 * position_jitter_m + SLACK_M
+
+with the jitter as the scenario sets it, or :data:`MAX_MEASURED_JITTER_M` where it is left to
+the measurement (:mod:`sse_cosim.world.walker_jitter`, which refuses more).
 
 Every pedestrian of the scenario starts on an edge of the extent and stays within its margin
 for the whole run, so no pedestrian outside the extent can reach the bus's route, a crossing
@@ -35,6 +38,7 @@ from sse_cosim.scenario.model import present
 if TYPE_CHECKING:
     from sse_cosim.scenario.model import Scenario
 
+MAX_MEASURED_JITTER_M = 2.0  # the most a measured jitter may be (m): the extent reaches that far
 SLACK_M = 10.0  # beyond the margin's terms: lane widths, a pedestrian's radius, rounding
 
 Box = tuple[float, float, float, float]  # (x_min, y_min, x_max, y_max), m
@@ -74,7 +78,13 @@ def scene_margin(scenario: Scenario) -> float:
     estimator = scenario.estimator
     return (estimator.max_pedestrian_speed_mps * scenario.simulation.duration_s
             + scenario.controller.interest_radius_m + max(ranges, default=0.0)
-            + 2.0 * estimator.position_jitter_m + SLACK_M)
+            + 2.0 * scene_jitter(scenario) + SLACK_M)
+
+
+def scene_jitter(scenario: Scenario) -> float:
+    """The jitter (m) the extent allows for: the scenario's, or the most a measured one may be."""
+    jitter = scenario.estimator.position_jitter_m
+    return MAX_MEASURED_JITTER_M if jitter is None else jitter
 
 
 def scene_edges(scenario: Scenario) -> list[str]:

@@ -68,6 +68,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -75,9 +76,10 @@ from typing import Any
 
 from sse_cosim.errors import AssumptionBroken, SimulationError, UserError
 from sse_cosim.scenario.model import AutomatedVehicle, Scenario, present
-from sse_cosim.world import demand
+from sse_cosim.world import demand, walker_jitter
 from sse_cosim.world.assumptions import MotionBounds, MotionBreak, PedestrianMotionCheck
 from sse_cosim.world.demand import ActorPlan, PedestrianPlan
+from sse_cosim.world.extent import MAX_MEASURED_JITTER_M, scene_extent
 from sse_cosim.world.network import NetworkBuildError, scenario_net_path
 from sse_cosim.world.roadmap import RoadMap, load_scene_roadmap, require_pedestrian_ground
 from sse_cosim.world.route_files import RouteFiles, read_route_files
@@ -94,7 +96,7 @@ from sse_cosim.world.sumo_setup import (
     person_centre,
     write_config,
 )
-from sse_cosim.world.walk_probe import ProbeTimer
+from sse_cosim.world.walk_probe import PROBE, ProbeTimer
 
 log = logging.getLogger(__name__)
 
@@ -169,11 +171,8 @@ class SumoWorld:
         self._collisions: list[Collision] = []
         self._statics: dict[str, tuple[float, float, str]] = {}
         self._person_length: dict[str, float] = {}
-        estimator = scenario.estimator
         self._motion_declared = MOTION_ASSUMPTION in scenario.breaks_assumptions
-        self._motion = PedestrianMotionCheck(
-            MotionBounds(estimator.max_pedestrian_speed_mps, estimator.position_jitter_m,
-                         self._dt), needed_jitter=not self._motion_declared)
+        self._motion: PedestrianMotionCheck | None = None  # once the jitter is known
         self._motion_breaks: list[tuple[MotionBreak, str, str]] = []
         self._motion_break_count = 0
         self._person_lanes: dict[str, str] = {}  # each person's lane at the latest snapshot
@@ -205,9 +204,16 @@ class SumoWorld:
         self._route_files = read_route_files(network.route_files, self.scenario.actor_ids(),
                                              self.scenario_name)
         self._check_carrier_types()
-        self._plan = demand.plan_actors(self.scenario, self._net_path, self._roadmap,
-                                        source=self.scenario_name,
-                                        timer=ProbeTimer(self._net_path))
+        with self._walking_alone():
+            self._plan = demand.plan_actors(self.scenario, self._net_path, self._roadmap,
+                                            source=self.scenario_name,
+                                            timer=ProbeTimer(self._net_path))
+            self.scenario = self._with_jitter()
+        estimator = self.scenario.estimator
+        assert estimator.position_jitter_m is not None
+        self._motion = PedestrianMotionCheck(
+            MotionBounds(estimator.max_pedestrian_speed_mps, estimator.position_jitter_m,
+                         self._dt), needed_jitter=not self._motion_declared)
         config = self._write_files()
         try:
             libsumo.start(["sumo", "-c", str(config)])
@@ -260,6 +266,53 @@ class SumoWorld:
         self._check_motion(snapshot)
         return snapshot
 
+    @contextlib.contextmanager
+    def _walking_alone(self) -> Iterator[None]:
+        """A failure of the short SUMO sessions before the run (lone walkers timing the walks
+        and measuring the jitter, :mod:`sse_cosim.world.walk_probe`) names the scenario."""
+        try:
+            yield
+        except SimulationError as exc:
+            if exc.scenario != PROBE:
+                raise
+            raise SimulationError(self.scenario_name, f"{exc.problem} (lone walkers before the "
+                                  "run)") from exc
+
+    def _with_jitter(self) -> Scenario:
+        """The scenario with the position jitter its network needs (:mod:`sse_cosim.world.
+        walker_jitter`): the measured one where it sets none; one below the measured one is a
+        UserError, unless the study lists ``pedestrian_speed`` (then it is not measured)."""
+        estimator = self.scenario.estimator
+        configured = estimator.position_jitter_m
+        if configured is not None and self._motion_declared:
+            return self.scenario
+        assert self._roadmap is not None and self._net_path is not None
+        net = self._roadmap.net  # None: the whole network (route files), read by measure
+        measured = walker_jitter.measure(
+            self._net_path, net, None if net is None else scene_extent(self.scenario, net),
+            estimator.max_pedestrian_speed_mps, self._dt, self.scenario.pedestrian_radius_m(),
+            sumo_version())
+        if measured.jitter_m > MAX_MEASURED_JITTER_M:
+            raise UserError(self.scenario_name, "estimator.position_jitter_m",
+                            f"SUMO's walkers need {measured.jitter_m:.3f} m on this network "
+                            f"({measured.where()}), more than the {MAX_MEASURED_JITTER_M:g} m "
+                            "a measured jitter may be",
+                            "set estimator.position_jitter_m to at least that, or smooth the "
+                            "walking areas of the network")
+        if configured is None:
+            return _with_estimator(self.scenario, position_jitter_m=measured.jitter_m)
+        if configured < measured.jitter_m:
+            raise UserError(
+                self.scenario_name, "estimator.position_jitter_m",
+                f"{configured:g} m is below the {measured.jitter_m:.3f} m SUMO's lone walkers "
+                f"need on this network at {measured.speed_mps:g} m/s and {self._dt:g} s steps "
+                f"({measured.where()})",
+                f"leave estimator.position_jitter_m out to take the measured "
+                f"{measured.jitter_m:.3f} m or set at least that (or list "
+                f"'{MOTION_ASSUMPTION}' in breaks_assumptions in a study that breaks it on "
+                "purpose)")
+        return self.scenario
+
     def _check_motion(self, snapshot: Snapshot) -> None:
         """Every pedestrian's true position keeps the estimator's motion model: a path with
         steps of at most max_pedestrian_speed_mps * step length plus a jitter of at most
@@ -267,6 +320,7 @@ class SumoWorld:
         the pedestrian, the time, its lanes before and after and the fix -- unless the study
         lists ``pedestrian_speed``: then it is counted (:attr:`motion_breaks`) and the run goes
         on."""
+        assert self._motion is not None
         found = self._motion.step(snapshot.time, {pid: person.position
                                                   for pid, person in snapshot.persons.items()})
         for brk in found:
@@ -555,6 +609,12 @@ class SumoWorld:
                       else float(libsumo.person.getLength(pid)))
             self._person_length[pid] = length
         return length
+
+
+def _with_estimator(scenario: Scenario, **changes: Any) -> Scenario:
+    """``scenario`` with ``changes`` to its estimator section (a validated copy)."""
+    estimator = scenario.estimator.model_copy(update=changes)
+    return scenario.model_copy(update={"estimator": estimator})
 
 
 def _lane(lane_id: str) -> str:

@@ -41,16 +41,23 @@ def broken_network(folder: Path) -> Path:
 
 
 def fail_at_third_step(monkeypatch) -> None:
-    """SUMO raises in its third step, as it does when something inside it breaks."""
-    real_step = sumo.libsumo.simulationStep
+    """SUMO raises in the third step of a run, as it does when something inside it breaks
+    (the short sessions of lone walkers before it, walk_probe's, step as they always do)."""
+    real_step, real_start = sumo.libsumo.simulationStep, sumo.libsumo.start
     calls = []
+
+    def start(args: list[str], *rest: object, **kwargs: object) -> object:
+        calls.clear()
+        calls.append(sumo.CONFIG_FILE_NAME in args[-1] and Path(args[-1]).parent.name == "sumo")
+        return real_start(args, *rest, **kwargs)
 
     def step() -> None:
         calls.append(1)
-        if len(calls) == 3:
+        if calls[0] and len(calls) == 4:
             raise sumo.libsumo.TraCIException("Vehicle 'bus' has no valid route")
         real_step()
 
+    monkeypatch.setattr(sumo.libsumo, "start", start)
     monkeypatch.setattr(sumo.libsumo, "simulationStep", step)
 
 

@@ -116,8 +116,9 @@ def test_accumulated_drift_is_caught_although_every_step_is_within_the_bounds():
 def test_the_needed_jitter_admits_the_walk_and_a_little_less_does_not():
     steps = np.arange(20)[:, np.newaxis] * np.array([[0.35, 0.0]])
     needed = least_jitter(steps, BOUNDS)
-    # the exact least jitter: the walk drifts 0.1 m a step for 19 steps: 2 eps = 1.9 m
-    assert 0.95 <= needed <= 0.952
+    # the exact least jitter: the walk drifts 0.1 m a step for 19 steps: 2 eps = 1.9 m;
+    # least_jitter is at most 0.13 % + 2 mm above it
+    assert 0.95 <= needed <= 0.95 * 1.0013 + 0.002
     assert admits(steps, MotionBounds(2.5, needed, 0.1), sides=FINE_SIDES)
     assert not admits(steps, MotionBounds(2.5, needed - 3e-3, 0.1), sides=FINE_SIDES)
 

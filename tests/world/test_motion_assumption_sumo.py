@@ -1,30 +1,64 @@
 """The world's motion check in real SUMO, on the paper road (S1): a pedestrian that leaves the
 estimator's model stops the run with exit status 5 and one line; a study that lists
 ``pedestrian_speed`` runs on and counts the breaks; in a batch the stopped run is a failed run
-whose error.json names the assumption, and the other runs go on."""
+whose error.json names the assumption, and the other runs go on.
+
+A jitter below the measured one is refused (tests/world/test_walker_jitter.py), so the runs
+that must break here run on a copy of the paper road whose cached measurement says 0.05 m (as
+if the measurement had missed the jump): the run's own check still stops them."""
 
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import pytest
+from world_helpers import REPO
 
 from sse_cosim.cli.main import EXIT_ASSUMPTION_BROKEN, main
 from sse_cosim.reporting.outputs import RUNS_FOLDER
 from sse_cosim.runner.batch import run_batch
 from sse_cosim.runner.executors import Execution
+from sse_cosim.scenario.loader import load_scenario
+from sse_cosim.world import walker_jitter
+from sse_cosim.world.network import build_network
+from sse_cosim.world.sumo import sumo_version
 
 pytestmark = pytest.mark.sumo
 S1 = Path(__file__).resolve().parents[2] / "scenarios" / "s1_pedestrian.toml"
-TIGHT = ["--set", "estimator.position_jitter_m=0.05", "--set", "simulation.duration_s=10"]
+MISSED_M = 0.05  # what the planted measurement says
 
 
-def test_a_jump_beyond_a_small_jitter_stops_the_run_with_one_line(tmp_path, capsys):
+@pytest.fixture
+def missed(tmp_path, monkeypatch) -> Path:
+    """A copy of the paper road whose cached walker measurement says every junction needs
+    only 0.05 m (the cache in a folder of the test's own)."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    net = tmp_path / "paper.net.xml"
+    shutil.copyfile(build_network(REPO / "sumo_net"), net)
+    scenario = load_scenario(S1)
+    key = walker_jitter.cache_key(sumo_version(), scenario.simulation.step_length_s,
+                                  scenario.estimator.max_pedestrian_speed_mps,
+                                  scenario.pedestrian_radius_m())
+    walker_jitter.JitterCache(net).add(key, [
+        walker_jitter.JunctionJitter(node, MISSED_M, (), ("", ""), 0.0) for node in "CEW"])
+    return net
+
+
+def _on(net: Path, folder: Path) -> Path:
+    """S1 for 10 s on the network ``net``: its scenario file in ``folder``."""
+    path = folder / "broken.toml"
+    path.write_text(f'extends = "{S1.as_posix()}"\n[simulation]\nduration_s = 10\n'
+                    f'[network]\nnet_file = "{net.as_posix()}"\n', encoding="utf-8")
+    return path
+
+
+def test_a_jump_beyond_a_small_jitter_stops_the_run_with_one_line(tmp_path, capsys, missed):
     """SUMO's striping model moves the walker 0.39 m in one step where it enters the walking
     area (WC_0 -> :C_w1_0): beyond 2.5 m/s x 0.1 s and a jitter of 0.05 m."""
     with pytest.raises(SystemExit) as info:
-        main(["run", str(S1), "--out", str(tmp_path / "out"), *TIGHT])
+        main(["run", str(_on(missed, tmp_path)), "--out", str(tmp_path / "out")])
     assert info.value.code == EXIT_ASSUMPTION_BROKEN
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err
@@ -52,10 +86,8 @@ def test_a_study_that_lists_the_assumption_runs_on_and_counts_the_breaks(tmp_pat
     assert len(breaks["first"]) == min(breaks["count"], 5)
 
 
-def test_in_a_batch_the_stopped_run_is_a_failed_run_naming_the_assumption(tmp_path):
-    broken = tmp_path / "broken.toml"
-    broken.write_text(f'extends = "{S1.as_posix()}"\n[simulation]\nduration_s = 10\n'
-                      "[estimator]\nposition_jitter_m = 0.05\n", encoding="utf-8")
+def test_in_a_batch_the_stopped_run_is_a_failed_run_naming_the_assumption(tmp_path, missed):
+    broken = _on(missed, tmp_path)
     good = tmp_path / "good.toml"
     good.write_text(f'extends = "{S1.as_posix()}"\n[simulation]\nduration_s = 1\n',
                     encoding="utf-8")

@@ -22,9 +22,10 @@ SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
 
 @pytest.fixture(scope="module")
-def trajectories(tmp_path_factory) -> dict[str, tuple[np.ndarray, float]]:
+def trajectories(tmp_path_factory) -> dict[str, tuple[np.ndarray, float, float]]:
     """The pedestrian's positions (k, 2) in every scenario with one, and in S3 with a pedestrian
-    that waits 6 s at its start before it walks, with the step length."""
+    that waits 6 s at its start before it walks, with the step length and the jitter the run
+    took (measured for the network)."""
     result = {}
     runs = {name: (name, {}) for name in ("s1_pedestrian", "s2_pedestrian", "s3_pedestrian")}
     runs["s3_waiting"] = ("s3_pedestrian", {"pedestrians.pedestrian.steps_onto_crossing_s": 20.0})
@@ -34,11 +35,12 @@ def trajectories(tmp_path_factory) -> dict[str, tuple[np.ndarray, float]]:
         steps = round(scenario.simulation.duration_s / scenario.simulation.step_length_s)
         positions = []
         with SumoWorld(scenario, tmp_path_factory.mktemp(name), name) as world:
+            jitter = world.scenario.estimator.position_jitter_m
             for _ in range(steps):
                 persons = world.step().persons
                 if persons:
                     positions.append(next(iter(persons.values())).position)
-        result[name] = (np.array(positions), scenario.simulation.step_length_s)
+        result[name] = (np.array(positions), scenario.simulation.step_length_s, jitter)
     return result
 
 
@@ -55,13 +57,13 @@ def path_exists(positions: np.ndarray, speed: float, step: float, jitter: float)
 
 def test_sumo_pedestrians_admit_a_speed_bounded_path_within_the_jitter(trajectories):
     estimator = load_scenario(SCENARIOS / "s1_pedestrian.toml").estimator
-    for name, (positions, step) in trajectories.items():
+    for name, (positions, step, jitter) in trajectories.items():
         assert len(positions) > 100, name
         assert path_exists(positions, estimator.max_pedestrian_speed_mps, step,
-                           estimator.position_jitter_m), name
+                           jitter), name
 
 
 def test_without_the_jitter_sumo_breaks_the_speed_bound(trajectories):
     """The jumps are real: a much smaller jitter has no admissible path."""
-    positions, step = trajectories["s1_pedestrian"]
+    positions, step, _ = trajectories["s1_pedestrian"]
     assert not path_exists(positions, 2.5, step, 0.05)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -94,7 +92,7 @@ def test_an_open_simulation_is_refused_and_the_probe_always_closes(net_path, tmp
                    STEP_S, tmp_path / "c")
     assert "\n" not in str(info.value)
     assert not libsumo.isLoaded()
-    with pytest.raises(SimulationError, match="walker 'far'.*depart_pos_m = 500 m"):
+    with pytest.raises(SimulationError, match=r"walker 'far'.*depart_pos_m = 500 m"):
         walk_alone(net_path, [Walker("far", ACROSS, 500.0, 4.0, SPEED)], STEP_S, tmp_path / "d")
     assert not libsumo.isLoaded()
     assert len(walk_alone(net_path, [walker], STEP_S, tmp_path / "e",

@@ -110,12 +110,11 @@ def test_pedestrian_walks_over_the_zebra(name: str,
 
 @pytest.mark.parametrize("overrides", [
     {},
-    # SUMO moves this walker 1.21 m in one step on the walking area :C_w1_0 (t = 19.3 s), which
-    # the paper road's 0.35 m jitter does not cover (the world's check names 0.482 m): the
-    # jitter is raised here, as a network-wide measurement would (issue "Your own town", item 2)
+    # SUMO moves this walker 1.21 m in one step on the walking area :C_w1_0 (t = 19.3 s): the
+    # jitter measured for the road covers it (sse_cosim/world/walker_jitter.py)
     {"pedestrians.pedestrian.start_edge": "CE", "pedestrians.pedestrian.start_pos_m": 14.0,
      "pedestrians.pedestrian.end_edge": "EC", "pedestrians.pedestrian.end_pos_m": 90.0,
-     "parked.truck.present": False, "estimator.position_jitter_m": 0.5},
+     "parked.truck.present": False},
 ], ids=["east along WC", "west along CE"])
 def test_pedestrian_waits_at_its_start_until_its_walk_starts(overrides: dict,
                                                              tmp_path: Path) -> None:

@@ -1,0 +1,347 @@
+"""How far SUMO's walkers stray from a speed-bounded path on a network: measured, and cached
+with the network.
+
+The estimator assumes every pedestrian's position is a path with steps of at most v dt plus a
+jitter of at most eps (:mod:`sse_cosim.world.assumptions`). SUMO's striping model keeps that
+on a straight sidewalk, but re-places a walker where it enters or leaves a walking area: it may
+move farther in one step than its speed allows (0.80 m in 0.1 s at 2.5 m/s on the paper road,
+1.2 to 1.5 m on converted town networks). How much jitter covers that depends on the geometry
+of each walking area, so it is measured on the network itself:
+
+* **Walks.** For every walking area of the scene (every one of the network for
+  :func:`measure_network`) and every ordered pair (a, b) of distinct lanes it joins (sidewalks
+  and crossings), one walker walks from :data:`LEAD_M` before the walking area on a through it
+  to :data:`LEAD_M` along b. A walk that enters by a crossing starts on a sidewalk before the
+  crossing's other walking area; one that leaves by a crossing ends on a sidewalk after it.
+  So every passage a walker can take is walked, with the sidewalk before and after it --
+  except a turn back: from a sidewalk to one that leads back to the same node (the two sides
+  of a street at a dead end, a loop). On such walking areas SUMO reports walkers up to tens of
+  metres away from the walking area (86 m in one step in the converted Bad Hersfeld): no
+  jitter covers that. The scenarios' walks cross the street over a zebra and do not turn
+  back; a walker that does (a person from a route file) stops its run at that jump.
+* **Alone, at the bound.** Every walker walks at the speed bound v, the run's step length and
+  SUMO's options of a run (:func:`sse_cosim.world.walk_probe.walk_alone`); walkers whose walks
+  share an edge never walk at the same time (slots of :func:`_slots`), so none is pushed by
+  another. Crowds are not measured: a scenario with several pedestrians near each other sets
+  its own, larger jitter.
+* **Least jitter.** Each walk's least jitter (:func:`~sse_cosim.world.assumptions.least_jitter`,
+  proven by inner polygons, at most 0.13 % + 2 mm above the least) at the speed bound; a
+  junction's jitter is the largest over the passages of its walking areas (walks whose
+  upper bound, :func:`~sse_cosim.world.assumptions.path_jitter`, is no larger than the
+  largest found need no more and are not bisected).
+
+A run takes the largest over the junctions of the walking areas in its scene's extent
+(:mod:`sse_cosim.world.extent`: the pedestrians of a run cannot walk beyond it before the run
+ends). Every step of every run still checks the assumption on the true walk, so a walker that
+strays more than measured (a crowd, a stripe the measurement did not walk) stops the run with
+exit status 5 and never goes unnoticed.
+
+Cache: a JSON file per network, the built network's folder for one built from sources
+(``walker_jitter.json`` beside ``road.net.xml``), else ``$XDG_CACHE_HOME/sse-cosim`` by the
+content hash of the ``.net.xml``; its entries are keyed by SUMO's version, the step length,
+the speed bound and the pedestrian's size, and hold each junction's jitter and the walk that
+needed it. It is written atomically; only the junctions not measured yet are walked.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+import sumolib
+
+from sse_cosim.files import write_text_atomic
+from sse_cosim.world.assumptions import MotionBounds, admits, least_jitter, path_jitter
+from sse_cosim.world.extent import SceneExtent
+from sse_cosim.world.network import BUILD_DIR_NAME, NET_FILE_NAME
+from sse_cosim.world.walk_probe import Walker, WalkTrace, walk_alone
+
+LEAD_M = 3.0  # how far a walk starts before a walking area and ends beyond it (m)
+CACHE_FILE_NAME = "walker_jitter.json"
+_EPS_M = 1e-9  # steps longer than v dt by rounding only need no jitter
+SLOT_SLACK_S = 3.0  # a slot outlasts its longest walk at the bound by this much (and half again)
+
+
+@dataclass(frozen=True)
+class JunctionJitter:
+    """The jitter (m) SUMO's walkers need at one junction, and the walk (its edges) that
+    needed the most there, with the lanes of its largest step (from, to) and that step (m)."""
+
+    junction: str
+    jitter_m: float
+    walk: tuple[str, ...]
+    step_lanes: tuple[str, str]
+    step_m: float
+
+    def as_dict(self) -> dict[str, object]:
+        return {"jitter_m": self.jitter_m, "walk": list(self.walk),
+                "step_lanes": list(self.step_lanes), "step_m": self.step_m}
+
+
+@dataclass(frozen=True)
+class NetworkJitter:
+    """The measured jitter over a set of junctions (the worst one named; 0.0 and no junction
+    where no walking area was found), and the settings it was measured with."""
+
+    jitter_m: float
+    worst: JunctionJitter | None
+    junctions: int
+    speed_mps: float
+    step_s: float
+
+    def where(self) -> str:
+        """Where the worst jump happened, for messages."""
+        if self.worst is None:
+            return "no walking area in the scene"
+        w = self.worst
+        return (f"at junction {w.junction!r}: a {w.step_m:.2f} m step from {w.step_lanes[0]!r} "
+                f"to {w.step_lanes[1]!r}")
+
+
+class JitterCache:
+    """The measured junctions of one network (see the module docstring), read once, written
+    after every measurement."""
+
+    def __init__(self, net_path: Path) -> None:
+        self.path = cache_path(net_path)
+        try:
+            self.entries: dict[str, dict[str, dict]] = json.loads(self.path.read_text("utf-8"))
+        except (OSError, ValueError):
+            self.entries = {}
+
+    def junctions(self, key: str) -> dict[str, JunctionJitter]:
+        return {jid: JunctionJitter(jid, e["jitter_m"], tuple(e["walk"]), tuple(e["step_lanes"]),
+                                    e["step_m"])
+                for jid, e in self.entries.get(key, {}).items()}
+
+    def add(self, key: str, found: Iterable[JunctionJitter]) -> None:
+        entry = self.entries.setdefault(key, {})
+        entry.update({j.junction: j.as_dict() for j in found})
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        write_text_atomic(self.path, json.dumps(self.entries, indent=1, sort_keys=True) + "\n")
+
+
+def cache_path(net_path: Path) -> Path:
+    """Where the measurements of the network at ``net_path`` are kept."""
+    net_path = Path(net_path).resolve()
+    if net_path.name == NET_FILE_NAME and net_path.parent.parent.name == BUILD_DIR_NAME:
+        return net_path.parent / CACHE_FILE_NAME  # a build: its folder is keyed by content
+    digest = hashlib.sha256()
+    with net_path.open("rb") as stream:
+        for block in iter(lambda: stream.read(1 << 20), b""):
+            digest.update(block)
+    root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return root / "sse-cosim" / f"{digest.hexdigest()[:16]}.{CACHE_FILE_NAME}"
+
+
+def measure(net_path: Path, net: sumolib.net.Net | None, extent: SceneExtent | None,
+            speed_mps: float, step_s: float, radius_m: float,
+            sumo_version: str) -> NetworkJitter:
+    """The jitter SUMO's walkers need on the walking areas of ``net`` (the network at
+    ``net_path``, read here if None) in ``extent`` (all of them for None), measured where the
+    cache lacks a junction."""
+    if net is None:
+        net = sumolib.net.readNet(str(net_path), withInternal=True,
+                                  withPedestrianConnections=True)
+    areas = [e for e in net.getEdges(withInternal=True) if e.getFunction() == "walkingarea"
+             and (extent is None or extent.holds(e))]
+    wanted = sorted({_junction(area) for area in areas})
+    cache = JitterCache(net_path)
+    key = cache_key(sumo_version, step_s, speed_mps, radius_m)
+    known = cache.junctions(key)
+    missing = [jid for jid in wanted if jid not in known]
+    if missing:
+        todo = [area for area in areas if _junction(area) in set(missing)]
+        started = time.perf_counter()
+        print(f"measuring how far SUMO's walkers jump on {len(todo)} walking areas of "
+              f"{net_path.name} (once per network, step length and speed bound)...",
+              file=sys.stderr, flush=True)
+        found = _walk_junctions(net_path, net, todo, speed_mps, step_s, radius_m)
+        print(f"measured {len(found)} junctions ({time.perf_counter() - started:.1f} s)",
+              file=sys.stderr, flush=True)
+        cache.add(key, found)
+        known.update({j.junction: j for j in found})
+    measured = [known[jid] for jid in wanted]
+    worst = max(measured, key=lambda j: (j.jitter_m, j.junction), default=None)
+    return NetworkJitter(jitter_m=0.0 if worst is None else worst.jitter_m, worst=worst,
+                         junctions=len(measured), speed_mps=speed_mps, step_s=step_s)
+
+
+def cache_key(sumo_version: str, step_s: float, speed_mps: float, radius_m: float) -> str:
+    """The cache entry of measurements with these settings."""
+    return (f"sumo {sumo_version}|step {step_s:.10g} s|speed {speed_mps:.10g} m/s"
+            f"|radius {radius_m:.10g} m")
+
+
+def _junction(area: sumolib.net.edge.Edge) -> str:
+    return str(area.getFromNode().getID())
+
+
+def passages(net: sumolib.net.Net, areas: Sequence[sumolib.net.edge.Edge]
+             ) -> list[tuple[str, tuple[str, ...], float, float]]:
+    """One walk (junction, edges, depart pos, arrival pos) per passage of each walking area
+    (module docstring); passages no sidewalk leads to or from are left out."""
+    walks = []
+    for area in areas:
+        neighbours = sorted({e.getID(): e for e in (*area.getIncoming(), *area.getOutgoing())
+                             }.values(), key=lambda e: e.getID())
+        for a in neighbours:
+            for b in neighbours:
+                if a is b or _turns_back(a, b, _junction(area)):
+                    continue
+                head = _into(a, area)
+                tail = _out_of(b, area)
+                if head is None or tail is None:
+                    continue
+                edges = (*head, area.getID(), *tail)
+                walks.append((_junction(area), edges,
+                              _lead(net.getEdge(edges[0]), toward=_node_of(net, edges[1])),
+                              _lead(net.getEdge(edges[-1]), toward=_node_of(net, edges[-2]))))
+    return walks
+
+
+def _turns_back(a: sumolib.net.edge.Edge, b: sumolib.net.edge.Edge, junction: str) -> bool:
+    """Whether sidewalks ``a`` and ``b`` both lead from ``junction`` to the same node: a walk
+    from one to the other turns back (a dead end's turn, a loop)."""
+    if "crossing" in (a.getFunction(), b.getFunction()):
+        return False
+    return _far_end(a, junction) == _far_end(b, junction)
+
+
+def _far_end(edge: sumolib.net.edge.Edge, junction: str) -> str:
+    ends = (edge.getFromNode().getID(), edge.getToNode().getID())
+    return ends[1] if ends[0] == junction else ends[0]
+
+
+def _into(lane_edge: sumolib.net.edge.Edge, area: sumolib.net.edge.Edge
+          ) -> tuple[str, ...] | None:
+    """The edges of a walk into ``area`` by ``lane_edge``: a sidewalk alone, or a sidewalk,
+    the other walking area and the crossing."""
+    if lane_edge.getFunction() != "crossing":
+        return (lane_edge.getID(),)
+    other = _other_area(lane_edge, area)
+    side = None if other is None else _a_sidewalk(other)
+    return None if side is None else (side, other.getID(), lane_edge.getID())
+
+
+def _out_of(lane_edge: sumolib.net.edge.Edge, area: sumolib.net.edge.Edge
+            ) -> tuple[str, ...] | None:
+    head = _into(lane_edge, area)
+    return None if head is None else tuple(reversed(head))
+
+
+def _other_area(crossing: sumolib.net.edge.Edge, area: sumolib.net.edge.Edge
+                ) -> sumolib.net.edge.Edge | None:
+    others = [e for e in (*crossing.getIncoming(), *crossing.getOutgoing())
+              if e.getFunction() == "walkingarea" and e.getID() != area.getID()]
+    return min(others, key=lambda e: e.getID(), default=None)
+
+
+def _a_sidewalk(area: sumolib.net.edge.Edge) -> str | None:
+    sides = sorted(e.getID() for e in (*area.getIncoming(), *area.getOutgoing())
+                   if e.getFunction() not in ("crossing", "walkingarea"))
+    return sides[0] if sides else None
+
+
+def _node_of(net: sumolib.net.Net, area_id: str) -> str:
+    return str(net.getEdge(area_id).getFromNode().getID())
+
+
+def _lead(edge: sumolib.net.edge.Edge, toward: str) -> float:
+    """The position (m) on sidewalk ``edge`` :data:`LEAD_M` from its end at node ``toward``."""
+    length = edge.getLength()
+    lead = min(LEAD_M, 0.5 * length)
+    return length - lead if edge.getToNode().getID() == toward else lead
+
+
+def _walk_junctions(net_path: Path, net: sumolib.net.Net,
+                    areas: Sequence[sumolib.net.edge.Edge], speed_mps: float, step_s: float,
+                    radius_m: float) -> list[JunctionJitter]:
+    walks = passages(net, areas)
+    lengths = [sum(net.getEdge(e).getLength() for e in edges[1:-1]) + 2.0 * LEAD_M
+               for _, edges, _, _ in walks]
+    longest_s = 1.5 * max(lengths, default=0.0) / speed_mps + SLOT_SLACK_S
+    slot_s = math.ceil(longest_s / step_s) * step_s
+    walkers = [Walker(id=f"w{i}", edges=edges, depart_pos_m=depart, arrival_pos_m=arrival,
+                      speed_mps=speed_mps, depart_s=round(slot * slot_s, 6), radius_m=radius_m)
+               for i, ((_, edges, depart, arrival), slot)
+               in enumerate(zip(walks, _slots([w[1] for w in walks]), strict=True))]
+    with tempfile.TemporaryDirectory(prefix="walker_jitter.") as work:
+        traces = walk_alone(net_path, walkers, step_s, Path(work))
+    _check_alone(walkers, traces)
+    bounds = MotionBounds(speed_mps, 0.0, step_s)
+    by_junction: dict[str, list[tuple[tuple[str, ...], WalkTrace]]] = {}
+    for (junction, edges, _, _), walker in zip(walks, walkers, strict=True):
+        by_junction.setdefault(junction, []).append((edges, traces[walker.id]))
+    junctions = sorted({_junction(area) for area in areas})
+    return [_junction_jitter(j, by_junction[j], bounds) if j in by_junction
+            else JunctionJitter(j, 0.0, (), ("", ""), 0.0) for j in junctions]
+
+
+def _junction_jitter(junction: str, walks: list[tuple[tuple[str, ...], WalkTrace]],
+                     bounds: MotionBounds) -> JunctionJitter:
+    """The largest least jitter of a junction's walks, in decreasing order of the jitter of a
+    speed-bounded path built from each (:func:`~sse_cosim.world.assumptions.path_jitter`, an
+    upper bound): a walk whose bound is no larger than the largest found so far, or that the
+    largest admits (:func:`~sse_cosim.world.assumptions.admits`, proven), needs no more and is
+    not bisected."""
+    bounded = sorted(((path_jitter(trace.xy, bounds.step_m), edges, trace)
+                      for edges, trace in walks), key=lambda w: -w[0])
+    best = _walk_jitter(junction, bounded[0][1], bounded[0][2], bounds)
+    for upper, edges, trace in bounded[1:]:
+        if upper <= best.jitter_m:
+            break
+        at_best = replace(bounds, jitter_m=best.jitter_m)
+        if admits(trace.xy, at_best):  # proven: it needs no more than the best
+            continue
+        found = _walk_jitter(junction, edges, trace, at_best)
+        if found.jitter_m > best.jitter_m:
+            best = found
+    return best
+
+
+def _slots(walks: Sequence[tuple[str, ...]]) -> list[int]:
+    """A slot per walk such that walks sharing an edge have different slots (first fit)."""
+    used: list[set[str]] = []
+    slots = []
+    for edges in walks:
+        mine = set(edges)
+        slot = next((k for k, taken in enumerate(used) if not taken & mine), len(used))
+        if slot == len(used):
+            used.append(set())
+        used[slot] |= mine
+        slots.append(slot)
+    return slots
+
+
+def _check_alone(walkers: Sequence[Walker], traces: dict[str, WalkTrace]) -> None:
+    """Walkers that share an edge did not walk at the same time (else a slot was too short)."""
+    spans = {w.id: (traces[w.id].times_s[0], traces[w.id].times_s[-1]) for w in walkers}
+    for i, first in enumerate(walkers):
+        for second in walkers[i + 1:]:
+            if set(first.edges) & set(second.edges):
+                (a0, a1), (b0, b1) = spans[first.id], spans[second.id]
+                if a0 <= b1 and b0 <= a1:
+                    raise RuntimeError(f"walkers {first.id} and {second.id} met: the jitter "
+                                       "measurement's slots are too short")
+
+
+def _walk_jitter(junction: str, edges: tuple[str, ...], trace: WalkTrace,
+                 bounds: MotionBounds) -> JunctionJitter:
+    """The least jitter of one walk (0.0 where no step exceeds v dt: the path is the walk)."""
+    steps = np.diff(trace.xy, axis=0)
+    lengths = np.sqrt((steps * steps).sum(axis=1))  # (k - 1,)
+    k = int(np.argmax(lengths)) if len(lengths) else 0
+    step_m = float(lengths[k]) if len(lengths) else 0.0
+    lanes = (trace.lanes[k], trace.lanes[k + 1]) if len(lengths) else ("", "")
+    needed = least_jitter(trace.xy, bounds) if step_m > bounds.step_m + _EPS_M else 0.0
+    return JunctionJitter(junction, needed, edges, lanes, round(step_m, 3))
