@@ -140,6 +140,11 @@ class Pedestrian(StrictModel):
         "SUMO walker on its walk; it does not wait for vehicles at the kerb. A time its walk "
         "cannot make is an error naming the earliest one."
     )
+    crossing_tolerance_s: NonNegativeFloat | None = Field(
+        None, description="How far (s) its step onto the crossing may be from "
+        "steps_onto_crossing_s before the run stops; left out: one step. A crowd whose "
+        "pedestrians hold each other up on the sidewalk sets more (scenarios/crowd.toml)."
+    )
     crossing: str | None = Field(
         None, description="SUMO id of the crossing its walk takes (e.g. ':C_c0'), where the walk "
         "has a choice; left out: the crossing of the shortest walk."

@@ -487,18 +487,21 @@ class SumoWorld:
             on = self._person_lanes.get(pid, "").rpartition("_")[0] == plan.crossing
             if on:
                 self._stepped_on.add(pid)
-            if abs(time - wanted) <= self._dt + _TIME_EPS or (not on and time < wanted):
+            tolerance = self.scenario.pedestrians[pid].crossing_tolerance_s
+            allowed = self._dt if tolerance is None else max(self._dt, tolerance)
+            if abs(time - wanted) <= allowed + _TIME_EPS or (not on and time < wanted):
                 continue
             when = f"stepped onto it at {time:.2f} s" if on else \
                 f"had not stepped onto it by {time:.2f} s"
             raise SimulationError(
                 self.scenario_name, f"pedestrian {pid!r} was to step onto its crossing "
                 f"{plan.crossing} at {wanted:g} s (pedestrians.{pid}.steps_onto_crossing_s, "
-                f"walking from {plan.walk_start_s:g} s) and {when}, more than one step "
-                f"({self._dt:g} s) off: something in SUMO held it up or its walk differs from "
+                f"walking from {plan.walk_start_s:g} s) and {when}, more than "
+                f"{allowed:g} s off: something in SUMO held it up or its walk differs from "
                 "the lone walker's that timed it -- clear its walk (persons or vehicles in its "
-                f"way, a pedestrian light), or change pedestrians.{pid}.steps_onto_crossing_s "
-                f"or pedestrians.{pid}.start_pos_m")
+                f"way, a pedestrian light), change pedestrians.{pid}.steps_onto_crossing_s "
+                f"or pedestrians.{pid}.start_pos_m, or allow more with "
+                f"pedestrians.{pid}.crossing_tolerance_s")
 
     def _check_insertions(self) -> None:
         """Every automated and moving vehicle is on the road from its departure on; SUMO
