@@ -26,7 +26,7 @@ PEDESTRIAN_SCENARIOS = [f"scenarios/s{i}_pedestrian.toml" for i in (1, 2, 3)]
 
 
 def open_loop(recording: Recording) -> dict:
-    config = Estimator()
+    config = Estimator(position_jitter_m=recording.jitter_m)
     model = MotionModel.from_config(config, DT)
     kalman = KalmanTracker(model)
     plain = {n: PlainObserver(model, config.gain_method) for n in recording.nodes}

@@ -133,10 +133,12 @@ class Recording:
     scenario: str
     nodes: list[str]
     steps: list[StepRecord] = field(default_factory=list)
+    jitter_m: float | None = None  # the run's position jitter (measured for its network)
 
 
 def record_step(result, recording: Recording) -> None:
     """Append one :class:`~sse_cosim.pipeline.result.StepResult` to ``recording``."""
+    recording.jitter_m = result.model.jitter
     strips: dict[str, dict[str, list[Strips]]] = {}
     for obs in result.observations.values():
         for person_id, detection in obs.detections.items():

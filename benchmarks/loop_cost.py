@@ -58,14 +58,16 @@ def bare_sumo(scenario: Scenario, steps: int, folder: Path) -> float:
 def cosim(scenario: Scenario, folder: Path) -> tuple[float, dict[str, float], int]:
     """Seconds per step of the full loop (recorder included), µs per stage, steps."""
     timer = StageTimer()
-    simulate(scenario, folder, "bench", RunRecorder(scenario), timer=timer)
+    recorder = RunRecorder(scenario)
+    simulate(scenario, folder, "bench", recorder, timer=timer, on_start=recorder.start)
     return sum(timer.totals.values()) / timer.steps, timer.per_step_us(), timer.steps
 
 
 def profile_run(scenario: Scenario, folder: Path, top: int = 15) -> str:
     """cProfile of one full run: the functions with the largest cumulative time."""
-    return profile_call(lambda: simulate(scenario, folder, "profile", RunRecorder(scenario)),
-                        "cumulative", top)
+    recorder = RunRecorder(scenario)
+    return profile_call(lambda: simulate(scenario, folder, "profile", recorder,
+                                         on_start=recorder.start), "cumulative", top)
 
 
 def profile_call(call: Callable[[], object], order: str, top: int) -> str:

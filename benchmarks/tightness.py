@@ -63,7 +63,7 @@ def record(path: str, overrides: dict | None = None) -> tuple[Recording, dict, S
         record_step(result, recording)
 
     with tempfile.TemporaryDirectory(prefix="sse-bench-rec-") as tmp:
-        simulate(scenario, Path(tmp), Path(path).stem, on_step)
+        simulate(scenario, Path(tmp), Path(path).stem, on_step, on_start=recorder.start)
     summary = recorder.summary()
     summary["kf_misses"] = sum(r["possible_contains_truth"] is False for r in recorder.rows)
     summary["steps_with_region"] = sum(r["possible_contains_truth"] is not None
@@ -141,7 +141,7 @@ def _replay(recording: Recording, gains: Sequence[str], fusions: Sequence[str],
 
 
 def replay(recording: Recording, gains=GAINS, fusions=FUSIONS) -> dict:
-    model = MotionModel.from_config(Estimator(), DT)
+    model = MotionModel.from_config(Estimator(position_jitter_m=recording.jitter_m), DT)
     return _replay(recording, gains, fusions, model)
 
 

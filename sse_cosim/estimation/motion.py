@@ -63,7 +63,12 @@ class MotionModel:
 
     @classmethod
     def from_config(cls, config: Estimator, step_length: float) -> MotionModel:
-        """The model named by ``config.state_model`` for steps of ``step_length`` seconds."""
+        """The model named by ``config.state_model`` for steps of ``step_length`` seconds;
+        ``config`` with its jitter set (a run's world measures it where a scenario leaves it
+        out, :mod:`sse_cosim.world.walker_jitter`)."""
+        if config.position_jitter_m is None:
+            raise ValueError("estimator.position_jitter_m is not set: the world resolves it "
+                             "before the estimator starts")
         v_max = config.max_pedestrian_speed_mps
         if config.state_model == "position":
             return cls(

@@ -48,7 +48,7 @@ def test_every_fault_kind_has_a_scenario_that_loads():
 def run(path: Path, tmp: Path, overrides: dict) -> dict:
     scenario = load_scenario(path, overrides)
     recorder = RunRecorder(scenario)
-    simulate(scenario, tmp / path.stem, path.stem, recorder)
+    simulate(scenario, tmp / path.stem, path.stem, recorder, on_start=recorder.start)
     return recorder.summary()
 
 

@@ -81,7 +81,7 @@ def test_clear_regions_and_detections_join_the_bus_and_the_senders():
 def test_the_pedestrians_in_view_are_those_some_node_detects_now():
     """The bus detects "a" now, not "c" (known from earlier); rsu1's newest message reports
     "b" detected: "a" and "b" are in view, "c" is only known."""
-    model = MotionModel.from_config(Estimator(), DT)
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
     fusion = second_level("labelled", model, EstimatorSettings("enclose", "girard", 8), "enclose",
                           ["front"], DT, BUS)
     z = Zonotope(np.zeros(2), np.eye(2))
@@ -96,7 +96,7 @@ def test_the_pedestrians_in_view_are_those_some_node_detects_now():
 
 
 def test_refined_regions_forget_their_history_when_the_picture_turns_inconsistent():
-    model = MotionModel.from_config(Estimator(), DT)
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
     walkable = shapely.box(-20, -20, 20, 20)
     small = {"ped": Zonotope(np.zeros(2), np.eye(2) * 0.5)}
     large = {"ped": Zonotope(np.zeros(2), np.eye(2) * 3.0)}

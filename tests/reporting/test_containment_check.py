@@ -79,7 +79,7 @@ def break_memo(monkeypatch: pytest.MonkeyPatch, memo: IdentityMemo,
 
 @pytest.fixture
 def scenario_and_model() -> tuple[Scenario, MotionModel]:
-    scenario = load_scenario(SCENARIO)  # position state, the paper road's jitter
+    scenario = load_scenario(SCENARIO, {"estimator.position_jitter_m": 0.646})  # the road's
     return scenario, MotionModel.from_config(scenario.estimator,
                                              scenario.simulation.step_length_s)
 

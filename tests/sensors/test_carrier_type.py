@@ -80,7 +80,7 @@ def test_a_node_in_the_scene_is_a_key_even_when_it_sees_nobody() -> None:
 
 
 def test_a_node_appearing_at_run_time_gets_an_observer_and_keeps_it() -> None:
-    model = MotionModel.from_config(Estimator(), 0.1)
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), 0.1)
     observers = LocalObservers.labelled(["bus"], model, EstimatorSettings("enclose", "girard", 8))
     strips = Strips(np.eye(2), np.array([210.0, 2.0]), np.array([0.5, 0.5]))
     assert observers.step(0, {}) == {"bus": {}}
