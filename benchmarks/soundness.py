@@ -33,12 +33,13 @@ KINDS = ("uniform", "worst-case")
 GAINS = ("volume", "frobenius", "enclose")
 FUSIONS = ("strips", "frobenius", "volume", "enclose")
 NODES = ("bus", "n1", "n2")
+JITTER_M = 0.3  # the synthetic walker's jitter (a SUMO run measures its network's)
 
 
 def stream(seed: int, bound: float, kind: str, gain: str, fusion: str, steps: int) -> dict:
     """One synthetic stream; counts of node-steps checked and of violations."""
     rng = np.random.default_rng(seed)
-    config = Estimator(gain_method=gain, fusion_method=fusion)
+    config = Estimator(gain_method=gain, fusion_method=fusion, position_jitter_m=JITTER_M)
     model = MotionModel.from_config(config, DT)
     step_bound = config.max_pedestrian_speed_mps * DT
     eps = config.position_jitter_m
