@@ -24,6 +24,7 @@ from sse_cosim.world.roadmap import RoadMap, load_roadmap
 ROOT = Path(__file__).resolve().parents[2]
 SOURCES = ROOT / "tests" / "networks" / "two_zebras"
 SCENARIO = ROOT / "scenarios" / "s1_pedestrian.toml"
+JITTER_M = 0.649  # the road's measured jitter: `sse-cosim network tests/networks/two_zebras`
 ROUTE = ["WC", "CD", "DE"]
 SECOND_ZEBRA_X = (258.0, 262.0)
 LANE_Y = (-3.5, 0.0)  # the bus's driving lane
@@ -37,8 +38,7 @@ SECOND_ZEBRA_CASE = {
     "pedestrians.pedestrian.walking_speed_mps": 2.5,
     "pedestrians.pedestrian.steps_onto_crossing_s": 12.0,
     # at 2.5 m/s SUMO's walker jumps 0.8 m in one step on the far walking area (:D_w0_0,
-    # t = 16.9 s), beyond a speed-bounded path plus 0.3 m (the world's check names 0.334 m)
-    "estimator.position_jitter_m": 0.35,
+    # t = 16.9 s): the jitter measured for the road covers it
     # the bus gives way to the pedestrian in view until SUMO removes it beyond the zebra (19 s),
     # then needs about 4 s to clear the zebra from its edge
     "simulation.duration_s": 26.0,
@@ -55,7 +55,7 @@ def scene(roadmap: RoadMap, route: list[str]) -> SceneContext:
     sc = load_scenario(SCENARIO, {"automated.bus.route_edges": route})
     est = sc.estimator
     return SceneContext.build(roadmap, route, sc.automated["bus"], sc.controller,
-                              est.max_pedestrian_speed_mps, est.position_jitter_m,
+                              est.max_pedestrian_speed_mps, JITTER_M,
                               sc.pedestrian_radius_m(), sc.simulation.step_length_s)
 
 
