@@ -89,10 +89,10 @@ def test_other_refusals_of_the_planner_stop_the_campaign(tmp_path):
 
 def test_the_default_campaign_has_at_least_1000_feasible_runs():
     plan = plan_campaign(load_campaign(DEFAULT))
-    # crowd: 498 and 270; junction: 114 and 78
-    assert len(plan.runs) == 1857 and len(plan.not_feasible) == 1023
+    # crowd: 498 and 270; junction: 114 and 78; town: 270 and 114
+    assert len(plan.runs) == 2127 and len(plan.not_feasible) == 1137
     assert {Path(r.scenario).stem for r in plan.runs} == {
-        *(f"s{i}_pedestrian" for i in (1, 2, 3)), "crowd", "junction"}
+        *(f"s{i}_pedestrian" for i in (1, 2, 3)), "crowd", "junction", "town"}
     speeds = {r.values["walk_mps"] for r in plan.runs}
     assert max(speeds) == 2.5  # the estimator's bound
     # `sse-cosim safety --help` tells the user the same count
@@ -112,7 +112,7 @@ def test_a_campaign_can_be_limited_to_some_of_its_scenarios():
     plan = plan_campaign(load_campaign(DEFAULT, only=("s1_pedestrian", "s3_pedestrian")))
     assert {Path(r.scenario).stem for r in plan.runs} == {"s1_pedestrian", "s3_pedestrian"}
     with pytest.raises(UserError, match=r"^--scenario: s4: is not a scenario of .*safety.toml "
-                                        r"-- choose from s1_pedestrian, .*crowd, junction$"):
+                                        r"-- choose from s1_pedestrian, .*crowd, junction, town$"):
         load_campaign(DEFAULT, only=("s4",))
 
 
