@@ -1,8 +1,9 @@
-"""The town scene (scenarios/town.toml) in real SUMO, labelled and anonymous: Bismarckstrasse in
-Bad Hersfeld, cut from an OpenStreetMap extract (sumo_net/town/). The pedestrian behind the
-parked truck steps onto the zebra at node 1384946487 while the bus comes; nobody is hit, every
-set holds its pedestrian, the bus passes the zebra only after the pedestrian has left it and
-finishes its route (at about 40 s, when the run ends)."""
+"""The town scene (scenarios/town.toml) in real SUMO: Bismarckstrasse in Bad Hersfeld, cut from
+an OpenStreetMap extract (sumo_net/town/). The pedestrian behind the parked truck steps onto
+the zebra at node 1384946487 while the bus comes; nobody is hit, every set holds its
+pedestrian, the bus passes the zebra only after the pedestrian has left it and finishes its
+route (at about 40 s, when the run ends). With anonymous detections:
+tests/cosim/test_town_anonymous.py (one run for all its checks)."""
 
 from __future__ import annotations
 
@@ -47,15 +48,3 @@ def test_the_bus_gives_way_at_the_town_zebra_and_finishes_its_route(tmp_path: Pa
     assert len(bus_on_zebra) > 0  # the bus reaches the zebra in the run
     assert on_zebra["t"].max() < bus_on_zebra.index.min()
 
-
-def test_the_town_scene_stays_sound_and_safe_with_anonymous_detections(
-        tmp_path: Path) -> None:
-    summary = run_scenario_file(TOWN, tmp_path, {"estimator.association": "anonymous"},
-                                plots=False)
-    assert summary["collisions"] == summary["contact_steps"] == 0
-    assert summary["containment_violations"] == 0, summary["violations"]
-    assert summary["route_completed"]
-    checks = pd.read_csv(tmp_path / "pedestrians.csv")
-    for column in ("contained_fused", "contained_refined"):
-        checked = checks[column].dropna()
-        assert len(checked) > 0 and checked.astype(bool).all(), column
