@@ -353,7 +353,7 @@ def test_a_track_is_not_fused_with_a_larger_track_that_holds_someone_else():
 @pytest.mark.parametrize("state_model", ["position", "constant-velocity"])
 def test_anonymous_node_observer_keeps_every_pedestrian(state_model):
     config = Estimator(state_model=state_model, max_pedestrian_speed_mps=SPEED,
-                       max_velocity_change_mps=2 * SPEED)
+                       max_velocity_change_mps=2 * SPEED, position_jitter_m=0.3)
     model = MotionModel.from_config(config, DT)
     observer = AnonymousNodeObserver("car", model, SETTINGS)
     rng = np.random.default_rng(4)

@@ -10,7 +10,7 @@ from sse_cosim.sets import Zonotope
 
 
 def test_far_clear_regions_change_nothing():
-    model = MotionModel.from_config(Estimator(), 0.1)
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), 0.1)
     fused = {"p": Zonotope([0.0, 0.0], np.eye(2))}
     far = ClearRegion(shapely.box(50, 50, 60, 60), 2)
     near = ClearRegion(shapely.box(0.5, -5, 5, 5), 0)

@@ -53,7 +53,7 @@ def test_stale_estimates_are_predicted_to_now():
 
 
 def test_the_picture_names_senders_whose_newest_message_reports_an_inconsistency():
-    model = MotionModel.from_config(Estimator(), DT)
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
     link = V2XLink(V2X(latency_steps=0), np.random.default_rng(0))
     link.send(Message("car", 0, {}, shapely.Polygon(), inconsistent=True), 5.0)
     link.send(message("rsu1", 0), 5.0)
@@ -65,7 +65,7 @@ def test_the_picture_names_senders_whose_newest_message_reports_an_inconsistency
 
 
 def test_a_tracker_that_forgets_is_a_fresh_one():
-    model = MotionModel.from_config(Estimator(), DT)
+    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
     walkable = shapely.box(-20, -20, 20, 20)
     used, fresh = OccupancyTracker(model, DT, walkable), OccupancyTracker(model, DT, walkable)
     small = {"ped": Zonotope(np.zeros(2), np.eye(2) * 0.5)}
