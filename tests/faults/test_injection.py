@@ -117,7 +117,8 @@ def test_phantom_follows_its_track_under_its_own_id():
 
 
 def test_node_faults_shift_or_shrink_what_the_node_sends():
-    model = MotionModel.from_config(scenario().estimator, 0.1)
+    model = MotionModel.from_config(
+        scenario().estimator.model_copy(update={"position_jitter_m": 0.646}), 0.1)  # the road's
     estimate = {"pedestrian": Zonotope(TRUTH, np.eye(2))}
     snap, _ = observe_at(4.0)
     for kind, field, value in (("shift", "shift_m", [4.0, 0.0]), ("shrink", "scale", 0.5)):
