@@ -147,17 +147,17 @@ def network(network_path: Path, step_length_s: float | None, speed_mps: float | 
     eclipse-sumo package builds it and caches the .net.xml under SOURCES/build/, and a run
     rebuilds it by itself when a source changes) or an existing SUMO .net.xml. Prints the
     network's path, then the jitter SUMO's lone walkers need at the speed bound on every
-    walking area of the network, with the junction and the step that need the most
-    (sse_cosim/world/walker_jitter.py; measured once per network and setting, then read from
-    the cache). A run whose scenario leaves estimator.position_jitter_m out takes the value
-    measured on its scene's part of the network.
+    walking area of the network, with the junction and the step that need the most, and the
+    widest ground margin: how far from a junction's walking areas and crossings a walker
+    strayed off the sidewalks, walking areas and crossings (sse_cosim/world/walker_jitter.py;
+    measured once per network and setting, then read from the cache). A run whose scenario leaves
+    estimator.position_jitter_m out takes the value measured on its scene's part of the
+    network.
     """
-    import sumolib
-
     from sse_cosim.scenario.model import Estimator, Pedestrian, Simulation
-    from sse_cosim.world import walker_jitter
     from sse_cosim.world.network import build_network, check_net_file
-    from sse_cosim.world.sumo import sumo_version
+    from sse_cosim.world.roadmap import load_roadmap
+    from sse_cosim.world.sumo import measure_walkers
 
     if network_path.is_dir():
         net_path = build_network(network_path)
@@ -166,9 +166,13 @@ def network(network_path: Path, step_length_s: float | None, speed_mps: float | 
     click.echo(net_path)
     step = step_length_s or Simulation.model_fields["step_length_s"].default
     speed = speed_mps or Estimator.model_fields["max_pedestrian_speed_mps"].default
-    net = sumolib.net.readNet(str(net_path), withInternal=True, withPedestrianConnections=True)
-    measured = walker_jitter.measure(net_path, net, None, speed, step,
-                                     Pedestrian.model_fields["radius_m"].default, sumo_version())
+    measured = measure_walkers(net_path, load_roadmap(net_path), None, speed, step,
+                               Pedestrian.model_fields["radius_m"].default)
     click.echo(f"walker jitter: {measured.jitter_m:.3f} m at {speed:g} m/s and {step:g} s steps "
                f"over {measured.junctions} junctions with walking areas; the most "
                f"{measured.where()}")
+    margins = measured.ground_margins
+    widest = max(margins, key=lambda j: (margins[j], j), default=None)
+    click.echo("ground margin: " + ("no walking area" if widest is None else
+               f"{margins[widest]:.3f} m at junction {widest!r}, above 0 at "
+               f"{sum(m > 0 for m in margins.values())} of {len(margins)} junctions"))

@@ -76,7 +76,7 @@ class SceneContext:
     """What does not change during a run: the route, walkable ground, the conflict zones."""
 
     route_line: shapely.LineString
-    walkable: shapely.Geometry  # sidewalks, walking areas and the crossings
+    walkable: shapely.Geometry  # the road map's walkable ground (measured margins included)
     crossings: tuple[RouteCrossing, ...]  # the crossings on the route, nearest first
     bus: AutomatedVehicle
     config: Controller
@@ -94,7 +94,7 @@ class SceneContext:
     ) -> SceneContext:
         """Prepare the static geometry for a bus driving ``route_edges``."""
         route_line = roadmap.route_line(route_edges)
-        walkable = shapely.union(roadmap.sidewalks, roadmap.crossing_area)
+        walkable = roadmap.walkable
         corridor = route_line.buffer(0.5 * bus.width_m + pedestrian_radius, cap_style="flat")
         sweep = body_sweep(RoutePath.of_lanes(route_lanes(roadmap, route_edges)), bus.length_m,
                            bus.width_m + 2.0 * pedestrian_radius)

@@ -111,7 +111,7 @@ def draw_scene(ax: Axes, frame: SceneFrame, roadmap: RoadMap, nodes: Sequence[st
                legend: bool = True) -> None:
     """Draw ``frame`` (footprints, fields of view, shadows, strips, local and fused
     zonotopes, the true positions) on ``ax``."""
-    _fill(ax, roadmap.sidewalks, "0.85", "sidewalk")
+    _fill(ax, roadmap.walkable, "0.85", "walkable ground")
     _fill(ax, roadmap.crossing_area, "w", "zebra", hatch="||")
     for _name, (node, visible, occluded) in frame.sectors.items():
         color = node_color(node, nodes)

@@ -221,7 +221,7 @@ def _replay_data(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: st
         "road": [i for lane in lanes for i in log.pool.add(lane.polygon())],
         "parking": [i for lane in roadmap.parking_lanes.values()
                     for i in log.pool.add(lane.polygon())],
-        "walkable": log.pool.add(roadmap.sidewalks),
+        "walkable": log.pool.add(roadmap.walkable),
         "crossings": log.pool.add(roadmap.crossing_area),
         "frames": log.frames,
     }

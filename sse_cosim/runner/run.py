@@ -44,6 +44,8 @@ def run_scenario(
     recorder = RunRecorder(scenario, tuple(scene_times),
                            replay=None if summary_only else ReplayLog())
     info = simulate(scenario, out_dir / "sumo", source, recorder, on_start=recorder.start)
-    extra = None if info.motion_breaks is None else {"assumption_breaks": info.motion_breaks}
+    extra = {key: breaks for key, breaks in (("assumption_breaks", info.motion_breaks),
+                                             ("ground_breaks", info.ground_breaks))
+             if breaks is not None} or None
     return write_run(out_dir, info.scenario, recorder, info.roadmap, source, info.arrived,
                      plots, summary_only, extra)

@@ -44,7 +44,7 @@ from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors import specs_from_scenario
 from sse_cosim.sensors.faults import FaultInjector
 from sse_cosim.world.roadmap import RoadMap
-from sse_cosim.world.sumo import MOTION_ASSUMPTION, SumoWorld
+from sse_cosim.world.sumo import GROUND_ASSUMPTION, MOTION_ASSUMPTION, SumoWorld
 
 
 @dataclass(frozen=True)
@@ -52,13 +52,15 @@ class SimulationInfo:
     """How a run ended (steps recorded; per automated vehicle whether it reached the end of
     its route), the road map and the scenario it ran with, and -- for a study that lists
     ``pedestrian_speed`` in ``breaks_assumptions`` -- the pedestrians' motion breaks it ran on
-    (``SumoWorld.motion_breaks``; None otherwise)."""
+    (``SumoWorld.motion_breaks``; None otherwise), and for one that lists ``walkable_ground``
+    the steps pedestrians were off the walkable ground (``SumoWorld.ground_breaks``)."""
 
     steps: int
     arrived: dict[str, bool]
     roadmap: RoadMap
     scenario: Scenario  # as run: with what the world resolved (the measured jitter)
     motion_breaks: dict[str, Any] | None = None
+    ground_breaks: dict[str, Any] | None = None
 
 
 def simulate(
@@ -103,7 +105,7 @@ def simulate(
             snapshot = world.step()
             if world.all_arrived:  # (world.step() refuses a vehicle missing at its departure)
                 return SimulationInfo(step, _arrivals(world, automated), world.roadmap,
-                                      scenario, _motion_breaks(world))
+                                      scenario, *_breaks(world))
             active = [ego for ego in egos if ego.id in snapshot.vehicles]
             timer.lap("sumo")
             observations = sense(snapshot, specs, faults, noise_rng)
@@ -124,12 +126,14 @@ def simulate(
                                results))
             timer.end_step("output")
         return SimulationInfo(n_steps, _arrivals(world, automated), world.roadmap, scenario,
-                              _motion_breaks(world))
+                              *_breaks(world))
 
 
-def _motion_breaks(world: SumoWorld) -> dict[str, Any] | None:
-    declared = MOTION_ASSUMPTION in world.scenario.breaks_assumptions
-    return world.motion_breaks if declared else None
+def _breaks(world: SumoWorld) -> tuple[dict[str, Any] | None, dict[str, Any] | None]:
+    """The motion and the ground breaks a study ran on (None where it does not list them)."""
+    declared = world.scenario.breaks_assumptions
+    return (world.motion_breaks if MOTION_ASSUMPTION in declared else None,
+            world.ground_breaks if GROUND_ASSUMPTION in declared else None)
 
 
 def _arrivals(world: SumoWorld, automated: list[str]) -> dict[str, bool]:

@@ -18,7 +18,8 @@ from sse_cosim.sets.reduction import REDUCTION_METHODS
 
 __all__ = ["NonNegativeFloat", "PositiveFloat", "Sensor", "SensorMount", "StrictModel"]
 
-Assumption = Literal["pedestrian_speed", "sensor_bounds", "shared_estimates"]
+Assumption = Literal["pedestrian_speed", "walkable_ground", "sensor_bounds",
+                     "shared_estimates"]
 
 
 class Simulation(StrictModel):
@@ -432,6 +433,9 @@ class Scenario(StrictModel):
         "that would break one is an error): 'pedestrian_speed': a pedestrian walks faster than "
         "estimator.max_pedestrian_speed_mps, or SUMO moves it farther off a speed-bounded path "
         "than estimator.position_jitter_m (the run counts these breaks and goes on); "
+        "'walkable_ground': a pedestrian's centre leaves the walkable ground (sidewalks, "
+        "walking areas and crossings, each junction's grown by the margin SUMO's lone walkers "
+        "were measured to need there; the run counts these steps and goes on); "
         "'sensor_bounds': sensors whose measurements leave "
         "their noise bounds or report what is not there (bias beyond the bound, stuck, phantom); "
         "'shared_estimates': connected nodes send estimates that do not hold their bounds "

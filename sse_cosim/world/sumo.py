@@ -56,6 +56,16 @@ a time: a second ``SumoWorld`` entered while one is open raises :class:`Simulati
 ``close()`` a new simulation can be started in the same process (the tests do so), but sweeps
 run each simulation in its own process so that they can run in parallel.
 
+Walkable ground. The estimator assumes every pedestrian's centre lies on the road map's
+walkable ground (:attr:`sse_cosim.world.roadmap.RoadMap.walkable`): sidewalks, walking areas and
+crossings, each junction's grown by the margin SUMO's lone walkers were measured to stray
+beyond them there (:mod:`sse_cosim.world.walker_jitter`, measured before every run -- also in a
+study that sets its own jitter and breaks ``pedestrian_speed``). The world fills the road
+map's margins before anything reads the road map, and ``step()`` checks every pedestrian's
+true centre against that ground: one off it stops the run with :class:`AssumptionBroken`
+(``walkable_ground``, exit status 5), unless the study lists ``walkable_ground`` in
+``breaks_assumptions``; then it counts the steps (:attr:`SumoWorld.ground_breaks`) and runs on.
+
 Determinism. Every vehicle and person type has ``speedDev=0`` and ``sigma=0`` (the route
 files' too, or they are refused), pedestrians do not dawdle (``pedestrian.striping.dawdling
 0``) and SUMO's seed is the scenario's seed: one scenario gives one sequence of snapshots.
@@ -74,12 +84,14 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
+import shapely
+
 from sse_cosim.errors import AssumptionBroken, SimulationError, UserError
 from sse_cosim.scenario.model import AutomatedVehicle, Scenario, present
 from sse_cosim.world import demand, walker_jitter
 from sse_cosim.world.assumptions import MotionBounds, MotionBreak, PedestrianMotionCheck
 from sse_cosim.world.demand import ActorPlan, PedestrianPlan
-from sse_cosim.world.extent import MAX_MEASURED_JITTER_M, scene_extent
+from sse_cosim.world.extent import MAX_MEASURED_JITTER_M, SceneExtent, scene_extent
 from sse_cosim.world.network import NetworkBuildError, scenario_net_path
 from sse_cosim.world.roadmap import RoadMap, load_scene_roadmap, require_pedestrian_ground
 from sse_cosim.world.route_files import RouteFiles, read_route_files
@@ -107,7 +119,8 @@ _PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libs
                 libsumo.VAR_LANE_ID)
 
 MOTION_ASSUMPTION = "pedestrian_speed"  # what breaks_assumptions lists for a motion break
-KEPT_BREAKS = 5  # the first breaks a study that lists MOTION_ASSUMPTION keeps (all counted)
+GROUND_ASSUMPTION = "walkable_ground"  # ... for a pedestrian off the walkable ground
+KEPT_BREAKS = 5  # the first breaks a study that lists an assumption keeps (all counted)
 _TIME_EPS = 1e-6  # tolerance of time comparisons (s)
 
 _open_world: SumoWorld | None = None
@@ -119,6 +132,18 @@ def sumo_version() -> str:
     if version:
         return version
     return str(libsumo.getVersion()[1]).removeprefix("SUMO ").strip()
+
+
+def measure_walkers(net_path: Path, roadmap: RoadMap, extent: SceneExtent | None,
+                    speed_mps: float, step_s: float, radius_m: float
+                    ) -> walker_jitter.NetworkJitter:
+    """The jitter SUMO's lone walkers need on the walking areas of ``roadmap`` (of the network
+    at ``net_path``) in ``extent`` (all for None), and where they leave its plain ground
+    (:mod:`sse_cosim.world.walker_jitter`, cached)."""
+    return walker_jitter.measure(
+        net_path, roadmap.net, extent,
+        walker_jitter.Ground(roadmap.ground, roadmap.junction_ground), speed_mps, step_s,
+        radius_m, sumo_version())
 
 
 @dataclass
@@ -175,6 +200,9 @@ class SumoWorld:
         self._motion: PedestrianMotionCheck | None = None  # once the jitter is known
         self._motion_breaks: list[tuple[MotionBreak, str, str]] = []
         self._motion_break_count = 0
+        self._ground_declared = GROUND_ASSUMPTION in scenario.breaks_assumptions
+        self._ground_breaks: list[dict[str, Any]] = []
+        self._ground_break_count = 0
         self._person_lanes: dict[str, str] = {}  # each person's lane at the latest snapshot
         self._previous_lanes: dict[str, str] = {}
         self._stepped_on: set[str] = set()  # pedestrians that stepped onto their crossing
@@ -208,7 +236,10 @@ class SumoWorld:
             self._plan = demand.plan_actors(self.scenario, self._net_path, self._roadmap,
                                             source=self.scenario_name,
                                             timer=ProbeTimer(self._net_path))
-            self.scenario = self._with_jitter()
+            measured = self._measure()
+            self.scenario = self._with_jitter(measured)
+        self._roadmap = self._roadmap.with_ground_margins(measured.ground_margins)
+        shapely.prepare(self._roadmap.walkable)
         estimator = self.scenario.estimator
         assert estimator.position_jitter_m is not None
         self._motion = PedestrianMotionCheck(
@@ -264,6 +295,7 @@ class SumoWorld:
         self._check_insertions()
         self._check_steps_onto_crossings(snapshot.time)
         self._check_motion(snapshot)
+        self._check_ground(snapshot)
         return snapshot
 
     @contextlib.contextmanager
@@ -278,20 +310,24 @@ class SumoWorld:
             raise SimulationError(self.scenario_name, f"{exc.problem} (lone walkers before the "
                                   "run)") from exc
 
-    def _with_jitter(self) -> Scenario:
-        """The scenario with the position jitter its network needs (:mod:`sse_cosim.world.
-        walker_jitter`): the measured one where it sets none; one below the measured one is a
-        UserError, unless the study lists ``pedestrian_speed`` (then it is not measured)."""
+    def _measure(self) -> walker_jitter.NetworkJitter:
+        """What SUMO's lone walkers need on the scene's walking areas: the jitter and each
+        junction's ground margin (:mod:`sse_cosim.world.walker_jitter`, cached)."""
+        assert self._roadmap is not None and self._net_path is not None
+        net = self._roadmap.net  # None: the whole network (route files)
+        return measure_walkers(self._net_path, self._roadmap,
+                               None if net is None else scene_extent(self.scenario, net),
+                               self.scenario.estimator.max_pedestrian_speed_mps, self._dt,
+                               self.scenario.pedestrian_radius_m())
+
+    def _with_jitter(self, measured: walker_jitter.NetworkJitter) -> Scenario:
+        """The scenario with the position jitter its network needs: the ``measured`` one where
+        it sets none; one below the measured one is a UserError, unless the study lists
+        ``pedestrian_speed`` (then its own is kept)."""
         estimator = self.scenario.estimator
         configured = estimator.position_jitter_m
         if configured is not None and self._motion_declared:
             return self.scenario
-        assert self._roadmap is not None and self._net_path is not None
-        net = self._roadmap.net  # None: the whole network (route files), read by measure
-        measured = walker_jitter.measure(
-            self._net_path, net, None if net is None else scene_extent(self.scenario, net),
-            estimator.max_pedestrian_speed_mps, self._dt, self.scenario.pedestrian_radius_m(),
-            sumo_version())
         if measured.jitter_m > MAX_MEASURED_JITTER_M:
             raise UserError(self.scenario_name, "estimator.position_jitter_m",
                             f"SUMO's walkers need {measured.jitter_m:.3f} m on this network "
@@ -344,6 +380,45 @@ class SumoWorld:
                 f"raise estimator.position_jitter_m to at least {brk.needed_jitter_m:.3f} m "
                 "(what its walk so far needs), "
                 f"or list '{MOTION_ASSUMPTION}' in breaks_assumptions")
+
+    def _check_ground(self, snapshot: Snapshot) -> None:
+        """Every pedestrian's true centre lies on the walkable ground (the road map's
+        :attr:`~sse_cosim.world.roadmap.RoadMap.walkable`, measured margins included). One off
+        it stops the run, naming the pedestrian, the time, its lane, how far off it is and the
+        fix -- unless the study lists ``walkable_ground``: then it is counted
+        (:attr:`ground_breaks`) and the run goes on."""
+        walkable = self.roadmap.walkable
+        for pid, person in snapshot.persons.items():
+            x, y = person.position
+            if shapely.intersects_xy(walkable, x, y):
+                continue
+            off_m = float(shapely.distance(walkable, shapely.Point(x, y)))
+            lane = self._person_lanes.get(pid, "")
+            if self._ground_declared:
+                self._ground_break_count += 1
+                if len(self._ground_breaks) < KEPT_BREAKS:
+                    self._ground_breaks.append({"pedestrian": pid, "t": snapshot.time,
+                                                "off_m": round(off_m, 3), "lane": lane})
+                continue
+            raise AssumptionBroken(
+                self.scenario_name, GROUND_ASSUMPTION,
+                f"pedestrian {pid!r} at t={snapshot.time:.2f} s (lane {_lane(lane)}) is "
+                f"{off_m:.3f} m off the walkable ground (sidewalks, walking areas and "
+                "crossings, each junction's grown by the margin SUMO's lone walkers were "
+                "measured to need there); the run stops before the estimator's sets are "
+                "checked against a truth outside its model",
+                "keep the pedestrian's walk (or the route file's person) on sidewalks, walking "
+                "areas and crossings -- SUMO's walkers were measured there alone, not in a "
+                "crowd or turning back -- or list "
+                f"'{GROUND_ASSUMPTION}' in breaks_assumptions in a study that breaks it on "
+                "purpose")
+
+    @property
+    def ground_breaks(self) -> dict[str, Any]:
+        """The steps a pedestrian was off the walkable ground in a study that lists
+        ``walkable_ground``: ``{"count", "first"}``, the first :data:`KEPT_BREAKS` as
+        ``{"pedestrian", "t", "off_m", "lane"}`` (metres rounded to 1 mm)."""
+        return {"count": self._ground_break_count, "first": list(self._ground_breaks)}
 
     @property
     def motion_breaks(self) -> dict[str, Any]:

@@ -30,17 +30,30 @@ of each walking area, so it is measured on the network itself:
   upper bound, :func:`~sse_cosim.world.assumptions.path_jitter`, is no larger than the
   largest found need no more and are not bisected).
 
+* **Off the ground.** While a walker is on a junction's walking areas and crossings, SUMO
+  moves it on a curve from the end of one lane to the start of the next, which can leave the
+  road map's plain ground (sidewalks, walking areas and crossings): the wedge between a
+  crossing's rectangle and its walking area's kerb, a corner cut short. Each junction's
+  *ground margin* is the largest distance from the junction's own walking areas and crossings
+  of a walker centre there that lies off the plain ground (0.0 where none does; rounded up to
+  the millimetre); the road map dilates that junction's walking areas and crossings by it
+  (:attr:`sse_cosim.world.roadmap.RoadMap.walkable`), so its walkable ground holds every
+  position measured, and any stripe that strays no farther. The ground is given as geometry
+  (:class:`Ground`).
+
 A run takes the largest over the junctions of the walking areas in its scene's extent
 (:mod:`sse_cosim.world.extent`: the pedestrians of a run cannot walk beyond it before the run
 ends). Every step of every run still checks the assumption on the true walk, so a walker that
 strays more than measured (a crowd, a stripe the measurement did not walk) stops the run with
-exit status 5 and never goes unnoticed.
+exit status 5 and never goes unnoticed; so does a walker off the walkable ground with its
+margins (:class:`sse_cosim.world.sumo.SumoWorld`).
 
 Cache: a JSON file per network, the built network's folder for one built from sources
 (``walker_jitter.json`` beside ``road.net.xml``), else ``$XDG_CACHE_HOME/sse-cosim`` by the
 content hash of the ``.net.xml``; its entries are keyed by SUMO's version, the step length,
 the speed bound and the pedestrian's size, and hold each junction's jitter and the walk that
-needed it. It is written atomically; only the junctions not measured yet are walked.
+needed it, and its ground margin (an entry written before margins were measured has none and
+is measured again). It is written atomically; only the junctions not measured yet are walked.
 """
 
 from __future__ import annotations
@@ -59,6 +72,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+import shapely
 import sumolib
 
 from sse_cosim.files import write_text_atomic
@@ -75,31 +89,60 @@ SLOT_SLACK_S = 3.0  # a slot outlasts its longest walk at the bound by this much
 
 
 @dataclass(frozen=True)
+class Ground:
+    """The ground the measurement holds walkers to: ``plain`` (the road map's sidewalks,
+    walking areas and crossings) and ``junctions`` (each junction's walking areas and
+    crossings, by junction id)."""
+
+    plain: shapely.Geometry
+    junctions: dict[str, shapely.Geometry]
+
+    def margin(self, junction: str, xy: np.ndarray) -> float:
+        """The ground margin (m) of ``junction`` that holds positions ``xy`` (k, 2): the
+        largest distance from the junction's walking areas and crossings of a position off
+        the plain ground (from the plain ground for a junction without any); 0.0 if none
+        is off it."""
+        points = shapely.points(xy.reshape(-1, 2))
+        off = points[shapely.distance(self.plain, points) > 0.0]
+        if len(off) == 0:
+            return 0.0
+        own = self.junctions.get(junction)
+        nearest = self.plain if own is None or own.is_empty else own
+        return float(shapely.distance(nearest, off).max())
+
+
+@dataclass(frozen=True)
 class JunctionJitter:
     """The jitter (m) SUMO's walkers need at one junction, and the walk (its edges) that
-    needed the most there, with the lanes of its largest step (from, to) and that step (m)."""
+    needed the most there, with the lanes of its largest step (from, to) and that step (m);
+    ``ground_margin_m`` its ground margin (module docstring; None: not measured, an old
+    entry)."""
 
     junction: str
     jitter_m: float
     walk: tuple[str, ...]
     step_lanes: tuple[str, str]
     step_m: float
+    ground_margin_m: float | None = None
 
     def as_dict(self) -> dict[str, object]:
         return {"jitter_m": self.jitter_m, "walk": list(self.walk),
-                "step_lanes": list(self.step_lanes), "step_m": self.step_m}
+                "step_lanes": list(self.step_lanes), "step_m": self.step_m,
+                "ground_margin_m": self.ground_margin_m}
 
 
 @dataclass(frozen=True)
 class NetworkJitter:
     """The measured jitter over a set of junctions (the worst one named; 0.0 and no junction
-    where no walking area was found), and the settings it was measured with."""
+    where no walking area was found), the settings it was measured with, and each junction's
+    ground margin (m) by id."""
 
     jitter_m: float
     worst: JunctionJitter | None
     junctions: int
     speed_mps: float
     step_s: float
+    ground_margins: dict[str, float]
 
     def where(self) -> str:
         """Where the worst jump happened, for messages."""
@@ -123,7 +166,7 @@ class JitterCache:
 
     def junctions(self, key: str) -> dict[str, JunctionJitter]:
         return {jid: JunctionJitter(jid, e["jitter_m"], tuple(e["walk"]), tuple(e["step_lanes"]),
-                                    e["step_m"])
+                                    e["step_m"], e.get("ground_margin_m"))
                 for jid, e in self.entries.get(key, {}).items()}
 
     def add(self, key: str, found: Iterable[JunctionJitter]) -> None:
@@ -147,11 +190,11 @@ def cache_path(net_path: Path) -> Path:
 
 
 def measure(net_path: Path, net: sumolib.net.Net | None, extent: SceneExtent | None,
-            speed_mps: float, step_s: float, radius_m: float,
+            ground: Ground, speed_mps: float, step_s: float, radius_m: float,
             sumo_version: str) -> NetworkJitter:
     """The jitter SUMO's walkers need on the walking areas of ``net`` (the network at
-    ``net_path``, read here if None) in ``extent`` (all of them for None), measured where the
-    cache lacks a junction."""
+    ``net_path``, read here if None) in ``extent`` (all of them for None), and each junction's
+    margin beyond ``ground``, measured where the cache lacks a junction or its margin."""
     if net is None:
         net = sumolib.net.readNet(str(net_path), withInternal=True,
                                   withPedestrianConnections=True)
@@ -161,14 +204,15 @@ def measure(net_path: Path, net: sumolib.net.Net | None, extent: SceneExtent | N
     cache = JitterCache(net_path)
     key = cache_key(sumo_version, step_s, speed_mps, radius_m)
     known = cache.junctions(key)
-    missing = [jid for jid in wanted if jid not in known]
+    missing = [jid for jid in wanted
+               if jid not in known or known[jid].ground_margin_m is None]
     if missing:
         todo = [area for area in areas if _junction(area) in set(missing)]
         started = time.perf_counter()
         print(f"measuring how far SUMO's walkers jump on {len(todo)} walking areas of "
               f"{net_path.name} (once per network, step length and speed bound)...",
               file=sys.stderr, flush=True)
-        found = _walk_junctions(net_path, net, todo, speed_mps, step_s, radius_m)
+        found = _walk_junctions(net_path, net, todo, ground, speed_mps, step_s, radius_m)
         print(f"measured {len(found)} junctions ({time.perf_counter() - started:.1f} s)",
               file=sys.stderr, flush=True)
         cache.add(key, found)
@@ -176,7 +220,9 @@ def measure(net_path: Path, net: sumolib.net.Net | None, extent: SceneExtent | N
     measured = [known[jid] for jid in wanted]
     worst = max(measured, key=lambda j: (j.jitter_m, j.junction), default=None)
     return NetworkJitter(jitter_m=0.0 if worst is None else worst.jitter_m, worst=worst,
-                         junctions=len(measured), speed_mps=speed_mps, step_s=step_s)
+                         junctions=len(measured), speed_mps=speed_mps, step_s=step_s,
+                         ground_margins={j.junction: j.ground_margin_m or 0.0
+                                         for j in measured})
 
 
 def cache_key(sumo_version: str, step_s: float, speed_mps: float, radius_m: float) -> str:
@@ -267,8 +313,8 @@ def _lead(edge: sumolib.net.edge.Edge, toward: str) -> float:
 
 
 def _walk_junctions(net_path: Path, net: sumolib.net.Net,
-                    areas: Sequence[sumolib.net.edge.Edge], speed_mps: float, step_s: float,
-                    radius_m: float) -> list[JunctionJitter]:
+                    areas: Sequence[sumolib.net.edge.Edge], ground: Ground,
+                    speed_mps: float, step_s: float, radius_m: float) -> list[JunctionJitter]:
     walks = passages(net, areas)
     lengths = [sum(net.getEdge(e).getLength() for e in edges[1:-1]) + 2.0 * LEAD_M
                for _, edges, _, _ in walks]
@@ -288,8 +334,22 @@ def _walk_junctions(net_path: Path, net: sumolib.net.Net,
     for (junction, edges, _, _), walker in zip(walks, walkers, strict=True):
         by_junction.setdefault(junction, []).append((edges, traces[walker.id]))
     junctions = sorted({_junction(area) for area in areas})
-    return [_junction_jitter(j, by_junction[j], bounds) if j in by_junction
-            else JunctionJitter(j, 0.0, (), ("", ""), 0.0) for j in junctions]
+    return [replace(_junction_jitter(j, by_junction[j], bounds),
+                    ground_margin_m=_ground_margin(net, j, by_junction[j], ground))
+            if j in by_junction else JunctionJitter(j, 0.0, (), ("", ""), 0.0, 0.0)
+            for j in junctions]
+
+
+def _ground_margin(net: sumolib.net.Net, junction: str,
+                   walks: list[tuple[tuple[str, ...], WalkTrace]], ground: Ground) -> float:
+    """The junction's ground margin (:meth:`Ground.margin`) over the positions its walks had
+    on its walking areas and crossings, rounded up to the millimetre."""
+    inner = {e for edges, _ in walks for e in edges
+             if net.getEdge(e).getFunction() in ("walkingarea", "crossing")}
+    on = [trace.xy[i] for _, trace in walks for i, lane in enumerate(trace.lanes)
+          if lane.rpartition("_")[0] in inner]
+    margin = ground.margin(junction, np.asarray(on, dtype=float).reshape(-1, 2))
+    return math.ceil(margin * 1000.0) / 1000.0
 
 
 def _junction_jitter(junction: str, walks: list[tuple[tuple[str, ...], WalkTrace]],

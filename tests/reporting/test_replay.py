@@ -97,7 +97,7 @@ def test_the_page_holds_the_data_and_the_map_and_nothing_ends_its_scripts_early(
     data, polygons = json.loads(scripts["replay-data"]), json.loads(scripts["replay-polygons"])
     assert (data["title"], data["frames"], data["automated"]) == (title, [], ["bus"])
     walkable = shapely.union_all([polygon(polygons[i]) for i in data["walkable"]])
-    assert walkable.symmetric_difference(roadmap.sidewalks).area < 0.01 * roadmap.sidewalks.length
+    assert walkable.symmetric_difference(roadmap.walkable).area < 0.01 * roadmap.walkable.length
 
 
 def test_key_moments_are_firsts_except_the_closest_approach():

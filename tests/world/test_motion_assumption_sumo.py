@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -23,7 +24,8 @@ from sse_cosim.runner.executors import Execution
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.world import walker_jitter
 from sse_cosim.world.network import build_network
-from sse_cosim.world.sumo import sumo_version
+from sse_cosim.world.roadmap import load_roadmap
+from sse_cosim.world.sumo import measure_walkers, sumo_version
 
 pytestmark = pytest.mark.sumo
 S1 = Path(__file__).resolve().parents[2] / "scenarios" / "s1_pedestrian.toml"
@@ -33,7 +35,8 @@ MISSED_M = 0.05  # what the planted measurement says
 @pytest.fixture
 def missed(tmp_path, monkeypatch) -> Path:
     """A copy of the paper road whose cached walker measurement says every junction needs
-    only 0.05 m (the cache in a folder of the test's own)."""
+    only 0.05 m (the cache in a folder of the test's own; where walkers leave the ground as
+    measured)."""
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
     net = tmp_path / "paper.net.xml"
     shutil.copyfile(build_network(REPO / "sumo_net"), net)
@@ -41,8 +44,12 @@ def missed(tmp_path, monkeypatch) -> Path:
     key = walker_jitter.cache_key(sumo_version(), scenario.simulation.step_length_s,
                                   scenario.estimator.max_pedestrian_speed_mps,
                                   scenario.pedestrian_radius_m())
-    walker_jitter.JitterCache(net).add(key, [
-        walker_jitter.JunctionJitter(node, MISSED_M, (), ("", ""), 0.0) for node in "CEW"])
+    road = build_network(REPO / "sumo_net")  # its own measurement, with where walkers leave
+    measure_walkers(road, load_roadmap(road), None, scenario.estimator.max_pedestrian_speed_mps,
+                    scenario.simulation.step_length_s, scenario.pedestrian_radius_m())
+    walker_jitter.JitterCache(net).add(key, [replace(measured, jitter_m=MISSED_M) for measured
+                                             in walker_jitter.JitterCache(road).junctions(key)
+                                             .values()])
     return net
 
 

@@ -9,7 +9,9 @@ import json
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
+import shapely
 import sumolib
 from world_helpers import REPO
 
@@ -17,7 +19,8 @@ from sse_cosim.cli.main import main
 from sse_cosim.world import walker_jitter
 from sse_cosim.world.assumptions import MotionBounds, admits, least_jitter
 from sse_cosim.world.network import build_network
-from sse_cosim.world.sumo import sumo_version
+from sse_cosim.world.roadmap import load_roadmap
+from sse_cosim.world.sumo import measure_walkers
 from sse_cosim.world.walk_probe import Walker, walk_alone
 
 pytestmark = pytest.mark.sumo
@@ -33,6 +36,11 @@ def paper(tmp_path, monkeypatch) -> tuple[Path, sumolib.net.Net]:
     shutil.copyfile(build_network(REPO / "sumo_net"), net_path)
     return net_path, sumolib.net.readNet(str(net_path), withInternal=True,
                                          withPedestrianConnections=True)
+
+
+def _measure(net_path: Path, speed: float) -> walker_jitter.NetworkJitter:
+    """The walkers' measurement on the whole network at ``net_path``."""
+    return measure_walkers(net_path, load_roadmap(net_path), None, speed, STEP, RADIUS)
 
 
 def _areas(net: sumolib.net.Net) -> list:
@@ -53,7 +61,7 @@ def test_every_passage_is_walked_but_a_turn_back(paper) -> None:
 
 def test_the_measured_jitter_admits_every_walk_and_is_the_least_the_worst_needs(paper) -> None:
     net_path, net = paper
-    measured = walker_jitter.measure(net_path, net, None, SPEED, STEP, RADIUS, sumo_version())
+    measured = _measure(net_path, SPEED)
     assert measured.worst is not None and measured.worst.junction == "C"
     # the known jump: 0.80 m in a step on :C_w0_0 needs 0.334 m alone (docs/results.md)
     assert 0.334 <= measured.jitter_m <= 1.0
@@ -68,20 +76,53 @@ def test_the_measured_jitter_admits_every_walk_and_is_the_least_the_worst_needs(
     # least_jitter is within 0.13 % + 2 mm of the least: 5 mm less does not admit the walk
     assert least_jitter(worst.xy, MotionBounds(SPEED, 0.0, STEP)) == measured.jitter_m
     assert not admits(worst.xy, MotionBounds(SPEED, measured.jitter_m - 0.005, STEP), 4096)
+    # the walkable ground with the measured margins holds every position of every walk; the
+    # plain ground does not (the curve over the zebra's walking areas leaves it by ~4 cm)
+    roadmap = load_roadmap(net_path)
+    walkable = roadmap.with_ground_margins(measured.ground_margins).walkable
+    points = np.concatenate([trace.xy for trace in traces.values()])  # (k, 2)
+    assert shapely.intersects_xy(walkable, points[:, 0], points[:, 1]).all()
+    assert not shapely.intersects_xy(roadmap.ground, points[:, 0], points[:, 1]).all()
+    assert 0.0 < measured.ground_margins["C"] <= 0.2
 
 
 def test_a_measurement_is_cached_with_its_settings(paper, monkeypatch) -> None:
-    net_path, net = paper
-    first = walker_jitter.measure(net_path, net, None, SPEED, STEP, RADIUS, sumo_version())
+    net_path, _ = paper
+    first = _measure(net_path, SPEED)
 
     def no_sumo(*args: object, **kwargs: object) -> None:
         raise AssertionError("measured again")
 
     monkeypatch.setattr(walker_jitter, "walk_alone", no_sumo)
-    assert walker_jitter.measure(net_path, net, None, SPEED, STEP, RADIUS,
-                                 sumo_version()) == first
+    assert _measure(net_path, SPEED) == first
     with pytest.raises(AssertionError, match="measured again"):  # another speed bound
-        walker_jitter.measure(net_path, net, None, 2.0, STEP, RADIUS, sumo_version())
+        _measure(net_path, 2.0)
+
+
+def test_a_cache_entry_without_a_ground_margin_is_measured_again(paper, monkeypatch) -> None:
+    """Entries written before the ground margin was measured lack it: their junctions are
+    walked again (the same jitter), and the margin is kept from then on."""
+    net_path, _ = paper
+    first = _measure(net_path, SPEED)
+    cache = walker_jitter.cache_path(net_path)
+    entries = json.loads(cache.read_text("utf-8"))
+    for junctions in entries.values():
+        for entry in junctions.values():
+            del entry["ground_margin_m"]
+    cache.write_text(json.dumps(entries), "utf-8")
+    walked: list[int] = []
+    real = walker_jitter.walk_alone
+
+    def counted(net: Path, walkers: list[Walker], *args: object) -> dict:
+        walked.append(len(walkers))
+        return real(net, walkers, *args)
+
+    monkeypatch.setattr(walker_jitter, "walk_alone", counted)
+    assert _measure(net_path, SPEED) == first and len(walked) == 1
+    assert all(entry["ground_margin_m"] is not None
+               for junctions in json.loads(cache.read_text("utf-8")).values()
+               for entry in junctions.values())
+    assert _measure(net_path, SPEED) == first and len(walked) == 1  # read from the cache
 
 
 def _run(tmp_path: Path, *sets: str) -> dict:
@@ -92,10 +133,7 @@ def _run(tmp_path: Path, *sets: str) -> dict:
 
 def test_a_run_takes_the_measured_jitter_keeps_a_larger_one_and_refuses_a_smaller_one(
         tmp_path, capsys) -> None:
-    measured = walker_jitter.measure(
-        *(lambda p: (p, sumolib.net.readNet(str(p), withInternal=True,
-                                            withPedestrianConnections=True)))(
-            build_network(REPO / "sumo_net")), None, SPEED, STEP, RADIUS, sumo_version())
+    measured = _measure(build_network(REPO / "sumo_net"), SPEED)
     assert _run(tmp_path)["position_jitter_m"] == measured.jitter_m
     assert _run(tmp_path, "--set", "estimator.position_jitter_m=1.5")["position_jitter_m"] == 1.5
     with pytest.raises(SystemExit) as info:
