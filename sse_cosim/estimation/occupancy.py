@@ -34,6 +34,27 @@ region also takes in O's rim moved one step, until its fused set lies inside B. 
 either the pedestrian is in its region or it is outside the window; there, as for hidden
 ground, every walkable place counts as possibly occupied. Without this a pedestrian who has
 left every view keeps a region that grows without bound.
+
+Ended tracks (anonymous detections, :class:`EndedTrack`). A node ends an anonymous track that
+has joined no detection for a while (:class:`~sse_cosim.estimation.observer.AnonymousNodeObserver`)
+and hands its pedestrians to the unobserved area: a track T ended at step e adds its path set
+(moved to the step it is added at) to that step's path region, before that step's views cut it:
+
+    U_t = (((U_{t-1} (+) disc(v dt)) ∪ A_t) ∩ ((walkable minus views_t) (+) disc(eps))) ∩ B,
+
+with A_t the union of the path sets of the tracks handed over at step t (a set of step e
+added at t >= e is moved by dilation by v dt (t - e), which holds the path point at t, A3).
+Proof that a pedestrian P of T (s_e in T's path set) is in U from then on, until a view that
+cuts U sees it: at the step t it is added, s_t lies in A_t; at every later step, s moves at
+most v dt (in U_{t-1} (+) disc(v dt)), or P entered B from outside (the inflow, as above); and
+a view at step t' that removes s_{t'} saw P, so that viewer detected P at t' and holds it in
+one of its tracks that joined a detection then (:mod:`~sse_cosim.estimation.association`),
+which is not an ended one (a track ends only at a step it joined nothing). So at each step P
+is in U or in a track the vehicle holds, as before T ended. Which track ends when does not
+matter for soundness: any track may be handed over, as long as it joined no detection at
+its last step. The vehicle's own ended tracks are added at the step they ended (the layers
+after the base are recomputed with them); a sender's, at the base's step when its message
+arrives (:class:`~sse_cosim.estimation.v2x.V2XLink`).
 """
 
 from __future__ import annotations
@@ -77,6 +98,15 @@ def dilate(region: shapely.Geometry, distance: float) -> shapely.Geometry:
     if distance <= 0 or region.is_empty:
         return region
     return region.buffer(ARC_SAFETY * distance, quad_segs=QUAD_SEGMENTS)
+
+
+@dataclass(frozen=True)
+class EndedTrack:
+    """A track a node ended at ``step`` (its state set ``estimate`` then): its pedestrians, if
+    it holds any, are the unobserved area's from that step on (module docstring)."""
+
+    step: int
+    estimate: Zonotope
 
 
 @dataclass(frozen=True)
@@ -222,41 +252,61 @@ class UnobservedArea:
         self._base = self._clip(dilate(walkable, model.jitter))  # path region at self._base_step
         self._base_step: int | None = None
         self._own: dict[int, shapely.Geometry] = {}  # the bus's views not yet in the base
+        self._ended: dict[int, list[shapely.Geometry]] = {}  # step -> path sets handed over
         self._base_moved: tuple[shapely.Geometry, shapely.Geometry] | None = None  # (base, moved)
 
     def update(
-        self, step: int, own_view: shapely.Geometry, shared_views: Sequence[shapely.Geometry]
+        self, step: int, own_view: shapely.Geometry, shared_views: Sequence[shapely.Geometry],
+        ended: Sequence[EndedTrack] = (),
     ) -> shapely.Geometry:
         """Where an undetected pedestrian may be at ``step``.
 
         ``own_view`` is what the bus sees now; ``shared_views`` what other nodes saw at
-        ``step - latency`` (the messages delivered now).
+        ``step - latency`` (the messages delivered now); ``ended``: the tracks handed over
+        now (the bus's own ended at ``step``, the senders' of the messages delivered now, each
+        ended at or before ``step - latency``; module docstring).
         """
         self._own[step] = own_view
         target = step - self.latency
         if self._base_step is None:
             self._base_step = target - 1
+        for track in ended:
+            self._hand_over(track, max(track.step, target))
         while self._base_step < target:
             self._base_step += 1
             views = [self._own.pop(self._base_step, EMPTY)]
             if self._base_step == target:
                 views += list(shared_views)
-            self._base = self._advance(self._base, views)
+            self._base = self._advance(self._base, views, self._ended.pop(self._base_step, []))
         current = self._base
         for later in range(target + 1, step + 1):
-            current = self._advance(current, [self._own.get(later, EMPTY)])
+            current = self._advance(current, [self._own.get(later, EMPTY)],
+                                    self._ended.get(later, []))
         return shapely.difference(
             shapely.intersection(dilate(current, self.model.jitter), self.walkable), own_view
         )
 
+    def _hand_over(self, track: EndedTrack, step: int) -> None:
+        """Add ``track``'s path set, moved to ``step`` (>= its own), to that step's path region
+        (module docstring)."""
+        if self._base_step is not None and step <= self._base_step:
+            raise ValueError(f"a track ended at step {track.step} handed over at step {step}, "
+                             f"which the unobserved area has passed ({self._base_step})")
+        path = zonotope_polygon(self.model.path_set(track.estimate))
+        self._ended.setdefault(step, []).append(dilate(path, self.reach * (step - track.step)))
+
     def _advance(
-        self, path: shapely.Geometry, views: Sequence[shapely.Geometry]
+        self, path: shapely.Geometry, views: Sequence[shapely.Geometry],
+        ended: Sequence[shapely.Geometry] = (),
     ) -> shapely.Geometry:
-        """One step of the path region: move, then keep what is near unseen walkable ground."""
+        """One step of the path region: move, add the path sets handed over at this step, then
+        keep what is near unseen walkable ground."""
         seen = [v for v in views if not v.is_empty]
         unseen = shapely.difference(self.walkable, shapely.union_all(seen)) if seen \
             else self.walkable
         moved = self._moved(path)
+        if ended:
+            moved = shapely.union_all([moved, *ended])
         return coarsen(self._clip(shapely.intersection(moved, dilate(unseen, self.model.jitter))))
 
     def _moved(self, path: shapely.Geometry) -> shapely.Geometry:
