@@ -25,6 +25,13 @@ A track that joined no detection (where a pedestrian may have hidden, or one who
 left every view) does not keep a view from being clear: every pedestrian in view is in a
 detected track too, so the test needs only those. It errs towards "meets" (tolerance), so it
 never declares a region clear by rounding.
+
+Ended tracks. A node ends only tracks that joined no detection at that step
+(:class:`~sse_cosim.estimation.observer.AnonymousNodeObserver`), so the statement above (a
+pedestrian in b's view is in one of b's detected tracks) and Proposition 2's certain pairs
+hold with the tracks it keeps; an ended track's pedestrians are the unobserved area's from
+then on (:mod:`~sse_cosim.estimation.occupancy`, :class:`~sse_cosim.estimation.v2x.V2XLink`),
+which the controller takes as possibly occupied as it does every region.
 """
 
 from __future__ import annotations

@@ -65,7 +65,10 @@ Rules of one step at one node (each proof in a line or two; "X" is a track's pre
 
 Every rule keeps each pedestrian of a prediction in some new set, and each detected one is
 in a prediction or in a new track: by induction every pedestrian ever detected stays inside
-a track set (``tests/estimation/test_association.py`` checks it on random crossings).
+a track set (``tests/estimation/test_association.py`` checks it on random crossings), until
+the node ends a track that joined no detection and hands its pedestrians over to the
+unobserved areas (:class:`~sse_cosim.estimation.observer.AnonymousNodeObserver`,
+:mod:`~sse_cosim.estimation.occupancy`); the rules below need only the tracks that are left.
 Moreover a pedestrian detected now (by d) is in a track that joined a detection now (its
 ``joined`` is not empty): in a prediction X, d is X's candidate (R1) and joins the corrected
 set, the piece X ∩ d of R8, or, if left out (R4), the claimer's set, which joined it (R2);

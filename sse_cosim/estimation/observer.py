@@ -6,7 +6,9 @@ process noise each step and still contains the pedestrian. :class:`NodeObserver`
 detections with tracks by the pedestrian's id (the simulation knows who is who; the paper has
 one pedestrian); :class:`AnonymousNodeObserver` works from anonymous detections, as a real
 perception stack reports them (:mod:`sse_cosim.estimation.association`), with node-local
-track ids.
+track ids, and ends a track that has joined no detection for :data:`END_AFTER_STEPS` steps in
+a row: its pedestrians, if any, go to the automated vehicles' unobserved areas
+(:class:`~sse_cosim.estimation.occupancy.EndedTrack`), which the node's messages carry.
 """
 
 from __future__ import annotations
@@ -23,8 +25,19 @@ from sse_cosim.estimation import track_kernels
 from sse_cosim.estimation.association import AnonymousDetection, Association, associate
 from sse_cosim.estimation.correction import Suspicion, correct
 from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.occupancy import EndedTrack
 from sse_cosim.estimation.vote import CONSISTENCY_TOL
 from sse_cosim.sets import Strips, Zonotope, intersect_strips
+
+END_AFTER_STEPS = 10
+"""An anonymous track that joined no detection at this many steps in a row ends (its set
+handed to the unobserved area). Any number is sound (:mod:`~sse_cosim.estimation.occupancy`):
+it trades the track's memory of where its pedestrian cannot be against its growth."""
+
+ENDED_KEPT_STEPS = 50
+"""A node's messages list the tracks it ended in this many steps up to the message's own: a
+receiver that missed fewer messages in a row learns every ending from the next one
+(:class:`~sse_cosim.estimation.v2x.V2XLink`)."""
 
 
 @dataclass(frozen=True)
@@ -53,6 +66,22 @@ class Track:
     conflict: bool = False
 
 
+class LocalTracks(dict[str, Track]):
+    """One node's tracks at a step (track key -> track) and the tracks it ended lately:
+    ``ended`` holds every track it ended at a step >= ``ended_since`` (labelled tracks never
+    end: none since step 0)."""
+
+    def __init__(self, tracks: Mapping[str, Track], ended: tuple[EndedTrack, ...] = (),
+                 ended_since: int = 0) -> None:
+        super().__init__(tracks)
+        self.ended = ended
+        self.ended_since = ended_since
+
+    def ended_at(self, step: int) -> tuple[EndedTrack, ...]:
+        """The tracks the node ended at ``step``."""
+        return tuple(t for t in self.ended if t.step == step)
+
+
 class NodeObserver:
     """Local set-membership observer of one node (paper Fig. 3, first fusion level)."""
 
@@ -65,7 +94,7 @@ class NodeObserver:
 
     def step(
         self, step: int, detections: Mapping[str, Sequence[Strips] | Mapping[str, Strips]]
-    ) -> dict[str, Track]:
+    ) -> LocalTracks:
         """Advance every track to ``step`` and correct those detected now.
 
         ``detections`` maps a pedestrian id to the position strips of this node's sensors
@@ -81,7 +110,7 @@ class NodeObserver:
             if person_id not in updated:
                 updated[person_id] = self._track(step, person_id, by_sensor[person_id])
         self.tracks = {person_id: updated[person_id] for person_id in order}
-        return self.tracks
+        return LocalTracks(self.tracks)
 
     def _track(self, step: int, person_id: str, strips: Mapping[str, Strips]) -> Track:
         """One track's update by the per-track path (the reference of :meth:`_plain_tracks`)."""
@@ -172,10 +201,18 @@ class AnonymousNodeObserver:
 
     Tracks are started, corrected, merged and ended by
     :func:`~sse_cosim.estimation.association.associate`; every pedestrian the node has
-    detected stays inside one of their sets. The output has :class:`Track`'s shape, keyed by
-    ``"<node>:<track id>"``: the id is local to the node, so tracks of different nodes never
-    share a key (fusing them by key would assume they hold the same pedestrian; use
-    :func:`~sse_cosim.estimation.association.associate_nodes`). No sensor is flagged: the
+    detected stays inside one of their sets, or in the set of a track the node handed over.
+    A track whose id joined no detection at :data:`END_AFTER_STEPS` steps in a row is handed
+    over, and so is at once a track with a new id that joined none (R8's possibility that a
+    pedestrian is hidden from a sensor, when it joins no track beside it): dropped, and kept for
+    :data:`ENDED_KEPT_STEPS` steps in the output's ``ended`` (the node's messages carry it to
+    the unobserved areas, :mod:`~sse_cosim.estimation.occupancy`). It joined nothing at the
+    step it ends, so every pedestrian in the node's view is still in one of its tracks that
+    joined a detection (what the second level and the clear regions rely on,
+    :mod:`~sse_cosim.estimation.anonymous_fusion`). The output has :class:`Track`'s shape,
+    keyed by ``"<node>:<track id>"``: the id is local to the node, so tracks of different
+    nodes never share a key (fusing them by key would assume they hold the same pedestrian;
+    use :func:`~sse_cosim.estimation.association.associate_nodes`). No sensor is flagged: the
     consistency vote needs to know which strips are about the same pedestrian.
     """
 
@@ -186,15 +223,28 @@ class AnonymousNodeObserver:
         self.settings = settings
         self.ground = ground
         self.association = Association((), 0)
+        self._joined_at: dict[int, int] = {}  # track id -> the last step it joined a detection
+        self._ended: tuple[EndedTrack, ...] = ()
 
-    def step(self, step: int, scan: NodeScan) -> dict[str, Track]:
-        """Tracks at ``step`` from the node's ``scan`` at ``step``."""
-        self.association = associate(
+    def step(self, step: int, scan: NodeScan) -> LocalTracks:
+        """Tracks at ``step`` from the node's ``scan`` at ``step``, and those it ended lately."""
+        association = associate(
             self.model, self.settings, self.association.tracks, scan.detections, scan.visible,
             step, self.association.next_id, self.ground)
+        joined_at = {t.track_id: step if t.joined
+                     else self._joined_at.get(t.track_id, step - END_AFTER_STEPS)
+                     for t in association.tracks}
+        live = {t.track_id: step - joined_at[t.track_id] < END_AFTER_STEPS
+                for t in association.tracks}
+        kept = tuple(t for t in association.tracks if live[t.track_id])
+        ended = [EndedTrack(step, t.estimate) for t in association.tracks if not live[t.track_id]]
+        self.association = Association(kept, association.next_id)
+        self._joined_at = {t.track_id: joined_at[t.track_id] for t in kept}
+        since = step - ENDED_KEPT_STEPS + 1
+        self._ended = (*(t for t in self._ended if t.step >= since), *ended)
         tracks = [Track(f"{self.node}:{t.track_id}", t.estimate, step, bool(t.joined))
-                  for t in self.association.tracks]
-        return {track.person_id: track for track in tracks}
+                  for t in kept]
+        return LocalTracks({track.person_id: track for track in tracks}, self._ended, since)
 
 
 NodeInput = TypeVar("NodeInput", Mapping[str, Mapping[str, Strips]], NodeScan)
@@ -205,7 +255,7 @@ name -> strips, :class:`NodeObserver`) or a :class:`NodeScan` (:class:`Anonymous
 class Observer(Protocol[NodeInput]):
     """One node's observer: its tracks at a step from that step's input."""
 
-    def step(self, step: int, found: NodeInput, /) -> dict[str, Track]: ...
+    def step(self, step: int, found: NodeInput, /) -> LocalTracks: ...
 
 
 class LocalObservers(Generic[NodeInput]):
@@ -236,10 +286,10 @@ class LocalObservers(Generic[NodeInput]):
         return LocalObservers(
             nodes, lambda node: AnonymousNodeObserver(node, model, settings), NodeScan())
 
-    def step(self, step: int, found: Mapping[str, NodeInput]) -> dict[str, dict[str, Track]]:
-        """Node -> track key -> track at ``step``, from ``found``: node -> what that node's
-        sensors report now (labelled: pedestrian id -> sensor name -> strips; anonymous: its
-        :class:`NodeScan`)."""
+    def step(self, step: int, found: Mapping[str, NodeInput]) -> dict[str, LocalTracks]:
+        """Node -> its tracks at ``step`` (track key -> track, and those it ended lately), from
+        ``found``: node -> what that node's sensors report now (labelled: pedestrian id ->
+        sensor name -> strips; anonymous: its :class:`NodeScan`)."""
         for node in found:
             if node not in self._observers:
                 self._observers[node] = self._make(node)
