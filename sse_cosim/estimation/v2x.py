@@ -5,6 +5,21 @@ A message leaves a node at step k and arrives at step k + latency unless it is d
 is farther than ``range_m`` from the bus when sending. The bus keeps the newest message per
 sender; a stale estimate is predicted forward to the current step before it is fused. Visible
 regions are used at the step they were seen (:mod:`sse_cosim.estimation.occupancy`).
+
+Ended tracks. A node's message lists the tracks it ended at every step from ``ended_since``
+to its own (:class:`~sse_cosim.estimation.observer.AnonymousNodeObserver`). When a sender's
+newest message j' replaces its newest j < j', the bus hands to its unobserved area every
+track listed in j' that ended after j, and, if j' does not list every step after j (the bus
+missed too many messages in a row), every track of j as well (ended at j). Proof that the
+bus then holds every pedestrian P of the sender's ended tracks (in a track of the sender's
+newest message, or in the unobserved area): while j is the newest, P's set is one of j's
+tracks or was handed over (induction); a track ended at e in (j, j'] held P at e only if P
+was in one of j's tracks at j (the sender's tracks hold every pedestrian they held, until
+they hand it over) or P was not the sender's at j, and then the bus never took it out of its
+unobserved area through the sender's views after j (it had not received them). So handing
+over j' 's listed tracks, or all of j's tracks (which hold P at j, hence the ended ones'
+pedestrians from j on), keeps P. A sender's first message hands nothing over: the bus took no
+pedestrian out of its unobserved area through that sender's views before.
 """
 
 from __future__ import annotations
@@ -15,7 +30,7 @@ import numpy as np
 import shapely
 
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.occupancy import ClearRegion
+from sse_cosim.estimation.occupancy import ClearRegion, EndedTrack
 from sse_cosim.scenario.model import V2X
 from sse_cosim.sets import Zonotope
 
@@ -27,7 +42,9 @@ class Message:
     ``detected`` names the pedestrians its sensors saw when sending: for any other
     pedestrian, ``visible_region`` is a place it was not (negative information).
     ``inconsistent``: the sender's own sources disagreed (it left a sensor out, or its
-    estimates are hulls of hypotheses; :mod:`sse_cosim.estimation.correction`).
+    estimates are hulls of hypotheses; :mod:`sse_cosim.estimation.correction`). ``ended``:
+    every track the sender ended at a step from ``ended_since`` to ``sent_step`` (module
+    docstring).
     """
 
     sender: str
@@ -36,6 +53,8 @@ class Message:
     visible_region: shapely.Geometry
     detected: frozenset[str] = frozenset()
     inconsistent: bool = False
+    ended: tuple[EndedTrack, ...] = ()
+    ended_since: int = 0
 
 
 @dataclass(frozen=True)
@@ -66,6 +85,7 @@ class V2XLink:
         self.rng = rng
         self._in_flight: list[tuple[int, Message]] = []
         self.latest: dict[str, Message] = {}
+        self._handed: list[EndedTrack] = []  # ended tracks delivered, not yet taken
 
     def send(self, message: Message, distance_to_bus: float, extra_latency_steps: int = 0) -> bool:
         """Queue ``message``; False if out of range or dropped. ``extra_latency_steps`` delay
@@ -79,14 +99,23 @@ class V2XLink:
         return True
 
     def deliver(self, step: int) -> list[Message]:
-        """Hand the bus every message due by ``step`` (returned); it keeps the newest per sender."""
+        """Hand the bus every message due by ``step`` (returned); it keeps the newest per
+        sender, and the tracks a new newest message hands over wait for :meth:`take_ended`."""
         due = [m for arrival, m in self._in_flight if arrival <= step]
         self._in_flight = [(a, m) for a, m in self._in_flight if a > step]
-        for message in due:
+        for message in sorted(due, key=lambda m: m.sent_step):
             kept = self.latest.get(message.sender)
             if kept is None or message.sent_step > kept.sent_step:
                 self.latest[message.sender] = message
+                if kept is not None:
+                    self._handed += _handed_over(kept, message)
         return due
+
+    def take_ended(self) -> list[EndedTrack]:
+        """The tracks handed over by the messages delivered since the last call (module
+        docstring), each at the step it ended."""
+        taken, self._handed = self._handed, []
+        return taken
 
     def picture(self, step: int, model: MotionModel) -> SharedPicture:
         """The newest message of every sender, predicted to ``step``."""
@@ -103,3 +132,13 @@ class V2XLink:
             detected={sender: m.detected for sender, m in latest},
             inconsistent=frozenset(sender for sender, m in latest if m.inconsistent),
         )
+
+
+def _handed_over(kept: Message, newest: Message) -> list[EndedTrack]:
+    """The tracks the sender's ``newest`` message hands over when it replaces ``kept``: those
+    it lists as ended after ``kept`` was sent, and every track of ``kept`` if it does not list
+    every step since (module docstring)."""
+    ended = [t for t in newest.ended if t.step > kept.sent_step]
+    if newest.ended_since > kept.sent_step + 1:
+        ended += [EndedTrack(kept.sent_step, z) for z in kept.estimates.values()]
+    return ended

@@ -104,8 +104,10 @@ class Ego:
         estimate, clear = self.fusion.step(tracks, shared, views)
         timer.lap("sharing_fusion")
         possible = self.known.update(step, observations, estimate, clear)
+        own = tracks.get(self.id)
         unknown = self.unobserved.update(
-            step, union_or_empty(o.visible for o in views), received.fresh_views)
+            step, union_or_empty(o.visible for o in views), received.fresh_views,
+            [*received.ended, *(own.ended_at(step) if own is not None else ())])
         timer.lap("occupancy")
         picture = assess(
             self.context, me.footprint.front.position, me.speed,

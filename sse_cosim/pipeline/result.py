@@ -6,7 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import Track
+from sse_cosim.estimation.observer import LocalTracks
 from sse_cosim.pipeline.ego import EgoStep
 from sse_cosim.sensors import SensorObservation
 from sse_cosim.sensors.faults import FaultStatus
@@ -23,7 +23,7 @@ class StepResult:
     step: int
     snapshot: Snapshot
     observations: dict[str, SensorObservation]
-    tracks: dict[str, dict[str, Track]]  # node -> pedestrian id -> track
+    tracks: dict[str, LocalTracks]  # node -> pedestrian id (or track key) -> track
     model: MotionModel
     faults: dict[str, FaultStatus]  # injected fault -> status
     vehicles: dict[str, EgoStep]

@@ -23,11 +23,12 @@ from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import (
     EstimatorSettings,
     LocalObservers,
+    LocalTracks,
     NodeInput,
     NodeScan,
     Track,
 )
-from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker
+from sse_cosim.estimation.occupancy import ClearRegion, EndedTrack, OccupancyTracker
 from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
 from sse_cosim.memo import IdentityMemo
 from sse_cosim.sensors import SensorObservation, SensorSpec, observe
@@ -36,7 +37,7 @@ from sse_cosim.sets import Strips, portable
 from sse_cosim.world.snapshot import Snapshot
 
 Observations = dict[str, SensorObservation]  # sensor name -> its observation at this step
-Tracks = Mapping[str, Mapping[str, Track]]  # node -> pedestrian id (or track key) -> track
+Tracks = Mapping[str, LocalTracks]  # node -> pedestrian id (or track key) -> track
 
 
 def sense(snapshot: Snapshot, specs: Mapping[str, SensorSpec], faults: FaultInjector,
@@ -83,8 +84,8 @@ class FirstLevel(Generic[NodeInput]):
         self.observers = observers
         self.inputs = inputs
 
-    def step(self, step: int, observations: Observations) -> dict[str, dict[str, Track]]:
-        """Node -> track key -> its local track at ``step``."""
+    def step(self, step: int, observations: Observations) -> dict[str, LocalTracks]:
+        """Node -> track key -> its local track at ``step`` (and those it ended lately)."""
         return self.observers.step(step, self.inputs(observations))
 
 
@@ -126,11 +127,13 @@ class Received:
     ``picture``: every sender's newest message brought to this step; ``fresh_views``: the
     visible regions of the messages delivered now that were seen exactly the link's latency
     ago (the unobserved area places them at that step; a view delayed longer by a link fault
-    is left out rather than placed at the wrong step).
+    is left out rather than placed at the wrong step); ``ended``: the tracks the messages
+    delivered now hand over to the unobserved area (:class:`~sse_cosim.estimation.v2x.V2XLink`).
     """
 
     picture: SharedPicture
     fresh_views: list[shapely.Geometry]
+    ended: list[EndedTrack]
 
 
 @dataclass(frozen=True)
@@ -147,8 +150,8 @@ def outgoing(step: int, snapshot: Snapshot, observations: Observations, tracks: 
              faults: FaultInjector, model: MotionModel) -> list[Outgoing]:
     """Every node's message of ``step``, built once for all receivers: each node in the scene
     whose message no loss burst takes sends its estimates (as its injected faults distort
-    them), visible region and the keys of the tracks its sensors detect now (by id, those
-    are the pedestrians it sees)."""
+    them), visible region, the keys of the tracks its sensors detect now (by id, those
+    are the pedestrians it sees) and the tracks it ended lately."""
     result = []
     for node, node_tracks in tracks.items():
         node_obs = [o for o in views_of(node, observations) if o.pose is not None]
@@ -159,7 +162,7 @@ def outgoing(step: int, snapshot: Snapshot, observations: Observations, tracks: 
         message = Message(
             node, step, estimates, union_or_empty(o.visible for o in node_obs),
             frozenset(key for key, t in node_tracks.items() if t.detected),
-            disagrees(node_tracks.values()),
+            disagrees(node_tracks.values()), node_tracks.ended, node_tracks.ended_since,
         )
         result.append(Outgoing(message, node_obs[0].pose.position, faults.extra_latency(node)))
     return result
@@ -188,7 +191,8 @@ class Sharing:
         delivered = self.link.deliver(step)
         latency = self.link.config.latency_steps
         return Received(self.link.picture(step, self.model),
-                        [m.visible_region for m in delivered if step - m.sent_step == latency])
+                        [m.visible_region for m in delivered if step - m.sent_step == latency],
+                        self.link.take_ended())
 
 
 def clear_regions(
