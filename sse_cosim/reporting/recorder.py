@@ -6,11 +6,15 @@ Soundness is checked per pedestrian (paper Section III): at every step every ped
 scene lies in each set the automated vehicle holds of it (local, fused), in its refined region,
 and in a refined region or the unobserved area; each miss is a violation, counted per
 pedestrian. With anonymous tracks (``estimator.association = "anonymous"``) no set names a
-pedestrian, so the checks are per pedestrian over all sets: one that some node has detected
-lies in some track set of that node; one that an automated vehicle has detected, or that a
-sender detected by the step of its newest message to that vehicle, lies in some fused set and
-some refined region of that vehicle. The true ids the recorder reads from the observations
-serve these checks only.
+pedestrian, so the checks are per pedestrian over all sets: one that some node holds (it has
+detected it, and not handed it over since) lies in some track set of that node; a node hands
+a pedestrian over at a step where it lies in none of the node's tracks but in one the node
+ended then (:class:`~sse_cosim.estimation.occupancy.EndedTrack`), and it must lie in one or
+the other (a pedestrian the node detects now, in one of its tracks). One that an automated
+vehicle holds, or that a sender held at the step of its newest message to that vehicle, lies
+in some fused set and some refined region of that vehicle; every pedestrian, handed over or
+never detected, lies in a refined region or the unobserved area (the ``unaccounted`` check).
+The true ids the recorder reads from the observations serve these checks only.
 
 Checks stay independent of what they check: the recorder recomputes from what it writes. A
 set's position set (:class:`PositionSet`) is computed here from its state estimate's own
@@ -257,7 +261,9 @@ class RunRecorder:
     anonymous: bool = field(init=False)  # sets of anonymous tracks: checked over all sets
     jitter: float = field(init=False)  # the estimator's position jitter (m), its claim's box
     state_dim: int = field(init=False)  # the estimator's state dimension (position rows first)
-    first_seen: dict[str, dict[str, int]] = field(default_factory=dict)  # node -> pid -> step
+    # node -> pid -> the steps from which the node holds it (True: detected) or has handed it
+    # over (False), each a change (anonymous checks)
+    custody: dict[str, dict[str, list[tuple[int, bool]]]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.start(self.scenario)
@@ -276,7 +282,7 @@ class RunRecorder:
         t = round(result.snapshot.time, 6)
         truths = {pid: np.asarray(p.position) for pid, p in sorted(result.snapshot.persons.items())}
         if self.anonymous:  # (by id, every set names its pedestrian: nothing to remember)
-            self._note_first_seen(result)
+            self._note_detected(result)
         self.truth_rows += [{"t": t, "pedestrian": pid, "x": xy[0], "y": xy[1]}
                             for pid, xy in truths.items()]
         local = self._check_local_sets(t, result, truths)
@@ -362,38 +368,50 @@ class RunRecorder:
         """Each pedestrian the vehicle knows of (module docstring) in some fused set and some
         refined region; every fused set (position sets) and refined region, by fused key."""
         fused = {key: self._position(z) for key, z in ego.estimate.fused.items()}
-        known = self._detected_by(ego.vehicle, result.step)
+        known = self._held_by(ego.vehicle, result.step)
         for sender, age in ego.shared.ages.items():
-            known |= self._detected_by(sender, result.step - age)
+            known |= self._held_by(sender, result.step - age)
         for pid in sorted(known & truths.keys()):
             checks[pid].fused = self._check(t, FUSED, pid, list(fused.values()), truths[pid])
             checks[pid].refined = self._check_region(t, pid, list(ego.possible.values()),
                                                      ego.window, truths[pid])
         return fused, dict(ego.possible)
 
-    def _note_first_seen(self, result: StepResult) -> None:
-        """The step at which each node first detected each pedestrian (anonymous checks)."""
+    def _note_detected(self, result: StepResult) -> None:
+        """Each node holds each pedestrian it detects now (anonymous checks)."""
         for obs in result.observations.values():
-            seen = self.first_seen.setdefault(obs.node, {})
             for pid in obs.detections:
-                seen.setdefault(pid, result.step)
+                self._note_custody(obs.node, pid, result.step, True)
 
-    def _detected_by(self, node: str, step: int) -> set[str]:
-        """The pedestrians ``node`` has detected by ``step``."""
-        return {pid for pid, first in self.first_seen.get(node, {}).items() if first <= step}
+    def _note_custody(self, node: str, pid: str, step: int, holds: bool) -> None:
+        changes = self.custody.setdefault(node, {}).setdefault(pid, [])
+        if not changes or changes[-1][1] != holds:
+            changes.append((step, holds))
+
+    def _held_by(self, node: str, step: int) -> set[str]:
+        """The pedestrians ``node`` holds at ``step``: it detected them by then and did not hand
+        them over after its last detection."""
+        held = set()
+        for pid, changes in self.custody.get(node, {}).items():
+            last = [holds for first, holds in changes if first <= step]
+            if last and last[-1]:
+                held.add(pid)
+        return held
 
     def _check_local_sets(self, t: float, result: StepResult,
                           truths: dict[str, np.ndarray]) -> list[_LocalSet]:
         """Every node's set of each pedestrian in the scene (anonymous: every track of every
-        node, each pedestrian the node has detected checked against them all), checked once
-        per step, however many automated vehicles receive it."""
+        node, each pedestrian the node holds checked against them all, or handed over),
+        checked once per step, however many automated vehicles receive it."""
         local: list[_LocalSet] = []
         for node, tracks in result.tracks.items():
             if self.anonymous:
                 mine = [_LocalSet(node, key, self._position(track.estimate), track.detected)
                         for key, track in tracks.items()]
-                for pid in sorted(self._detected_by(node, result.step) & truths.keys()):
-                    self._check(t, node, pid, [s.position for s in mine], truths[pid])
+                ended = [self._position(e.estimate) for e in tracks.ended_at(result.step)]
+                for pid in sorted(self._held_by(node, result.step) & truths.keys()):
+                    self._check_held(t, result, node, pid, [s.position for s in mine], ended,
+                                     truths[pid])
                 local += mine
                 continue
             for pid in (pid for pid in truths if pid in tracks):
@@ -401,6 +419,20 @@ class RunRecorder:
                 self._check(t, node, pid, [position], truths[pid])
                 local.append(_LocalSet(node, pid, position, tracks[pid].detected))
         return local
+
+    def _check_held(self, t: float, result: StepResult, node: str, pid: str,
+                    positions: list[PositionSet], ended: list[PositionSet],
+                    truth: np.ndarray) -> None:
+        """A pedestrian ``node`` holds lies in one of its track sets (``positions``), or, if
+        the node does not detect it now, in one of the tracks it ended now (``ended``): then
+        the node has handed it over."""
+        detected = any(o.node == node and pid in o.detections
+                       for o in result.observations.values())
+        if not detected and any(z.contains(truth) for z in ended) \
+                and not any(z.contains(truth) for z in positions):
+            self._note_custody(node, pid, result.step, False)
+            return
+        self._check(t, node, pid, positions, truth)
 
     def _position(self, estimate: Zonotope) -> PositionSet:
         """The position set of a state estimate that the recorder writes and checks, from the
