@@ -33,6 +33,16 @@ jitter disc of its latest position (it walks well within the bounds: the usual c
 one containment test of two homothetic polygons a step, no polygon operation. After a
 reported break the walk's set starts afresh at the break's position.
 
+Compiled. :func:`admits` (and with it :func:`least_jitter`, which the jitter measurement of
+:mod:`sse_cosim.world.walker_jitter` bisects with it) runs the recursion in a numba kernel,
+:func:`~sse_cosim.world.assumption_kernels.admits_walk`; :func:`admits_reference` is its
+NumPy/shapely reference (:func:`advance`: :func:`minkowski_sum` and GEOS's :func:`intersect`).
+The kernel's own rounding moves its answer no more than moving both bounds by about 1e-11 m
+would, for walks within 1 km of their first position (the kernel module's docstring proves
+the bound): five orders of magnitude below :data:`TOLERANCE_M`, and least_jitter rounds up to
+1 mm. :class:`PedestrianMotionCheck` keeps the reference's operations (its polygons pass from
+the fine recursion to the coarse one, which the kernel's sector form would not hold exactly).
+
 Discs against the estimator's boxes: the estimator's process noise is the box |dx|, |dy| <=
 v dt and its jitter the box |e_x|, |e_y| <= eps; each holds the disc of the same radius, so
 a walk that keeps the disc model keeps the box model too (this test is the stricter one).
@@ -49,6 +59,7 @@ import numpy as np
 import shapely
 
 from sse_cosim.sets import portable
+from sse_cosim.world.assumption_kernels import admits_walk
 
 COARSE_SIDES = 64
 FINE_SIDES = 4096
@@ -186,11 +197,19 @@ def admits(positions: np.ndarray, bounds: MotionBounds, sides: int = COARSE_SIDE
     keeps it whole (homothetic polygons: P_N(c, eps) (+) P_N(v dt) holds P_N(p, eps)), with
     no polygon operation. The walk is followed up to its last step longer than v dt only: from
     a path point s_k within eps of p_k, s_k + (p_(k+1) - p_k) is one for p_(k+1) whenever that
-    step is at most v dt, so a walk admitted up to there is admitted whole."""
-    steps = np.diff(positions, axis=0)
-    longer = np.flatnonzero((steps * steps).sum(axis=1) > bounds.step_m * bounds.step_m)
-    positions = positions[:longer[-1] + 2] if len(longer) else positions[:1]
-    positions = positions - positions[0]
+    step is at most v dt, so a walk admitted up to there is admitted whole.
+
+    Compiled (:func:`~sse_cosim.world.assumption_kernels.admits_walk`, whose docstring bounds
+    its rounding); :func:`admits_reference` is the NumPy/shapely reference."""
+    return admits_walk(_to_follow(positions, bounds), unit_polygon(sides),
+                       _edge_midpoints(sides), bounds.step_m, bounds.jitter_m)
+
+
+def admits_reference(positions: np.ndarray, bounds: MotionBounds,
+                     sides: int = COARSE_SIDES) -> bool:
+    """:func:`admits` by :func:`advance` (``minkowski_sum`` and GEOS's ``intersect``) step by
+    step: the reference of the compiled kernel."""
+    positions = _to_follow(positions, bounds)
     center: np.ndarray | None = positions[0]
     current: np.ndarray | None = None
     for position in positions[1:]:
@@ -204,6 +223,17 @@ def admits(positions: np.ndarray, bounds: MotionBounds, sides: int = COARSE_SIDE
         if current is None:
             return False
     return True
+
+
+def _to_follow(positions: np.ndarray, bounds: MotionBounds) -> np.ndarray:
+    """The part of the walk ``positions`` (k, 2) :func:`admits` follows, up to its last step
+    longer than v dt (the first position alone without one), relative to its first position:
+    (j, 2), contiguous float64."""
+    positions = np.asarray(positions, dtype=float)
+    steps = np.diff(positions, axis=0)
+    longer = np.flatnonzero((steps * steps).sum(axis=1) > bounds.step_m * bounds.step_m)
+    positions = positions[:longer[-1] + 2] if len(longer) else positions[:1]
+    return np.ascontiguousarray(positions - positions[0])
 
 
 def least_jitter(positions: np.ndarray, bounds: MotionBounds) -> float:
