@@ -12,7 +12,10 @@ paper's road, the zebra). The body's sweep is SUMO's placement of the body along
 (:mod:`sse_cosim.control.swept`): on a straight road the centre line widened by half the
 width, on a corner wider (the rear swings out, the side cuts in). Each zone has an extent
 ``[start_m, end_m]`` along the route: the body touches it only while the front bumper is
-between ``start_m`` and ``end_m + length``.
+between ``start_m`` and ``end_m + length``. A piece of walkable ground longer than
+:data:`ZONE_PIECE_M` along the route (a strip of kerb the corridor grazes, joined to the next
+at a walking area) is cut into overlapping zones about that long, which together cover it:
+the bus has to clear each before anyone could reach it, not the whole strip at once.
 
 Every step the picture says, per zone ahead, the **earliest arrival**: the soonest any
 pedestrian can be in the zone. Each known pedestrian's refined region and every walkable
@@ -41,11 +44,16 @@ from itertools import pairwise
 
 import numpy as np
 import shapely
+import shapely.ops
 
 from sse_cosim.control.kinematics import BusDynamics
 from sse_cosim.control.swept import RoutePath, SweepPiece, body_sweep, swept_region, touch_extent
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
 from sse_cosim.world.roadmap import RoadMap
+
+ZONE_PIECE_M = 4.0  # conflict zones are cut into pieces about this long along the route (m)
+_CUT_OVERLAP_M = 0.5  # consecutive pieces overlap by twice this along the route (m)
+_CUT_COVER_M2 = 1e-9  # what the cut pieces may leave of a zone uncovered, by rounding (m²)
 
 
 @dataclass(frozen=True)
@@ -76,7 +84,7 @@ class SceneContext:
     """What does not change during a run: the route, walkable ground, the conflict zones."""
 
     route_line: shapely.LineString
-    walkable: shapely.Geometry  # the road map's walkable ground (measured margins included)
+    walkable: shapely.Geometry  # the road map's walkable ground (measured patches included)
     crossings: tuple[RouteCrossing, ...]  # the crossings on the route, nearest first
     bus: AutomatedVehicle
     config: Controller
@@ -386,15 +394,46 @@ def _window(crossings: Sequence[RouteCrossing],
 
 def _swept_walkable(route_line: shapely.LineString, corridor: shapely.Geometry,
                     walkable: shapely.Geometry) -> list[tuple[shapely.Geometry, float, float]]:
-    """Each connected piece of walkable ground inside the ``corridor`` around the route, with
-    its extent along the route (min and max of its vertices' projections), in route order."""
+    """Each connected piece of walkable ground inside the ``corridor`` around the route, cut
+    into pieces of about :data:`ZONE_PIECE_M` along it (:func:`_cut_along`), with its extent
+    along the route (min and max of its vertices' projections), in route order."""
     pieces = []
-    for part in shapely.get_parts(shapely.intersection(corridor, walkable)):
-        if part.area <= 0.0:
-            continue
-        along = [route_line.project(shapely.Point(p)) for p in shapely.get_coordinates(part)]
-        pieces.append((part, min(along), max(along)))
+    for whole in shapely.get_parts(shapely.intersection(corridor, walkable)):
+        for part in _cut_along(whole, route_line, corridor):
+            if part.area <= 0.0:
+                continue
+            along = [route_line.project(shapely.Point(p)) for p in shapely.get_coordinates(part)]
+            pieces.append((part, min(along), max(along)))
     return sorted(pieces, key=lambda piece: piece[1])
+
+
+def _cut_along(part: shapely.Geometry, route_line: shapely.LineString,
+               corridor: shapely.Geometry) -> list[shapely.Geometry]:
+    """``part`` cut into polygons each within about :data:`ZONE_PIECE_M` of route along it:
+    ``part`` ∩ the route's stretch [a - d, b + d] widened by the corridor's reach (flat ends),
+    for consecutive [a, b] of that length (d = :data:`_CUT_OVERLAP_M`: overlapping stretches
+    leave no gap at a bend). The pieces must cover ``part`` (checked: else ``part`` stays
+    whole), so every place of it is in a zone; they may overlap, which only repeats a place.
+
+    Why: a long strip of kerb inside the corridor (sidewalk slivers joined at a walking area)
+    would be one zone the bus has to clear whole before anyone could reach any of it."""
+    along = [route_line.project(shapely.Point(p)) for p in shapely.get_coordinates(part)]
+    first, last = min(along), max(along)
+    if last - first <= ZONE_PIECE_M:
+        return [part]
+    reach = shapely.hausdorff_distance(corridor, route_line) + 1.0
+    count = math.ceil((last - first) / ZONE_PIECE_M)
+    edges = np.linspace(first, last, count + 1)
+    cuts = []
+    for a, b in pairwise(edges.tolist()):
+        stretch = shapely.ops.substring(route_line, max(a - _CUT_OVERLAP_M, 0.0),
+                                        min(b + _CUT_OVERLAP_M, route_line.length))
+        cuts.extend(shapely.get_parts(shapely.intersection(
+            part, stretch.buffer(reach, cap_style="flat"))))
+    cuts = [c for c in cuts if c.area > 0.0]
+    if shapely.difference(part, shapely.union_all(cuts)).area > _CUT_COVER_M2:
+        return [part]
+    return cuts
 
 
 def route_lanes(roadmap: RoadMap, route_edges: Sequence[str]) -> list[tuple[np.ndarray, float]]:
