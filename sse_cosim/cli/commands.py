@@ -148,8 +148,8 @@ def network(network_path: Path, step_length_s: float | None, speed_mps: float | 
     rebuilds it by itself when a source changes) or an existing SUMO .net.xml. Prints the
     network's path, then the jitter SUMO's lone walkers need at the speed bound on every
     walking area of the network, with the junction and the step that need the most, and the
-    widest ground margin: how far from a junction's walking areas and crossings a walker
-    strayed off the sidewalks, walking areas and crossings (sse_cosim/world/walker_jitter.py;
+    ground patches: where the lone walkers strayed off the sidewalks, walking areas and
+    crossings, which the walkable ground takes in (sse_cosim/world/walker_jitter.py;
     measured once per network and setting, then read from the cache). A run whose scenario leaves
     estimator.position_jitter_m out takes the value measured on its scene's part of the
     network.
@@ -171,8 +171,7 @@ def network(network_path: Path, step_length_s: float | None, speed_mps: float | 
     click.echo(f"walker jitter: {measured.jitter_m:.3f} m at {speed:g} m/s and {step:g} s steps "
                f"over {measured.junctions} junctions with walking areas; the most "
                f"{measured.where()}")
-    margins = measured.ground_margins
-    widest = max(margins, key=lambda j: (margins[j], j), default=None)
-    click.echo("ground margin: " + ("no walking area" if widest is None else
-               f"{margins[widest]:.3f} m at junction {widest!r}, above 0 at "
-               f"{sum(m > 0 for m in margins.values())} of {len(margins)} junctions"))
+    patches = measured.ground_patches
+    click.echo(f"ground patches: {sum(p.area for p in patches.values()):.1f} m² beyond the "
+               f"sidewalks, walking areas and crossings, at {len(patches)} of "
+               f"{measured.junctions} junctions")

@@ -11,10 +11,10 @@ admits road vehicles (passenger cars, buses, ...) and no pedestrians. A network 
 number of crossings, none included; the road map holds them all.
 
 *Walkable ground* (:attr:`RoadMap.walkable`), where the estimator assumes every pedestrian's
-centre is: the sidewalks, walking areas and crossings, and around each junction's walking
-areas and crossings the margin SUMO's lone walkers were measured to stray beyond them there
-(``ground_margins``, :mod:`sse_cosim.world.walker_jitter`; the world fills it before a run,
-:meth:`RoadMap.with_ground_margins`, and checks every step that each pedestrian is on it).
+centre is: the sidewalks, walking areas and crossings, and the patches where SUMO's lone
+walkers were measured to leave them (``ground_patches``, :mod:`sse_cosim.world.walker_jitter`;
+the world fills them before a run, :meth:`RoadMap.with_ground_patches`, and checks every step
+that each pedestrian is on it).
 """
 
 from __future__ import annotations
@@ -33,7 +33,6 @@ import shapely
 import sumolib
 
 from sse_cosim.errors import UserError
-from sse_cosim.estimation.occupancy import dilate
 from sse_cosim.world.extent import SceneExtent, scene_extent
 
 if TYPE_CHECKING:
@@ -85,9 +84,8 @@ class RoadMap:
     junction between two consecutive edges of a vehicle route. A road map built for a
     scene (:func:`load_scene_roadmap`) holds the edges near it only
     (:mod:`sse_cosim.world.extent`), and ``net`` the network it was read from.
-    ``junction_ground[node]`` is the union of a junction's walking areas and crossings;
-    ``ground_margins[node]`` how far (m) beyond them SUMO's lone walkers were measured to
-    leave the plain :attr:`ground` there (none measured: empty).
+    ``ground_patches[node]`` is the ground SUMO's lone walkers were measured to need beyond
+    the plain :attr:`ground` at a junction (none measured: empty).
     """
 
     net_path: Path
@@ -102,8 +100,7 @@ class RoadMap:
     # an internal lane -> the internal lane it leads into (a passage split at an internal
     # junction: a left turn waiting inside the junction)
     internal_next: dict[str, str] = field(default_factory=dict)
-    junction_ground: dict[str, shapely.Geometry] = field(default_factory=dict)
-    ground_margins: dict[str, float] = field(default_factory=dict)
+    ground_patches: dict[str, shapely.Geometry] = field(default_factory=dict)
     net: sumolib.net.Net | None = field(default=None, compare=False, repr=False)
 
     @functools.cached_property
@@ -113,18 +110,14 @@ class RoadMap:
 
     @functools.cached_property
     def walkable(self) -> shapely.Geometry:
-        """The walkable ground every consumer uses: :attr:`ground`, and each junction's walking
-        areas and crossings dilated by its measured margin (where it is above 0) with a
-        polygon that holds the dilation by a disc (:func:`~sse_cosim.estimation.occupancy.
-        dilate`), so it holds every position SUMO's lone walkers were measured at."""
-        grown = [dilate(self.junction_ground[node], margin)
-                 for node, margin in sorted(self.ground_margins.items())
-                 if margin > 0.0 and node in self.junction_ground]
-        return shapely.union_all([self.ground, *grown]) if grown else self.ground
+        """The walkable ground every consumer uses: :attr:`ground` and the measured patches,
+        so it holds every position SUMO's lone walkers were measured at."""
+        patches = [self.ground_patches[node] for node in sorted(self.ground_patches)]
+        return shapely.union_all([self.ground, *patches]) if patches else self.ground
 
-    def with_ground_margins(self, margins: dict[str, float]) -> RoadMap:
-        """This road map with ``margins`` (junction -> m) as its ``ground_margins``."""
-        return replace(self, ground_margins=dict(margins))
+    def with_ground_patches(self, patches: dict[str, shapely.Geometry]) -> RoadMap:
+        """This road map with ``patches`` (junction -> ground) as its ``ground_patches``."""
+        return replace(self, ground_patches=dict(patches))
 
     @functools.cached_property
     def crossing_area(self) -> shapely.Geometry:
@@ -321,7 +314,7 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
     internal_next: dict[str, str] = {}
     edge_lengths: dict[str, float] = {}
     crossings: list[Crossing] = []
-    walking_areas: list[tuple[str, shapely.Polygon]] = []
+    walking_areas: list[shapely.Polygon] = []
     for edge in net.getEdges(withInternal=True):
         if extent is not None and not extent.holds(edge):
             continue
@@ -334,7 +327,7 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
             if len(ring) >= 3:
                 poly = shapely.make_valid(shapely.Polygon(ring))
                 if poly.area > 1e-6:
-                    walking_areas.append((edge.getFromNode().getID(), poly))
+                    walking_areas.append(poly)
             continue
         if function == "internal":
             for lane in edge.getLanes():
@@ -352,7 +345,7 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
             elif is_driving_lane(lane):
                 driving[lane.getID()] = _geometry(lane)
     sidewalk_union = shapely.union_all(
-        [g.polygon() for g in sidewalk.values()] + [poly for _, poly in walking_areas])
+        [g.polygon() for g in sidewalk.values()] + walking_areas)
     progress.say(f"road map: {len(edge_lengths)} edges "
                  f"{'in all' if extent is None else 'near the scene'}")
     return RoadMap(
@@ -366,18 +359,8 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
         edge_lengths=edge_lengths,
         junction_lanes=_junction_lanes(net, extent),
         internal_next=internal_next,
-        junction_ground=_junction_ground(walking_areas, crossings),
         net=None if extent is None else net,
     )
-
-
-def _junction_ground(walking_areas: Sequence[tuple[str, shapely.Polygon]],
-                     crossings: Sequence[Crossing]) -> dict[str, shapely.Geometry]:
-    """Each junction's walking areas and crossings, united, by junction id."""
-    parts: dict[str, list[shapely.Geometry]] = {}
-    for node, area in [*walking_areas, *((c.node, c.area) for c in crossings)]:
-        parts.setdefault(node, []).append(area)
-    return {node: shapely.union_all(areas) for node, areas in sorted(parts.items())}
 
 
 def _crossing(edge: sumolib.net.edge.Edge) -> Crossing:

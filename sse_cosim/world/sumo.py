@@ -58,10 +58,10 @@ run each simulation in its own process so that they can run in parallel.
 
 Walkable ground. The estimator assumes every pedestrian's centre lies on the road map's
 walkable ground (:attr:`sse_cosim.world.roadmap.RoadMap.walkable`): sidewalks, walking areas and
-crossings, each junction's grown by the margin SUMO's lone walkers were measured to stray
-beyond them there (:mod:`sse_cosim.world.walker_jitter`, measured before every run -- also in a
-study that sets its own jitter and breaks ``pedestrian_speed``). The world fills the road
-map's margins before anything reads the road map, and ``step()`` checks every pedestrian's
+crossings, and the patches where SUMO's lone walkers were measured to leave them
+(:mod:`sse_cosim.world.walker_jitter`, measured before every run -- also in a study that sets
+its own jitter and breaks ``pedestrian_speed``). The world fills the road map's patches before
+anything reads the road map, and ``step()`` checks every pedestrian's
 true centre against that ground: one off it stops the run with :class:`AssumptionBroken`
 (``walkable_ground``, exit status 5), unless the study lists ``walkable_ground`` in
 ``breaks_assumptions``; then it counts the steps (:attr:`SumoWorld.ground_breaks`) and runs on.
@@ -142,7 +142,7 @@ def measure_walkers(net_path: Path, roadmap: RoadMap, extent: SceneExtent | None
     (:mod:`sse_cosim.world.walker_jitter`, cached)."""
     return walker_jitter.measure(
         net_path, roadmap.net, extent,
-        walker_jitter.Ground(roadmap.ground, roadmap.junction_ground), speed_mps, step_s,
+        walker_jitter.Ground(roadmap.ground), speed_mps, step_s,
         radius_m, sumo_version())
 
 
@@ -238,7 +238,7 @@ class SumoWorld:
                                             timer=ProbeTimer(self._net_path))
             measured = self._measure()
             self.scenario = self._with_jitter(measured)
-        self._roadmap = self._roadmap.with_ground_margins(measured.ground_margins)
+        self._roadmap = self._roadmap.with_ground_patches(measured.ground_patches)
         shapely.prepare(self._roadmap.walkable)
         estimator = self.scenario.estimator
         assert estimator.position_jitter_m is not None
@@ -383,7 +383,7 @@ class SumoWorld:
 
     def _check_ground(self, snapshot: Snapshot) -> None:
         """Every pedestrian's true centre lies on the walkable ground (the road map's
-        :attr:`~sse_cosim.world.roadmap.RoadMap.walkable`, measured margins included). One off
+        :attr:`~sse_cosim.world.roadmap.RoadMap.walkable`, measured patches included). One off
         it stops the run, naming the pedestrian, the time, its lane, how far off it is and the
         fix -- unless the study lists ``walkable_ground``: then it is counted
         (:attr:`ground_breaks`) and the run goes on."""
@@ -404,8 +404,8 @@ class SumoWorld:
                 self.scenario_name, GROUND_ASSUMPTION,
                 f"pedestrian {pid!r} at t={snapshot.time:.2f} s (lane {_lane(lane)}) is "
                 f"{off_m:.3f} m off the walkable ground (sidewalks, walking areas and "
-                "crossings, each junction's grown by the margin SUMO's lone walkers were "
-                "measured to need there); the run stops before the estimator's sets are "
+                "crossings, and the patches where SUMO's lone walkers were measured to leave "
+                "them); the run stops before the estimator's sets are "
                 "checked against a truth outside its model",
                 "keep the pedestrian's walk (or the route file's person) on sidewalks, walking "
                 "areas and crossings -- SUMO's walkers were measured there alone, not in a "

@@ -33,27 +33,30 @@ of each walking area, so it is measured on the network itself:
 * **Off the ground.** While a walker is on a junction's walking areas and crossings, SUMO
   moves it on a curve from the end of one lane to the start of the next, which can leave the
   road map's plain ground (sidewalks, walking areas and crossings): the wedge between a
-  crossing's rectangle and its walking area's kerb, a corner cut short. Each junction's
-  *ground margin* is the largest distance from the junction's own walking areas and crossings
-  of a walker centre there that lies off the plain ground (0.0 where none does; rounded up to
-  the millimetre); the road map dilates that junction's walking areas and crossings by it
-  (:attr:`sse_cosim.world.roadmap.RoadMap.walkable`), so its walkable ground holds every
-  position measured, and any stripe that strays no farther. The ground is given as geometry
-  (:class:`Ground`).
+  crossing's rectangle and its walking area's kerb, a corner cut short (up to 2.9 m off on
+  the town cut). Each junction's *ground patch* covers every stretch a walker spent off the
+  plain ground there, with the positions before and after it, widened by
+  :data:`GROUND_BAND_M` (0.25 m: room for a walker on another stripe or at another speed
+  whose curve runs close beside the lone walker's; one that strays farther is stopped by the
+  world's check, never missed); the road map adds the patches to its walkable ground
+  (:attr:`sse_cosim.world.roadmap.RoadMap.walkable`), so it holds every position measured,
+  and the world checks every step that each pedestrian is on it. The ground is given as
+  geometry (:class:`Ground`).
 
 A run takes the largest over the junctions of the walking areas in its scene's extent
 (:mod:`sse_cosim.world.extent`: the pedestrians of a run cannot walk beyond it before the run
 ends). Every step of every run still checks the assumption on the true walk, so a walker that
 strays more than measured (a crowd, a stripe the measurement did not walk) stops the run with
 exit status 5 and never goes unnoticed; so does a walker off the walkable ground with its
-margins (:class:`sse_cosim.world.sumo.SumoWorld`).
+patches (:class:`sse_cosim.world.sumo.SumoWorld`).
 
 Cache: a JSON file per network, the built network's folder for one built from sources
 (``walker_jitter.json`` beside ``road.net.xml``), else ``$XDG_CACHE_HOME/sse-cosim`` by the
 content hash of the ``.net.xml``; its entries are keyed by SUMO's version, the step length,
 the speed bound and the pedestrian's size, and hold each junction's jitter and the walk that
-needed it, and its ground margin (an entry written before margins were measured has none and
-is measured again). It is written atomically; only the junctions not measured yet are walked.
+needed it, and its ground patch (exact, as hex WKB; an entry written before patches were
+measured has none and is measured again). It is written atomically; only the junctions not
+measured yet are walked.
 """
 
 from __future__ import annotations
@@ -75,6 +78,7 @@ import numpy as np
 import shapely
 import sumolib
 
+from sse_cosim.estimation.occupancy import dilate
 from sse_cosim.files import write_text_atomic
 from sse_cosim.world.assumptions import MotionBounds, admits, least_jitter, path_jitter
 from sse_cosim.world.extent import SceneExtent
@@ -85,64 +89,75 @@ LEAD_M = 3.0  # how far a walk starts before a walking area and ends beyond it (
 CACHE_FILE_NAME = "walker_jitter.json"
 _EPS_M = 1e-9  # steps longer than v dt by rounding only need no jitter
 _DURATION = re.compile(r'duration="([0-9.]+)"')
+GROUND_BAND_M = 0.25  # how far a ground patch reaches around a lone walker's stretch off it (m)
 SLOT_SLACK_S = 3.0  # a slot outlasts its longest walk at the bound by this much (and half again)
 
 
 @dataclass(frozen=True)
 class Ground:
-    """The ground the measurement holds walkers to: ``plain`` (the road map's sidewalks,
-    walking areas and crossings) and ``junctions`` (each junction's walking areas and
-    crossings, by junction id)."""
+    """The ground the measurement holds walkers to: the road map's sidewalks, walking areas and
+    crossings as the network draws them (``plain``)."""
 
     plain: shapely.Geometry
-    junctions: dict[str, shapely.Geometry]
 
-    def margin(self, junction: str, xy: np.ndarray) -> float:
-        """The ground margin (m) of ``junction`` that holds positions ``xy`` (k, 2): the
-        largest distance from the junction's walking areas and crossings of a position off
-        the plain ground (from the plain ground for a junction without any); 0.0 if none
-        is off it."""
-        points = shapely.points(xy.reshape(-1, 2))
-        off = points[shapely.distance(self.plain, points) > 0.0]
-        if len(off) == 0:
-            return 0.0
-        own = self.junctions.get(junction)
-        nearest = self.plain if own is None or own.is_empty else own
-        return float(shapely.distance(nearest, off).max())
+    def patch(self, runs: Sequence[np.ndarray]) -> shapely.Geometry:
+        """The ground patch that holds the walk pieces ``runs`` (each (k, 2)) where they are
+        off the plain ground: each stretch of consecutive positions off it, with the position
+        before and after, as a line dilated by :data:`GROUND_BAND_M` (a polygon holding the
+        disc dilation, :func:`~sse_cosim.estimation.occupancy.dilate`); empty if none is
+        off."""
+        lines = []
+        for xy in runs:
+            off = shapely.distance(self.plain, shapely.points(xy.reshape(-1, 2))) > 0.0
+            for first, last in _stretches(off):
+                piece = xy[max(first - 1, 0):last + 2]
+                lines.append(shapely.LineString(piece) if len(piece) > 1
+                             else shapely.Point(piece[0]))
+        if not lines:
+            return shapely.Polygon()
+        return dilate(shapely.union_all(lines), GROUND_BAND_M)
+
+
+def _stretches(flags: np.ndarray) -> list[tuple[int, int]]:
+    """The (first, last) indices of each run of True in ``flags`` (k,)."""
+    edges = np.diff(np.concatenate([[0], flags.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(edges == 1).tolist(),
+                    (np.flatnonzero(edges == -1) - 1).tolist(), strict=True))
 
 
 @dataclass(frozen=True)
 class JunctionJitter:
     """The jitter (m) SUMO's walkers need at one junction, and the walk (its edges) that
     needed the most there, with the lanes of its largest step (from, to) and that step (m);
-    ``ground_margin_m`` its ground margin (module docstring; None: not measured, an old
-    entry)."""
+    ``ground_patch`` the ground its walkers need beyond the plain ground (module docstring;
+    None: not measured, an old entry)."""
 
     junction: str
     jitter_m: float
     walk: tuple[str, ...]
     step_lanes: tuple[str, str]
     step_m: float
-    ground_margin_m: float | None = None
+    ground_patch: shapely.Geometry | None = None
 
     def as_dict(self) -> dict[str, object]:
+        patch = None if self.ground_patch is None else shapely.to_wkb(self.ground_patch, hex=True)
         return {"jitter_m": self.jitter_m, "walk": list(self.walk),
                 "step_lanes": list(self.step_lanes), "step_m": self.step_m,
-                "ground_margin_m": self.ground_margin_m}
+                "ground_patch": patch}
 
 
 @dataclass(frozen=True)
 class NetworkJitter:
     """The measured jitter over a set of junctions (the worst one named; 0.0 and no junction
     where no walking area was found), the settings it was measured with, and each junction's
-    ground margin (m) by id."""
+    ground patch by id."""
 
     jitter_m: float
     worst: JunctionJitter | None
     junctions: int
     speed_mps: float
     step_s: float
-    ground_margins: dict[str, float]
+    ground_patches: dict[str, shapely.Geometry]
 
     def where(self) -> str:
         """Where the worst jump happened, for messages."""
@@ -166,7 +181,7 @@ class JitterCache:
 
     def junctions(self, key: str) -> dict[str, JunctionJitter]:
         return {jid: JunctionJitter(jid, e["jitter_m"], tuple(e["walk"]), tuple(e["step_lanes"]),
-                                    e["step_m"], e.get("ground_margin_m"))
+                                    e["step_m"], _patch(e.get("ground_patch")))
                 for jid, e in self.entries.get(key, {}).items()}
 
     def add(self, key: str, found: Iterable[JunctionJitter]) -> None:
@@ -205,7 +220,7 @@ def measure(net_path: Path, net: sumolib.net.Net | None, extent: SceneExtent | N
     key = cache_key(sumo_version, step_s, speed_mps, radius_m)
     known = cache.junctions(key)
     missing = [jid for jid in wanted
-               if jid not in known or known[jid].ground_margin_m is None]
+               if jid not in known or known[jid].ground_patch is None]
     if missing:
         todo = [area for area in areas if _junction(area) in set(missing)]
         started = time.perf_counter()
@@ -221,14 +236,15 @@ def measure(net_path: Path, net: sumolib.net.Net | None, extent: SceneExtent | N
     worst = max(measured, key=lambda j: (j.jitter_m, j.junction), default=None)
     return NetworkJitter(jitter_m=0.0 if worst is None else worst.jitter_m, worst=worst,
                          junctions=len(measured), speed_mps=speed_mps, step_s=step_s,
-                         ground_margins={j.junction: j.ground_margin_m or 0.0
-                                         for j in measured})
+                         ground_patches={j.junction: j.ground_patch for j in measured
+                                         if j.ground_patch is not None
+                                         and not j.ground_patch.is_empty})
 
 
 def cache_key(sumo_version: str, step_s: float, speed_mps: float, radius_m: float) -> str:
     """The cache entry of measurements with these settings."""
     return (f"sumo {sumo_version}|step {step_s:.10g} s|speed {speed_mps:.10g} m/s"
-            f"|radius {radius_m:.10g} m")
+            f"|radius {radius_m:.10g} m|ground band {GROUND_BAND_M:g} m")
 
 
 def _junction(area: sumolib.net.edge.Edge) -> str:
@@ -335,21 +351,27 @@ def _walk_junctions(net_path: Path, net: sumolib.net.Net,
         by_junction.setdefault(junction, []).append((edges, traces[walker.id]))
     junctions = sorted({_junction(area) for area in areas})
     return [replace(_junction_jitter(j, by_junction[j], bounds),
-                    ground_margin_m=_ground_margin(net, j, by_junction[j], ground))
-            if j in by_junction else JunctionJitter(j, 0.0, (), ("", ""), 0.0, 0.0)
+                    ground_patch=_ground_patch(net, by_junction[j], ground))
+            if j in by_junction else JunctionJitter(j, 0.0, (), ("", ""), 0.0, shapely.Polygon())
             for j in junctions]
 
 
-def _ground_margin(net: sumolib.net.Net, junction: str,
-                   walks: list[tuple[tuple[str, ...], WalkTrace]], ground: Ground) -> float:
-    """The junction's ground margin (:meth:`Ground.margin`) over the positions its walks had
-    on its walking areas and crossings, rounded up to the millimetre."""
+def _ground_patch(net: sumolib.net.Net, walks: list[tuple[tuple[str, ...], WalkTrace]],
+                  ground: Ground) -> shapely.Geometry:
+    """The junction's ground patch (:meth:`Ground.patch`) over the stretches its walks spent on
+    its walking areas and crossings."""
     inner = {e for edges, _ in walks for e in edges
              if net.getEdge(e).getFunction() in ("walkingarea", "crossing")}
-    on = [trace.xy[i] for _, trace in walks for i, lane in enumerate(trace.lanes)
-          if lane.rpartition("_")[0] in inner]
-    margin = ground.margin(junction, np.asarray(on, dtype=float).reshape(-1, 2))
-    return math.ceil(margin * 1000.0) / 1000.0
+    runs = []
+    for _, trace in walks:
+        on = np.array([lane.rpartition("_")[0] in inner for lane in trace.lanes])
+        runs.extend(trace.xy[first:last + 1] for first, last in _stretches(on))
+    return ground.patch(runs)
+
+
+def _patch(text: str | None) -> shapely.Geometry | None:
+    """A cached ground patch (hex WKB, exact), None for an entry without one."""
+    return None if text is None else shapely.from_wkb(text)
 
 
 def _junction_jitter(junction: str, walks: list[tuple[tuple[str, ...], WalkTrace]],

@@ -4,9 +4,9 @@
 On the town cut (sumo_net/town/) SUMO walks the scene's pedestrian over the walking area
 ``:1384946487_w1`` onto the zebra on a curve that leaves the plain ground (sidewalks, walking
 areas, crossing rectangles) by up to 0.21 m at 15.8 to 16.1 s. The lone walkers' measurement
-(sse_cosim/world/walker_jitter.py) gives that junction a margin and the walkable ground holds
-them; on a copy of the network whose cached measurement gives every junction a margin of 0
-the run stops there -- or, in a study that lists ``walkable_ground``, counts.
+(sse_cosim/world/walker_jitter.py) gives that junction a ground patch and the walkable ground
+holds them; on a copy of the network whose cached measurement gives every junction an empty
+patch the run stops there -- or, in a study that lists ``walkable_ground``, counts.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+import shapely
 from world_helpers import REPO
 
 from sse_cosim.cli.main import EXIT_ASSUMPTION_BROKEN, main
@@ -33,7 +34,7 @@ TOWN = REPO / "scenarios" / "town.toml"
 @pytest.fixture
 def plain(tmp_path, monkeypatch) -> Path:
     """A copy of the town cut whose cached measurement keeps the jitter and gives every
-    junction a ground margin of 0 (the cache in a folder of the test's own)."""
+    junction an empty ground patch (the cache in a folder of the test's own)."""
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
     road = build_network(REPO / "sumo_net" / "town")
     scenario = load_scenario(TOWN)
@@ -44,7 +45,7 @@ def plain(tmp_path, monkeypatch) -> Path:
     net = tmp_path / "town.net.xml"
     shutil.copyfile(road, net)
     walker_jitter.JitterCache(net).add(key, [
-        replace(measured, ground_margin_m=0.0)
+        replace(measured, ground_patch=shapely.Polygon())
         for measured in walker_jitter.JitterCache(road).junctions(key).values()])
     return net
 

@@ -8,9 +8,9 @@ SUMO put the scene's second pedestrian (``scenarios/town.toml`` with
 ``pedestrians.walker.steps_onto_crossing_s=25`` and
 ``pedestrians.walker.crossing=:cluster_8989139931_8989139951_c1``, truth.csv, 1.2 m/s),
 0.009 to 0.197 m outside the plain ground; before the walkable ground held the junctions'
-measured margins, that run counted them as six ``unaccounted`` containment violations. The
-walkable ground with the margins the lone walkers need (2.5 m/s,
-sse_cosim/world/walker_jitter.py) holds them.
+measured patches, that run counted them as six ``unaccounted`` containment violations. The
+walkable ground with the patches where the lone walkers (2.5 m/s,
+sse_cosim/world/walker_jitter.py) left the plain ground holds them.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ def test_the_walkable_ground_holds_sumos_walker_where_a_crossing_meets_a_walking
     xy = [(x, y) for _, x, y in WALKER_AT_THE_JOINS]
     x, y = zip(*xy, strict=True)
     assert not shapely.intersects_xy(roadmap.ground, x, y).any()  # the wedge
-    walkable = roadmap.with_ground_margins(measured.ground_margins).walkable
+    walkable = roadmap.with_ground_patches(measured.ground_patches).walkable
     outside = {t: round(float(d), 3) for (t, _, _), d
                in zip(WALKER_AT_THE_JOINS, shapely.distance(walkable, shapely.points(xy)),
                       strict=True) if d > 0.0}
