@@ -166,12 +166,13 @@ def network(network_path: Path, step_length_s: float | None, speed_mps: float | 
     click.echo(net_path)
     step = step_length_s or Simulation.model_fields["step_length_s"].default
     speed = speed_mps or Estimator.model_fields["max_pedestrian_speed_mps"].default
-    measured = measure_walkers(net_path, load_roadmap(net_path), None, speed, step,
+    roadmap = load_roadmap(net_path)
+    measured = measure_walkers(net_path, roadmap, None, speed, step,
                                Pedestrian.model_fields["radius_m"].default)
     click.echo(f"walker jitter: {measured.jitter_m:.3f} m at {speed:g} m/s and {step:g} s steps "
                f"over {measured.junctions} junctions with walking areas; the most "
                f"{measured.where()}")
     patches = measured.ground_patches
-    click.echo(f"ground patches: {sum(p.area for p in patches.values()):.1f} m² beyond the "
-               f"sidewalks, walking areas and crossings, at {len(patches)} of "
-               f"{measured.junctions} junctions")
+    beyond = roadmap.with_ground_patches(patches).walkable.area - roadmap.ground.area
+    click.echo(f"ground patches: {beyond:.1f} m² beyond the sidewalks, walking areas and "
+               f"crossings, at {len(patches)} of {measured.junctions} junctions")
