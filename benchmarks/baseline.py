@@ -17,7 +17,7 @@ import shapely
 from benchmarks.common import PlainObserver, Recording, contains_lp_batch, fuse_inputs
 from benchmarks.tightness import DT, record
 from sse_cosim.estimation.kalman import KalmanTracker
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.scenario.model import Estimator
 
 BUS = "bus"  # the automated vehicle's id (its node)
@@ -27,7 +27,7 @@ PEDESTRIAN_SCENARIOS = [f"scenarios/s{i}_pedestrian.toml" for i in (1, 2, 3)]
 
 def open_loop(recording: Recording) -> dict:
     config = Estimator(position_jitter_m=recording.jitter_m)
-    model = MotionModel.from_config(config, DT)
+    model = motion_model(config, DT)
     kalman = KalmanTracker(model)
     plain = {n: PlainObserver(model, config.gain_method) for n in recording.nodes}
     steps = kf_misses = 0

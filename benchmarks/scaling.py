@@ -20,7 +20,7 @@ import shapely
 from benchmarks.common import PlainObserver, fuse_inputs, median
 from benchmarks.loop_cost import profile_call
 from sse_cosim.control.picture import SceneContext, assess
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea
 from sse_cosim.scenario.model import AutomatedVehicle, Controller, Estimator
 from sse_cosim.sensors import Camera, SensorSpec, observe
@@ -65,14 +65,14 @@ def measure(pedestrians: int, sensors: int, steps: int, warmup: int, roadmap) ->
     """Median seconds per step (after ``warmup`` steps) of one configuration."""
     rng = np.random.default_rng(pedestrians * 100 + sensors)
     config = Estimator(position_jitter_m=JITTER_M)
-    model = MotionModel.from_config(config, DT)
+    model = motion_model(config, DT)
     specs = _specs(sensors)
     nodes = sorted({s.node for s in specs.values()})
     observers = {n: PlainObserver(model, config.gain_method) for n in nodes}
-    context = SceneContext.build(roadmap, ["WC", "CE"], AutomatedVehicle(), Controller(),
-                                 model.max_speed, model.jitter, 0.3, DT)
-    occupancy = OccupancyTracker(model, DT, context.walkable, context.window)  # as in the loop
-    unobserved = UnobservedArea(context.walkable, model, DT, 1, window=context.window)
+    context = SceneContext.build(roadmap, ["WC", "CE"], AutomatedVehicle(), Controller(), model,
+                                 0.3, DT)
+    occupancy = OccupancyTracker(model, context.walkable, context.window)  # as in the loop
+    unobserved = UnobservedArea(context.walkable, model, 1, window=context.window)
     people, velocity = _pedestrians(pedestrians, rng)
     inbox: dict[str, tuple[int, dict, shapely.Geometry]] = {}
     samples = []

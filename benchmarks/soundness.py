@@ -22,7 +22,7 @@ from multiprocessing import get_context
 import numpy as np
 
 from benchmarks.common import PlainObserver, contains_lp_batch, fuse_inputs
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sensors.measurement import measure
 from sse_cosim.world.snapshot import Pose
@@ -40,7 +40,7 @@ def stream(seed: int, bound: float, kind: str, gain: str, fusion: str, steps: in
     """One synthetic stream; counts of node-steps checked and of violations."""
     rng = np.random.default_rng(seed)
     config = Estimator(gain_method=gain, fusion_method=fusion, position_jitter_m=JITTER_M)
-    model = MotionModel.from_config(config, DT)
+    model = motion_model(config, DT)
     step_bound = config.max_pedestrian_speed_mps * DT
     eps = config.position_jitter_m
     poses = {n: Pose(*rng.uniform(-20, 20, 2), rng.uniform(-math.pi, math.pi)) for n in NODES}

@@ -22,7 +22,7 @@ import shapely
 from shapely.geometry.base import BaseGeometry
 
 from benchmarks.common import PlainObserver, Recording, fuse_inputs, record_step
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import MotionModel, motion_model
 from sse_cosim.reporting.recorder import RunRecorder
 from sse_cosim.runner.simulation import simulate
 from sse_cosim.scenario.loader import load_scenario
@@ -141,7 +141,7 @@ def _replay(recording: Recording, gains: Sequence[str], fusions: Sequence[str],
 
 
 def replay(recording: Recording, gains=GAINS, fusions=FUSIONS) -> dict:
-    model = MotionModel.from_config(Estimator(position_jitter_m=recording.jitter_m), DT)
+    model = motion_model(Estimator(position_jitter_m=recording.jitter_m), DT)
     return _replay(recording, gains, fusions, model)
 
 

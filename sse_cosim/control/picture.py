@@ -18,10 +18,11 @@ at a walking area) is cut into overlapping zones about that long, which together
 the bus has to clear each before anyone could reach it, not the whole strip at once.
 
 Every step the picture says, per zone ahead, the **earliest arrival**: the soonest any
-pedestrian can be in the zone. Each known pedestrian's refined region and every walkable
-place where an undetected pedestrian may be grows by the speed bound v (plus twice the
-jitter eps: the region holds the position p = s + e, the path s moves at most v per second,
-and the position strays at most eps from it):
+pedestrian can be in the zone, from each known pedestrian's refined region and every walkable
+place where an undetected pedestrian may be. The motion model gives it
+(:meth:`~sse_cosim.estimation.motion.MotionModel.earliest_arrival_s`); for the registered
+speed-bounded models (the region holds the position p = s + e, the path s moves at most v per
+second, and the position strays at most eps from it):
 
     arrival = max(0, distance(source, zone) - 2 eps) / v.
 
@@ -48,6 +49,7 @@ import shapely.ops
 
 from sse_cosim.control.kinematics import BusDynamics
 from sse_cosim.control.swept import RoutePath, SweepPiece, body_sweep, swept_region, touch_extent
+from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
 from sse_cosim.world.roadmap import RoadMap
 
@@ -88,8 +90,7 @@ class SceneContext:
     crossings: tuple[RouteCrossing, ...]  # the crossings on the route, nearest first
     bus: AutomatedVehicle
     config: Controller
-    pedestrian_speed: float  # the estimator's speed bound (m/s)
-    jitter: float  # how far a position strays from its speed-bounded path (m)
+    pedestrians: MotionModel  # the estimator's: how far and how soon a pedestrian gets
     dynamics: BusDynamics
     window: shapely.Geometry  # where hidden ground is tracked; outside, it counts as occupied
     zones: tuple[ConflictZone, ...]
@@ -97,7 +98,7 @@ class SceneContext:
     @classmethod
     def build(
         cls, roadmap: RoadMap, route_edges: Sequence[str], bus: AutomatedVehicle,
-        config: Controller, pedestrian_speed: float, jitter: float, pedestrian_radius: float,
+        config: Controller, pedestrians: MotionModel, pedestrian_radius: float,
         step_length: float,
     ) -> SceneContext:
         """Prepare the static geometry for a bus driving ``route_edges``."""
@@ -115,9 +116,9 @@ class SceneContext:
         beyond = shapely.difference(walkable, window)
         zones = tuple(
             ConflictZone(polygon, start, end,
-                         _arrival([beyond], polygon, pedestrian_speed, 2.0 * jitter))
+                         _arrival([beyond], polygon, pedestrians))
             for polygon, start, end in swept)
-        return cls(route_line, walkable, crossings, bus, config, pedestrian_speed, jitter,
+        return cls(route_line, walkable, crossings, bus, config, pedestrians,
                    BusDynamics.of(bus, config, step_length), window, zones)
 
     def crossing_at(self, front_s: float) -> RouteCrossing | None:
@@ -139,7 +140,7 @@ class SceneContext:
         to_clear = crossing.end_m - front_s + self.bus.length_m
         if to_clear <= 0:
             return 0.0
-        radius = self.pedestrian_speed * to_clear / self.bus.nominal_speed_mps
+        radius = self.pedestrians.reach_during_m(to_clear, self.bus.nominal_speed_mps)
         return min(radius, self.config.interest_radius_m)
 
     def path_ahead(self, front_s: float, length: float, margin: float) -> shapely.Geometry:
@@ -318,9 +319,8 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[shapely.Ge
              for index, zone in enumerate(context.zones)]
     ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead if to_clear > 0.0]
     polygons = [zone.polygon for _, zone, _ in ahead]
-    speed, slack = context.pedestrian_speed, 2.0 * context.jitter
-    arrivals = _arrivals(sources, polygons, speed, slack)
-    in_view_arrivals = _arrivals(in_view, polygons, speed, slack)
+    arrivals = _arrivals(sources, polygons, context.pedestrians)
+    in_view_arrivals = _arrivals(in_view, polygons, context.pedestrians)
     return tuple(
         ZoneOutlook(index, zone.start_m - front_s, to_clear,
                     max(min(zone.beyond_arrival_s, float(arrival)), floors.get(index, 0.0)),
@@ -331,21 +331,21 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[shapely.Ge
 
 
 def _arrivals(sources: Iterable[shapely.Geometry], zones: Sequence[shapely.Geometry],
-              speed: float, slack: float) -> np.ndarray:
+              pedestrians: MotionModel) -> np.ndarray:
     """Earliest time (s) a pedestrian somewhere in ``sources`` can be in each of ``zones``,
-    shape (z,) (inf without a source)."""
+    shape (z,) (inf without a source): the model's arrival from the nearest source."""
     parts = [s for s in sources if not s.is_empty]
     if not parts or not zones:
         return np.full(len(zones), math.inf)
     distances = shapely.distance(np.array(parts, dtype=object)[:, None],
                                  np.array(zones, dtype=object)[None, :])  # (s, z)
-    return np.maximum(0.0, distances.min(axis=0) - slack) / speed
+    return pedestrians.earliest_arrival_s(distances.min(axis=0))
 
 
-def _arrival(sources: Iterable[shapely.Geometry], zone: shapely.Geometry, speed: float,
-             slack: float) -> float:
+def _arrival(sources: Iterable[shapely.Geometry], zone: shapely.Geometry,
+             pedestrians: MotionModel) -> float:
     """Earliest time (s) a pedestrian somewhere in ``sources`` can be in ``zone``."""
-    return float(_arrivals(sources, [zone], speed, slack)[0])
+    return float(_arrivals(sources, [zone], pedestrians)[0])
 
 
 def route_stations(line: shapely.LineString) -> np.ndarray:

@@ -111,7 +111,7 @@ class AnonymousFusionCentre(BaseFusionCentre):
         may have walked since the view was taken."""
         shapely.prepare(node.view)
         return NodeTracks(node.node, dict(enumerate(node.tracks[k] for k in sorted(node.tracks))),
-                          node.view, self.model.max_speed * self.step_length * node.age)
+                          node.view, self.model.reach_m(node.age))
 
     def _fuse(self, sets: Sequence[Zonotope]) -> Zonotope:
         return fuse_sets(sets, self.fusion_method, self.settings, self.model)

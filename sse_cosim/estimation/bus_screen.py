@@ -27,21 +27,22 @@ CONFLICT = "conflict"
 
 
 def contradicted(
-    position: Zonotope, clear: Sequence[ClearRegion], jitter: float, reach: float,
+    position: Zonotope, clear: Sequence[ClearRegion], model: MotionModel,
     tol: float = CONSISTENCY_TOL,
 ) -> bool:
     """Whether a path set (2-D, about s_k) lies wholly where a node looked and saw nobody.
 
     A region R seen ``age`` steps ago without the pedestrian proves p_{k-age} is outside R,
-    and p_{k-age} is within jitter + reach * age of s_k. If the whole set lies in R shrunk by
-    that slack, no point of it can be s_k: the source that reported the set is wrong (or the
-    viewer missed a pedestrian it could see, which the sensor model rules out). The erosion
-    uses polygons inscribed in the true one (radius scaled by ARC_SAFETY).
+    and p_{k-age} is within jitter + reach(age) of s_k (``model``'s jitter and reach). If the
+    whole set lies in R shrunk by that slack, no point of it can be s_k: the source that
+    reported the set is wrong (or the viewer missed a pedestrian it could see, which the
+    sensor model rules out). The erosion uses polygons inscribed in the true one (radius
+    scaled by ARC_SAFETY).
     """
     lo, hi = position.interval_hull()
     shape = None
     for item in clear:
-        slack = jitter + reach * item.age + tol
+        slack = model.jitter + model.reach_m(item.age) + tol
         x0, y0, x1, y1 = item.region.bounds if not item.region.is_empty else (0, 0, -1, -1)
         if not (x0 + slack <= lo[0] and y0 + slack <= lo[1] and hi[0] <= x1 - slack
                 and hi[1] <= y1 - slack):
@@ -101,10 +102,8 @@ class BusScreener:
     """An automated vehicle's screen of its fusion inputs (``node`` its id), with each
     pedestrian's sources on probation."""
 
-    def __init__(self, model: MotionModel, reach: float, node: str,
-                 tol: float = CONSISTENCY_TOL) -> None:
+    def __init__(self, model: MotionModel, node: str, tol: float = CONSISTENCY_TOL) -> None:
         self.model = model
-        self.reach = reach  # how far a path moves in one step (m)
         self.node = node
         self.tol = tol
         self._probation: dict[str, Probation] = {}
@@ -161,8 +160,7 @@ class BusScreener:
                          self.node)
 
     def _contradicted(self, estimate: Zonotope, clear: Sequence[ClearRegion]) -> bool:
-        return contradicted(self.model.path_set(estimate), clear, self.model.jitter,
-                            self.reach, self.tol)
+        return contradicted(self.model.path_set(estimate), clear, self.model, self.tol)
 
     def _vote(self, person_id: str, sets: Sequence[Zonotope],
               names: Sequence[str]) -> tuple[list[str], frozenset[str]]:

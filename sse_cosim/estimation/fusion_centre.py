@@ -45,16 +45,15 @@ class BusEstimate:
 
 class BaseFusionCentre:
     """What either fusion centre of an automated vehicle is built with (``node`` its id): the
-    motion model, the estimator's settings, the fusion method, the sensors and the step (s)."""
+    motion model, the estimator's settings, the fusion method and the sensors."""
 
     def __init__(self, model: MotionModel, settings: EstimatorSettings, fusion_method: str,
-                 sensors: Iterable[str], step_length: float, node: str) -> None:
+                 sensors: Iterable[str], node: str) -> None:
         self.node = node
         self.model = model
         self.settings = settings
         self.fusion_method = fusion_method
         self.sensors = list(sensors)
-        self.step_length = step_length
 
 
 class FusionCentre(BaseFusionCentre):
@@ -62,9 +61,9 @@ class FusionCentre(BaseFusionCentre):
     probation kept across steps."""
 
     def __init__(self, model: MotionModel, settings: EstimatorSettings, fusion_method: str,
-                 sensors: Iterable[str], step_length: float, node: str) -> None:
-        super().__init__(model, settings, fusion_method, sensors, step_length, node)
-        self._screener = BusScreener(model, model.max_speed * step_length, node)
+                 sensors: Iterable[str], node: str) -> None:
+        super().__init__(model, settings, fusion_method, sensors, node)
+        self._screener = BusScreener(model, node)
 
     def step(
         self,

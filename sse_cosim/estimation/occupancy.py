@@ -8,7 +8,8 @@ so the zonotopes (sound on their own) ignore it, and the bus keeps polygons inst
 - :class:`UnobservedArea`, where a pedestrian *nobody has detected* may be.
 
 Both reason about the path s of :mod:`sse_cosim.estimation.motion` (p = s + e, ||e|| <= eps,
-s moving at most v dt per step): if p is in a set A, then s is in A (+) disc(eps). So
+s moving at most v dt per step: the model's reach, ``MotionModel.reach_m``): if p is in a set
+A, then s is in A (+) disc(eps). So
 
     U_k = (U_{k-1} (+) disc(v dt)) ∩ ((walkable minus views_k) (+) disc(eps)),
 
@@ -131,19 +132,16 @@ class OccupancyTracker:
     region (it was there a step before, or it came in from outside through the inflow).
     """
 
-    def __init__(self, model: MotionModel, step_length: float,
-                 walkable: shapely.Geometry | None = None,
+    def __init__(self, model: MotionModel, walkable: shapely.Geometry | None = None,
                  window: shapely.Geometry | None = None) -> None:
         if window is not None and walkable is None:
             raise ValueError("a tracked window needs the walkable ground")
         self.model = model
-        self.reach = model.max_speed * step_length
         self._walkable = walkable
         self._ground = None if walkable is None else dilate(walkable, model.jitter)
         if self._ground is not None:
             shapely.prepare(self._ground)
-        self._window = None if window is None else TrackedWindow(window, walkable, model,
-                                                                 step_length)
+        self._window = None if window is None else TrackedWindow(window, walkable, model)
         self._paths: dict[str, shapely.Geometry] = {}
         self._step: int | None = None
         self.beyond: frozenset[str] = frozenset()  # pedestrians who may be outside B now
@@ -177,7 +175,7 @@ class OccupancyTracker:
             outside = person_id in self.beyond and not self._window.bounds.contains(path)
             previous = self._paths.get(person_id)
             if previous is not None:
-                moved = dilate(previous, self.reach * elapsed)
+                moved = dilate(previous, self.model.reach_m(elapsed))
                 if outside:
                     moved = shapely.union(moved, self._window.inflow(elapsed))
                 path = shapely.intersection(moved, path)
@@ -189,9 +187,9 @@ class OccupancyTracker:
             now_clear = [c.region for c in clear.get(person_id, ()) if c.age == 0]
             for item in clear.get(person_id, ()):
                 # p was outside item.region ``age`` steps ago, on walkable ground, within
-                # eps + reach*age of s now (so ground nobody saw off the walkable, such as a
+                # eps + reach(age) of s now (so ground nobody saw off the walkable, such as a
                 # vehicle's shadow on the road, keeps no path alive)
-                slack = eps + self.reach * item.age
+                slack = eps + self.model.reach_m(item.age)
                 if _apart(path, item.region, 2.0 * ARC_SAFETY * slack):
                     continue  # the region cannot touch dilate(path): the cut keeps path whole
                 outside = shapely.difference(self._on_foot(dilate(path, slack)), item.region)
@@ -211,9 +209,9 @@ class TrackedWindow:
     inflow: where a path outside B at one step can be inside B some steps later (O's rim moved,
     O = (walkable (+) disc(eps)) minus B)."""
 
-    def __init__(self, window: shapely.Geometry, walkable: shapely.Geometry, model: MotionModel,
-                 step_length: float) -> None:
-        self.reach = model.max_speed * step_length  # how far a path moves in one step
+    def __init__(self, window: shapely.Geometry, walkable: shapely.Geometry,
+                 model: MotionModel) -> None:
+        self.model = model
         self.jitter = model.jitter
         self.walkable = walkable
         self.bounds = dilate(window, self.jitter)  # B
@@ -224,7 +222,7 @@ class TrackedWindow:
         """Where a path outside B now can be inside B or near it ``steps`` steps later
         (computed once per number of steps)."""
         if steps not in self._inflows:
-            reach, eps = self.reach * steps, self.jitter
+            reach, eps = self.model.reach_m(steps), self.jitter
             near = shapely.intersection(self.walkable, dilate(self.bounds, reach + eps))
             rim = shapely.difference(dilate(near, eps), self.bounds)
             self._inflows[steps] = dilate(rim, reach) if reach > 0 else EMPTY
@@ -239,13 +237,11 @@ class UnobservedArea:
     """Walkable area where an undetected pedestrian may be, as the bus knows it: all of it, or
     (with a ``window``) at least every such place inside the window."""
 
-    def __init__(self, walkable: shapely.Geometry, model: MotionModel, step_length: float,
-                 latency_steps: int, window: shapely.Geometry | None = None) -> None:
+    def __init__(self, walkable: shapely.Geometry, model: MotionModel, latency_steps: int,
+                 window: shapely.Geometry | None = None) -> None:
         self.model = model
-        self.reach = model.max_speed * step_length  # how far a path moves in one step
         self.latency = latency_steps
-        self._window = None if window is None else TrackedWindow(window, walkable, model,
-                                                                 step_length)
+        self._window = None if window is None else TrackedWindow(window, walkable, model)
         if self._window is not None:
             walkable = shapely.intersection(walkable, dilate(self._window.bounds, model.jitter))
         self.walkable = walkable  # the walkable ground whose views matter
@@ -293,7 +289,8 @@ class UnobservedArea:
             raise ValueError(f"a track ended at step {track.step} handed over at step {step}, "
                              f"which the unobserved area has passed ({self._base_step})")
         path = zonotope_polygon(self.model.path_set(track.estimate))
-        self._ended.setdefault(step, []).append(dilate(path, self.reach * (step - track.step)))
+        moved = dilate(path, self.model.reach_m(step - track.step))
+        self._ended.setdefault(step, []).append(moved)
 
     def _advance(
         self, path: shapely.Geometry, views: Sequence[shapely.Geometry],
@@ -310,14 +307,15 @@ class UnobservedArea:
         return coarsen(self._clip(shapely.intersection(moved, dilate(unseen, self.model.jitter))))
 
     def _moved(self, path: shapely.Geometry) -> shapely.Geometry:
-        """The path region one step later before any view: moved by ``reach``, plus the inflow.
+        """The path region one step later before any view: moved by the model's one-step reach,
+        plus the inflow.
 
         The base's is kept: with a latency, one step carries the base forward with the bus's
         newest view and the next advances the base itself, from the same region.
         """
         if self._base_moved is not None and self._base_moved[0] is path:
             return self._base_moved[1]
-        moved = dilate(path, self.reach)
+        moved = dilate(path, self.model.reach_m())
         if self._window is not None:  # O's rim moved one step: paths entering B from outside
             moved = shapely.union(moved, self._window.inflow())
         if path is self._base:

@@ -78,18 +78,18 @@ class Ego:
         self.controller = scenario.controller
         self.sharing = Sharing(V2XLink(scenario.v2x, link_rng), model, vehicle_id)
         self.fusion = second_level(config.association, model, settings, config.fusion_method,
-                                   specs, dt, vehicle_id)
+                                   specs, vehicle_id)
         self.context = SceneContext.build(
-            roadmap, vehicle.route_edges, vehicle, scenario.controller, model.max_speed,
-            model.jitter, scenario.pedestrian_radius_m(), dt,
+            roadmap, vehicle.route_edges, vehicle, scenario.controller, model,
+            scenario.pedestrian_radius_m(), dt,
         )
         self.policy = make_policy(self.context)
         self.arrivals = ArrivalMemory(dt)  # the last consistent picture, for the floors
-        self.known = known_regions(config.filter, model, dt, self.context.walkable,
+        self.known = known_regions(config.filter, model, self.context.walkable,
                                    self.context.window, history=config.association == "labelled")
         # hidden ground is tracked near the crossings on its route; outside it counts as occupied
         self.unobserved = UnobservedArea(
-            self.context.walkable, model, dt, scenario.v2x.latency_steps,
+            self.context.walkable, model, scenario.v2x.latency_steps,
             window=self.context.window,
         )
 

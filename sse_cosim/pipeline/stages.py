@@ -252,14 +252,12 @@ class AnonymousFusion:
 
 
 def second_level(association: str, model: MotionModel, settings: EstimatorSettings,
-                 fusion_method: str, sensors: Iterable[str], step_length: float,
-                 node: str) -> SecondLevel:
+                 fusion_method: str, sensors: Iterable[str], node: str) -> SecondLevel:
     """Automated vehicle ``node``'s second fusion level of ``estimator.association``."""
     if association == "anonymous":
         return AnonymousFusion(AnonymousFusionCentre(model, settings, fusion_method, sensors,
-                                                     step_length, node))
-    return LabelledFusion(FusionCentre(model, settings, fusion_method, sensors, step_length,
-                                       node))
+                                                     node))
+    return LabelledFusion(FusionCentre(model, settings, fusion_method, sensors, node))
 
 
 class KnownRegions(Protocol):
@@ -313,12 +311,11 @@ class KalmanRegions:
         return self.tracker.regions()
 
 
-def known_regions(filter_name: str, model: MotionModel, step_length: float,
-                  walkable: shapely.Geometry, window: shapely.Geometry,
-                  history: bool = True) -> KnownRegions:
+def known_regions(filter_name: str, model: MotionModel, walkable: shapely.Geometry,
+                  window: shapely.Geometry, history: bool = True) -> KnownRegions:
     """The region stage of ``estimator.filter``: ``zonotope`` or ``kalman``; refined regions
     are kept in the tracked ``window``; ``history``: whether they carry a fused set's key from
     one step to the next (false for anonymous tracks, :class:`RefinedRegions`)."""
     if filter_name == "kalman":
         return KalmanRegions(KalmanTracker(model))
-    return RefinedRegions(OccupancyTracker(model, step_length, walkable, window), history)
+    return RefinedRegions(OccupancyTracker(model, walkable, window), history)

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from sse_cosim.control.speed import SpeedLevel
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.estimation.observer import EstimatorSettings
 from sse_cosim.pipeline.ego import Ego
 from sse_cosim.pipeline.result import StepCallback, StepResult
@@ -91,7 +91,7 @@ def simulate(
         streams = np.random.SeedSequence(scenario.simulation.seed).spawn(2 + len(automated))
         noise_rng, first_link_rng, fault_rng, *link_rngs = map(np.random.default_rng, streams)
         config = scenario.estimator
-        model = MotionModel.from_config(config, dt)
+        model = motion_model(config, dt)
         settings = EstimatorSettings(config.gain_method, config.reduction_method,
                                      config.max_generators)
         specs = specs_from_scenario(scenario)

@@ -11,6 +11,7 @@ from typing import Any, Literal, TypeVar
 
 from pydantic import Field, field_validator, model_validator
 
+from sse_cosim.estimation.motion import MODELS
 from sse_cosim.scenario.base import NonNegativeFloat, PositiveFloat, StrictModel
 from sse_cosim.sensors.kinds import Sensor, SensorMount
 from sse_cosim.sets import available_fusion_methods, available_gain_methods
@@ -166,8 +167,12 @@ class V2X(StrictModel):
     drop_probability: float = Field(0.0, ge=0, lt=1, description="Probability a message is lost.")
 
 
+StateModel = Literal[tuple(MODELS)]  # the registered names, in order
+"""A registered motion model's name (:data:`sse_cosim.estimation.motion.MODELS`)."""
+
+
 class Estimator(StrictModel):
-    state_model: Literal["position", "constant-velocity"] = Field(
+    state_model: StateModel = Field(
         "position", description="Pedestrian state: 2-D position, or 4-D position and velocity."
     )
     max_pedestrian_speed_mps: PositiveFloat = Field(
@@ -211,6 +216,13 @@ class Estimator(StrictModel):
         "set-membership association, and each automated vehicle fuses only tracks that surely "
         "hold the same pedestrians (docs/method.md). No faults, no Kalman filter.",
     )
+
+    @field_validator("state_model", mode="before")
+    @classmethod
+    def _known_state_model(cls, value: Any) -> Any:
+        if isinstance(value, str) and value not in MODELS:
+            raise ValueError(f"unknown state model {value!r}; use one of {', '.join(MODELS)}")
+        return value
 
     @field_validator("gain_method")
     @classmethod

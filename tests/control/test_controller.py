@@ -22,7 +22,9 @@ from sse_cosim.control.picture import (
     route_stations,
 )
 from sse_cosim.control.speed import SpeedLevel, level_speed, paper_level
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.scenario.loader import load_scenario
+from sse_cosim.scenario.model import Estimator
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import load_roadmap
 
@@ -37,10 +39,11 @@ def context() -> SceneContext:
     scenario = load_scenario(SCENARIO)
     roadmap = load_roadmap(build_network(scenario.network.sources_dir))
     bus = scenario.automated["bus"]
-    return SceneContext.build(roadmap, bus.route_edges, bus,
-                              scenario.controller, scenario.estimator.max_pedestrian_speed_mps,
-                              JITTER_M, scenario.pedestrian_radius_m(),
-                              scenario.simulation.step_length_s)
+    dt = scenario.simulation.step_length_s
+    pedestrians = motion_model(
+        scenario.estimator.model_copy(update={"position_jitter_m": JITTER_M}), dt)
+    return SceneContext.build(roadmap, bus.route_edges, bus, scenario.controller, pedestrians,
+                              scenario.pedestrian_radius_m(), dt)
 
 
 def picture(**changes) -> Picture:
@@ -130,9 +133,8 @@ def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
     empty = shapely.Polygon()
     result = assess(context, front, 10.0, empty, empty, [pedestrian])
     (outlook,) = result.zones
-    eps = context.jitter
-    assert outlook.arrival_s == pytest.approx((4.5 - 2 * eps) / context.pedestrian_speed,
-                                              abs=1e-3)
+    eps, speed = context.pedestrians.jitter, context.pedestrians.max_speed
+    assert outlook.arrival_s == pytest.approx((4.5 - 2 * eps) / speed, abs=1e-3)
     assert outlook.to_start_m == pytest.approx(40.0, abs=1e-6)
     assert outlook.to_clear_m == pytest.approx(zone.end_m - zone.start_m + 40.0
                                                + context.bus.length_m, abs=1e-6)
@@ -203,15 +205,17 @@ def test_floors_come_only_from_a_picture_made_while_consistent(context):
 def test_arrivals_in_one_call_are_the_earliest_arrival_of_each_zone():
     # _arrivals measures every source to every zone in one shapely call: per zone, the same
     # earliest arrival as the nearest source's distance, minus the slack, over the speed.
+    pedestrians = motion_model(Estimator(max_pedestrian_speed_mps=1.5, position_jitter_m=0.3),
+                               0.1)  # slack 2 eps = 0.6 m
     rng = np.random.default_rng(3)
     for _ in range(50):
         sources = [shapely.box(x, y, x + w, y + h).buffer(rng.uniform(0.0, 1.0), quad_segs=2)
                    for x, y, w, h in rng.uniform(0.0, 20.0, size=(rng.integers(1, 4), 4))]
         zones = [shapely.box(x, y, x + 3.0, y + 2.0) for x, y in rng.uniform(0.0, 30.0, (3, 2))]
-        got = _arrivals([shapely.Polygon(), *sources], zones, 1.5, 0.6)
+        got = _arrivals([shapely.Polygon(), *sources], zones, pedestrians)
         expected = [max(0.0, min(s.distance(z) for s in sources) - 0.6) / 1.5 for z in zones]
         assert got.tolist() == expected
-    assert _arrivals([shapely.Polygon()], zones, 1.5, 0.6).tolist() == [np.inf] * 3
+    assert _arrivals([shapely.Polygon()], zones, pedestrians).tolist() == [np.inf] * 3
 
 
 def test_route_pieces_are_shapelys_substrings(context):

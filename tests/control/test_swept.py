@@ -24,7 +24,9 @@ from sse_cosim.control.swept import (
     swept_region,
     touch_extent,
 )
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.scenario.loader import load_scenario
+from sse_cosim.scenario.model import Estimator
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import RoadMap, load_roadmap
 
@@ -45,10 +47,9 @@ def roadmap() -> RoadMap:
 
 def turn_context(roadmap: RoadMap) -> SceneContext:
     sc = load_scenario(JUNCTION, {"automated.bus_we.route_edges": TURN})
-    est = sc.estimator
+    dt = sc.simulation.step_length_s
     return SceneContext.build(roadmap, TURN, sc.automated["bus_we"], sc.controller,
-                              est.max_pedestrian_speed_mps, est.position_jitter_m,
-                              sc.pedestrian_radius_m(), sc.simulation.step_length_s)
+                              motion_model(sc.estimator, dt), sc.pedestrian_radius_m(), dt)
 
 
 def test_a_straight_route_sweeps_the_centre_line_widened_by_half_the_width() -> None:
@@ -70,9 +71,11 @@ def test_a_straight_route_sweeps_the_centre_line_widened_by_half_the_width() -> 
 def test_the_straight_routes_of_the_junction_keep_their_zones(roadmap: RoadMap) -> None:
     """bus_we and bus_sn drive straight across: their zones are the corridor's, as before."""
     sc = load_scenario(JUNCTION)
+    pedestrians = motion_model(Estimator(max_pedestrian_speed_mps=2.5, position_jitter_m=1.2),
+                               0.1)
     for bus_id in ("bus_we", "bus_sn"):
         bus = sc.automated[bus_id]
-        context = SceneContext.build(roadmap, bus.route_edges, bus, sc.controller, 2.5, 1.2,
+        context = SceneContext.build(roadmap, bus.route_edges, bus, sc.controller, pedestrians,
                                      sc.pedestrian_radius_m(), 0.1)
         zones = [(z.polygon.area, z.start_m, z.end_m) for z in context.zones]
         assert np.array(zones) == pytest.approx(np.array([(12.6, 172.5, 176.5),

@@ -15,6 +15,7 @@ import pytest
 import shapely
 
 from sse_cosim.control.picture import SceneContext, assess
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.world.demand import plan_actors
@@ -53,10 +54,11 @@ def roadmap() -> RoadMap:
 def scene(roadmap: RoadMap, route: list[str]) -> SceneContext:
     """The static picture of S1's bus driving ``route`` on the two-zebra road."""
     sc = load_scenario(SCENARIO, {"automated.bus.route_edges": route})
-    est = sc.estimator
-    return SceneContext.build(roadmap, route, sc.automated["bus"], sc.controller,
-                              est.max_pedestrian_speed_mps, JITTER_M,
-                              sc.pedestrian_radius_m(), sc.simulation.step_length_s)
+    dt = sc.simulation.step_length_s
+    pedestrians = motion_model(sc.estimator.model_copy(update={"position_jitter_m": JITTER_M}),
+                               dt)
+    return SceneContext.build(roadmap, route, sc.automated["bus"], sc.controller, pedestrians,
+                              sc.pedestrian_radius_m(), dt)
 
 
 @pytest.fixture(scope="module")

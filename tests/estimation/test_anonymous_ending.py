@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import shapely
 
+from sse_cosim.estimation import motion
 from sse_cosim.estimation.association import AnonymousDetection
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import (
@@ -45,7 +46,7 @@ EMPTY = shapely.Polygon()
 def motion_model() -> MotionModel:
     config = Estimator(state_model="position", max_pedestrian_speed_mps=SPEED,
                        position_jitter_m=JITTER)
-    return MotionModel.from_config(config, DT)
+    return motion.motion_model(config, DT)
 
 
 def walk(rng: np.random.Generator, steps: int) -> np.ndarray:
@@ -120,8 +121,8 @@ def test_the_vehicle_holds_a_handed_over_pedestrian_in_its_unobserved_area(laten
     model = motion_model()
     observer = AnonymousNodeObserver("rsu", model, SETTINGS)
     link = V2XLink(V2X(latency_steps=latency), np.random.default_rng(0))
-    handed = UnobservedArea(SIDEWALK, model, DT, latency)
-    without = UnobservedArea(SIDEWALK, model, DT, latency)
+    handed = UnobservedArea(SIDEWALK, model, latency)
+    without = UnobservedArea(SIDEWALK, model, latency)
     missed = 0
     for k, position in enumerate(walk(rng, 200)):
         tracks = observer.step(k, scan(rng, k, position))

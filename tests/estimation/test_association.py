@@ -14,6 +14,7 @@ from shapely.geometry import Point, Polygon, box
 from shapely.geometry.base import BaseGeometry
 from shapely.ops import unary_union
 
+from sse_cosim.estimation import motion
 from sse_cosim.estimation.anonymous_fusion import AnonymousFusionCentre
 from sse_cosim.estimation.association import (
     AnonymousDetection,
@@ -46,7 +47,7 @@ def fusion(sets):
 def motion_model(jitter: float = 0.0) -> MotionModel:
     config = Estimator(state_model="position", max_pedestrian_speed_mps=SPEED,
                        position_jitter_m=jitter)
-    return MotionModel.from_config(config, DT)
+    return motion.motion_model(config, DT)
 
 
 @dataclass(frozen=True)
@@ -354,7 +355,7 @@ def test_a_track_is_not_fused_with_a_larger_track_that_holds_someone_else():
 def test_anonymous_node_observer_keeps_every_pedestrian(state_model):
     config = Estimator(state_model=state_model, max_pedestrian_speed_mps=SPEED,
                        max_velocity_change_mps=2 * SPEED, position_jitter_m=0.3)
-    model = MotionModel.from_config(config, DT)
+    model = motion.motion_model(config, DT)
     observer = AnonymousNodeObserver("car", model, SETTINGS)
     rng = np.random.default_rng(4)
     sensors = [Sensor("front", Point(-1, 0).buffer(3.0)), Sensor("side", box(-1, -20, 20, 20))]
@@ -397,9 +398,9 @@ def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined
                "rsu": [random_sensor(rng, "rsu_a")]}
     observers = {node: AnonymousNodeObserver(node, model, SETTINGS) for node in sensors}
     views = {node: unary_union([s.region for s in mine]) for node, mine in sensors.items()}
-    centre = AnonymousFusionCentre(model, SETTINGS, "enclose", ["bus_a", "bus_b"], DT, "bus")
+    centre = AnonymousFusionCentre(model, SETTINGS, "enclose", ["bus_a", "bus_b"], "bus")
     link = V2XLink(V2X(latency_steps=1), np.random.default_rng(0))
-    refined = RefinedRegions(OccupancyTracker(model, DT), history=False)
+    refined = RefinedRegions(OccupancyTracker(model), history=False)
     first_seen: dict[str, dict[int, int]] = {node: {} for node in sensors}
     for k, positions in enumerate(crossing_walks(rng, people, 12)):
         tracks = {}

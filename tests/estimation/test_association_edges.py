@@ -12,7 +12,7 @@ from shapely.geometry import Point, box
 from shapely.geometry.base import BaseGeometry
 
 from sse_cosim.estimation.association import AnonymousDetection, LocalTrack, associate
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import MotionModel, motion_model
 from sse_cosim.estimation.observer import EstimatorSettings
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips
@@ -29,7 +29,7 @@ VIEW = box(-40.0, -40.0, 40.0, 40.0).difference(OCCLUDER)
 def model() -> MotionModel:
     config = Estimator(state_model="position", max_pedestrian_speed_mps=SPEED,
                        position_jitter_m=JITTER)
-    return MotionModel.from_config(config, DT)
+    return motion_model(config, DT)
 
 
 def detection(rng: np.random.Generator, position: np.ndarray) -> AnonymousDetection:

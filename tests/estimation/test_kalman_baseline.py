@@ -5,7 +5,7 @@ import pytest
 import shapely
 
 from sse_cosim.estimation.kalman import KalmanTracker, initial, update
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips
 
@@ -29,7 +29,7 @@ def test_ellipse_polygon_circumscribes_the_three_sigma_ellipse():
 
 
 def test_tracker_predicts_and_updates_and_the_option_exists():
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), 0.1)
+    model = motion_model(Estimator(position_jitter_m=0.3), 0.1)
     tracker = KalmanTracker(model)
     strips = [Strips(np.eye(2), [5.0, 1.0], [0.5, 0.5])]
     tracker.step(0, {"p": strips})

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips, Zonotope, intersect_strips, portable
 
@@ -22,7 +22,7 @@ def random_strips(rng: np.random.Generator, m: int) -> Strips:
 
 @pytest.mark.parametrize("state_model", ["position", "constant-velocity"])
 def test_path_and_state_strips_equal_the_validated_operations(state_model):
-    model = MotionModel.from_config(Estimator(state_model=state_model, position_jitter_m=0.3), DT)
+    model = motion_model(Estimator(state_model=state_model, position_jitter_m=0.3), DT)
     rng = np.random.default_rng(3)
     for m in (1, 2, 5):
         measured = random_strips(rng, m)
@@ -39,7 +39,7 @@ def test_path_and_state_strips_equal_the_validated_operations(state_model):
 def test_initial_set_equals_the_validated_construction(state_model):
     """The parallelogram of the first two independent strips (parallel ones skipped), the
     rest intersected with it: the same bits as building it with the checked constructors."""
-    model = MotionModel.from_config(Estimator(state_model=state_model, position_jitter_m=0.3),
+    model = motion_model(Estimator(state_model=state_model, position_jitter_m=0.3),
                                     DT)
     rng = np.random.default_rng(4)
     for m in (2, 3, 4):
@@ -62,7 +62,7 @@ def test_initial_set_equals_the_validated_construction(state_model):
 
 
 def test_model_and_strips_beyond_the_fast_paths_assumptions_are_errors():
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
     with pytest.raises(ValueError, match="first two entries"):
         dataclasses.replace(model, position_matrix=np.array([[0.0, 1.0], [1.0, 0.0]]))
     with pytest.raises(ValueError, match="jitter"):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sse_cosim.estimation.bus_fusion import fuse_at_bus
-from sse_cosim.estimation.motion import POSITION_MEMO, MotionModel
+from sse_cosim.estimation.motion import POSITION_MEMO, motion_model
 from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips, Zonotope
@@ -45,7 +45,7 @@ def sensor_strips(rng, truth: np.ndarray, bound: float, worst_case: bool) -> Str
 def test_local_observer_contains_truth_every_step(state_model, gain, worst_case):
     config = Estimator(state_model=state_model, gain_method=gain, max_pedestrian_speed_mps=2.0,
                        position_jitter_m=0.3, max_velocity_change_mps=4.0)
-    model = MotionModel.from_config(config, DT)
+    model = motion_model(config, DT)
     settings = EstimatorSettings(gain, "girard", 8)
     # a cvxpy LP per strip (``enclose`` is the ``volume`` gain outside 2-D)
     slow_lp = state_model == "constant-velocity" and gain in ("volume", "enclose")
@@ -63,7 +63,7 @@ def test_local_observer_contains_truth_every_step(state_model, gain, worst_case)
 
 
 def test_set_grows_while_unseen_and_shrinks_on_detection():
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.0), DT)
+    model = motion_model(Estimator(position_jitter_m=0.0), DT)
     observer = NodeObserver("n", model, EstimatorSettings("volume", "girard", 8))
     rng = np.random.default_rng(0)
     observer.step(0, {"ped": [sensor_strips(rng, np.zeros(2), 0.5, False)]})
@@ -75,7 +75,7 @@ def test_set_grows_while_unseen_and_shrinks_on_detection():
 
 def test_fused_estimate_contains_truth_and_is_never_larger_than_inputs():
     config = Estimator(position_jitter_m=0.3)
-    model = MotionModel.from_config(config, DT)
+    model = motion_model(config, DT)
     settings = EstimatorSettings("volume", "girard", 8)
     for method in ("frobenius", "volume", "strips", "enclose"):
         rng = np.random.default_rng(7)
@@ -92,7 +92,7 @@ def test_fused_estimate_contains_truth_and_is_never_larger_than_inputs():
 
 
 def test_initial_set_is_the_parallelogram_of_two_strips():
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.0), DT)
+    model = motion_model(Estimator(position_jitter_m=0.0), DT)
     strips = Strips(np.eye(2), np.array([3.0, -1.0]), np.array([0.5, 0.25]))
     start = model.initial_set(strips, "frobenius")
     np.testing.assert_allclose(start.center, [3.0, -1.0])
@@ -101,7 +101,7 @@ def test_initial_set_is_the_parallelogram_of_two_strips():
 
 @pytest.mark.parametrize("state_model", ["position", "constant-velocity"])
 def test_position_sets_are_kept_per_estimate_and_equal_the_projection(state_model):
-    model = MotionModel.from_config(Estimator(state_model=state_model, position_jitter_m=0.3), DT)
+    model = motion_model(Estimator(state_model=state_model, position_jitter_m=0.3), DT)
     rng = np.random.default_rng(5)
     estimates = [Zonotope(rng.normal(size=model.dim), rng.normal(size=(model.dim, 3)))
                  for _ in range(POSITION_MEMO + 5)]

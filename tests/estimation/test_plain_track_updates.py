@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sse_cosim.estimation import track_kernels
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips
@@ -48,7 +48,7 @@ def detections(rng: np.random.Generator, truth: np.ndarray, step: int) -> dict[s
 
 
 def run(observer_type: type[NodeObserver], gain: str, seed: int) -> list[dict]:
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3, gain_method=gain), DT)
+    model = motion_model(Estimator(position_jitter_m=0.3, gain_method=gain), DT)
     observer = observer_type("node", model, EstimatorSettings(gain, "girard", 8))
     rng = np.random.default_rng(seed)
     truth = rng.uniform(-5, 5, (PEOPLE, 2))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.estimation.occupancy import (
     COARSEN_M,
     ClearRegion,
@@ -43,7 +43,7 @@ def test_out_of_range_and_dropped_messages_never_arrive():
 
 
 def test_stale_estimates_are_predicted_to_now():
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.0), DT)
+    model = motion_model(Estimator(position_jitter_m=0.0), DT)
     link = V2XLink(V2X(latency_steps=3), np.random.default_rng(0))
     link.send(message("rsu1", 0), 5.0)
     link.deliver(3)
@@ -53,7 +53,7 @@ def test_stale_estimates_are_predicted_to_now():
 
 
 def test_the_picture_names_senders_whose_newest_message_reports_an_inconsistency():
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
     link = V2XLink(V2X(latency_steps=0), np.random.default_rng(0))
     link.send(Message("car", 0, {}, shapely.Polygon(), inconsistent=True), 5.0)
     link.send(message("rsu1", 0), 5.0)
@@ -65,15 +65,15 @@ def test_the_picture_names_senders_whose_newest_message_reports_an_inconsistency
 
 
 def test_a_tracker_that_forgets_is_a_fresh_one():
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
     walkable = shapely.box(-20, -20, 20, 20)
-    used, fresh = OccupancyTracker(model, DT, walkable), OccupancyTracker(model, DT, walkable)
+    used, fresh = OccupancyTracker(model, walkable), OccupancyTracker(model, walkable)
     small = {"ped": Zonotope(np.zeros(2), np.eye(2) * 0.5)}
     large = {"ped": Zonotope(np.zeros(2), np.eye(2) * 3.0)}
     used.update(0, small, {})
     assert used.update(1, large, {})["ped"].area < fresh.update(1, large, {})["ped"].area
     used.forget()
-    assert used.update(2, large, {})["ped"].equals(OccupancyTracker(model, DT, walkable)
+    assert used.update(2, large, {})["ped"].equals(OccupancyTracker(model, walkable)
                                                    .update(2, large, {})["ped"])
 
 
@@ -86,10 +86,10 @@ def test_dilate_circumscribes_the_disc():
 
 
 def test_unobserved_area_is_cleared_by_views_and_grows_back_from_unseen_ground():
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.0, max_pedestrian_speed_mps=1.0),
+    model = motion_model(Estimator(position_jitter_m=0.0, max_pedestrian_speed_mps=1.0),
                                     DT)
     walkable = shapely.box(0, 0, 20, 2)
-    area = UnobservedArea(walkable, model, DT, latency_steps=0)
+    area = UnobservedArea(walkable, model, latency_steps=0)
     seen = shapely.box(0, -1, 10, 3)
     first = area.update(0, seen, [])
     assert abs(first.area - 20.0) < 1e-6  # the half in view is clear
@@ -99,10 +99,10 @@ def test_unobserved_area_is_cleared_by_views_and_grows_back_from_unseen_ground()
 
 
 def test_shared_views_apply_at_the_step_they_were_taken():
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.0, max_pedestrian_speed_mps=1.0),
+    model = motion_model(Estimator(position_jitter_m=0.0, max_pedestrian_speed_mps=1.0),
                                     DT)
     walkable = shapely.box(0, 0, 20, 2)
-    area = UnobservedArea(walkable, model, DT, latency_steps=2)
+    area = UnobservedArea(walkable, model, latency_steps=2)
     for step in range(2):
         area.update(step, shapely.Polygon(), [])
     # the view taken at step 0 arrives at step 2: carried two steps forward, not eroded
@@ -111,8 +111,8 @@ def test_shared_views_apply_at_the_step_they_were_taken():
 
 
 def test_known_pedestrian_region_excludes_clear_regions_and_keeps_the_truth():
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
-    tracker = OccupancyTracker(model, DT)
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
+    tracker = OccupancyTracker(model)
     fused = {"ped": Zonotope(np.array([5.0, 0.0]), np.eye(2) * 3.0)}
     view = shapely.box(0, -5, 4, 5)  # saw x < 4 without the pedestrian
     region = tracker.update(0, fused, {"ped": [ClearRegion(view, 0)]})["ped"]
@@ -123,13 +123,13 @@ def test_known_pedestrian_region_excludes_clear_regions_and_keeps_the_truth():
 def test_windowed_unobserved_area_keeps_everything_the_full_tracker_has_inside_the_window():
     """Tracking only around the window (ground outside counts as unseen) loses nothing inside
     it: checked against the whole-walkable tracker on random views, with latency."""
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
     walkable = shapely.union(shapely.box(0, 0, 60, 2), shapely.box(28, -8, 32, 10))
     window = shapely.box(24, -6, 36, 8)
     rng = np.random.default_rng(7)
     for latency in (0, 2):
-        full = UnobservedArea(walkable, model, DT, latency)
-        windowed = UnobservedArea(walkable, model, DT, latency, window=window)
+        full = UnobservedArea(walkable, model, latency)
+        windowed = UnobservedArea(walkable, model, latency, window=window)
         for step in range(40):
             x, y = rng.uniform(0, 60), rng.uniform(-8, 10)
             own = shapely.box(x, y, x + rng.uniform(2, 30), y + rng.uniform(2, 15))
@@ -146,13 +146,13 @@ def test_windowed_unobserved_area_keeps_everything_the_full_tracker_has_inside_t
 def test_the_kept_move_of_the_base_is_the_move_computed_afresh():
     """The unobserved area keeps the base's moved region for the next step: with latency 1
     and 2 and random views, every step equals that of an area made to forget it."""
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
     walkable = shapely.union(shapely.box(0, 0, 60, 2), shapely.box(28, -8, 32, 10))
     window = shapely.box(24, -6, 36, 8)
     rng = np.random.default_rng(11)
     for latency in (1, 2):
-        kept = UnobservedArea(walkable, model, DT, latency, window=window)
-        afresh = UnobservedArea(walkable, model, DT, latency, window=window)
+        kept = UnobservedArea(walkable, model, latency, window=window)
+        afresh = UnobservedArea(walkable, model, latency, window=window)
         for step in range(30):
             x, y = rng.uniform(0, 60), rng.uniform(-8, 10)
             own = shapely.box(x, y, x + rng.uniform(2, 30), y + rng.uniform(2, 15))
@@ -169,15 +169,15 @@ def test_a_known_region_kept_in_the_window_holds_the_pedestrian_who_leaves_and_c
     window (also across a step without an update); the region stays within the window's
     bounds; once it is seen back inside, it is no longer counted as possibly beyond. The
     region without the window grows far larger."""
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
     walkable = shapely.box(0, 0, 120, 3)
     window = shapely.box(20, -5, 40, 8)
     bounds = dilate(window, model.jitter).buffer(1e-9)
     step_length = model.max_speed * DT
     for seed in range(4):
         rng = np.random.default_rng(seed)
-        windowed = OccupancyTracker(model, DT, walkable, window)
-        whole = OccupancyTracker(model, DT, walkable)
+        windowed = OccupancyTracker(model, walkable, window)
+        whole = OccupancyTracker(model, walkable)
         truth, estimate, heading, largest = np.array([30.0, 1.5]), None, 1.0, 0.0
         for step in range(700):
             if truth[0] > 75.0:
@@ -212,21 +212,21 @@ def test_a_known_region_kept_in_the_window_holds_the_pedestrian_who_leaves_and_c
 def test_the_inflow_holds_every_path_that_enters_the_bounds_from_outside():
     """A path s outside B (on walkable (+) disc(eps)) that moves at most ``steps`` times the
     reach of a step ends, if inside B, inside the inflow of that many steps."""
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
     walkable = shapely.union(shapely.box(0, 0, 60, 2), shapely.box(28, -8, 32, 10))
     window = shapely.box(24, -6, 36, 8)
-    tracked = TrackedWindow(window, walkable, model, DT)
+    tracked = TrackedWindow(window, walkable, model)
     ground = dilate(walkable, model.jitter)
     rng = np.random.default_rng(5)
     for steps in (1, 2, 5):
         inflow = tracked.inflow(steps).buffer(1e-7)
         entered = 0
-        x0, y0, x1, y1 = tracked.bounds.buffer(steps * tracked.reach).bounds
+        x0, y0, x1, y1 = tracked.bounds.buffer(model.reach_m(steps)).bounds
         for _ in range(20000):
             start = shapely.Point(rng.uniform(x0, x1), rng.uniform(y0, y1))
             if not ground.contains(start) or tracked.bounds.contains(start):
                 continue
-            angle, length = rng.uniform(0, 2 * np.pi), rng.uniform(0, steps * tracked.reach)
+            angle, length = rng.uniform(0, 2 * np.pi), rng.uniform(0, model.reach_m(steps))
             end = shapely.Point(start.x + length * np.cos(angle), start.y + length * np.sin(angle))
             if tracked.bounds.contains(end):
                 entered += 1
@@ -239,12 +239,12 @@ def test_ground_nobody_saw_off_the_walkable_keeps_no_path_alive():
     pedestrian, who stays on walkable ground, cannot have been on the road, so its region
     keeps nothing of the sidewalk's middle. Without walkable ground the shadow within the
     jitter keeps the strip next to it."""
-    model = MotionModel.from_config(Estimator(position_jitter_m=1.0), DT)
+    model = motion_model(Estimator(position_jitter_m=1.0), DT)
     sidewalk, road = shapely.box(-10, -3, 10, 0), shapely.box(-10, 0, 10, 7)
     fused = {"ped": Zonotope(np.array([0.0, -1.5]), np.diag([8.0, 1.5]))}
     seen = [ClearRegion(shapely.box(-20, -20, 20, 0), 0)]  # the sidewalk side, not the road
-    kept = OccupancyTracker(model, DT, sidewalk).update(0, fused, {"ped": seen})["ped"]
+    kept = OccupancyTracker(model, sidewalk).update(0, fused, {"ped": seen})["ped"]
     assert kept.intersection(shapely.box(-5, -3, 5, 0)).is_empty
-    plain = OccupancyTracker(model, DT).update(0, fused, {"ped": seen})["ped"]
+    plain = OccupancyTracker(model).update(0, fused, {"ped": seen})["ped"]
     assert not plain.intersection(shapely.box(-5, -1, 5, 0)).is_empty
     assert not road.is_empty

@@ -21,7 +21,7 @@ import shapely
 from sse_cosim.estimation.bus_screen import BusScreen
 from sse_cosim.estimation.flags import StepFlags, disagrees
 from sse_cosim.estimation.fusion_centre import FusionCentre
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import MotionModel, motion_model
 from sse_cosim.estimation.observer import EstimatorSettings, LocalObservers, Track
 from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.v2x import Message, V2XLink
@@ -93,7 +93,7 @@ class Harness:
     def __post_init__(self) -> None:
         config = Estimator(max_pedestrian_speed_mps=self.speed, position_jitter_m=self.jitter,
                            gain_method=self.gain)
-        self.model = MotionModel.from_config(config, DT)
+        self.model = motion_model(config, DT)
 
     def run(self, steps: int) -> list[StepRecord]:
         rng = np.random.default_rng(self.seed)
@@ -102,7 +102,7 @@ class Harness:
         nodes = sorted({s.node for s in self.sensors.values()} | {BUS})
         observers = LocalObservers.labelled(nodes, self.model, settings)
         link = V2XLink(V2X(latency_steps=self.latency), np.random.default_rng(0))
-        centre = FusionCentre(self.model, settings, "strips", self.sensors, DT, BUS)
+        centre = FusionCentre(self.model, settings, "strips", self.sensors, BUS)
         records = []
         for k, p in enumerate(truth):
             detections = self._detections(rng, k, p)

@@ -8,6 +8,7 @@ import pytest
 import shapely
 
 from sse_cosim.estimation.bus_screen import _eroded, contradicted
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.estimation.occupancy import QUAD_SEGMENTS, ClearRegion
 from sse_cosim.estimation.vote import (
     READMIT_STEPS,
@@ -16,7 +17,11 @@ from sse_cosim.estimation.vote import (
     largest_consistent_groups,
     vote,
 )
+from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Zonotope
+
+# jitter 0.3 m; reach 2.5 m/s x 0.1 s = 0.25 m per step
+MODEL = motion_model(Estimator(max_pedestrian_speed_mps=2.5, position_jitter_m=0.3), 0.1)
 
 
 def box(x: float, y: float, half: float = 1.0) -> Zonotope:
@@ -74,7 +79,7 @@ def test_conflict_suspects_wait_but_are_not_proven():
 def test_negative_information_never_contradicts_a_set_that_holds_the_path(gap):
     """Clear views that just miss p: a set holding s (|p - s| <= eps) is never contradicted."""
     rng = np.random.default_rng(3)
-    eps, reach = 0.3, 0.25
+    eps = MODEL.jitter
     for _ in range(200):
         s = rng.uniform(-5, 5, 2)
         p = s + eps * rng.uniform(-1, 1, 2) / np.sqrt(2)
@@ -84,14 +89,14 @@ def test_negative_information_never_contradicts_a_set_that_holds_the_path(gap):
         size = rng.uniform(2, 20)
         centre = p + direction * (gap + size / np.sqrt(2))
         region = shapely.box(*(centre - size / 2), *(centre + size / 2))
-        assert not contradicted(estimate, [ClearRegion(region, 0)], eps, reach)
+        assert not contradicted(estimate, [ClearRegion(region, 0)], MODEL)
 
 
 def test_a_set_inside_a_clear_view_is_contradicted():
     view = shapely.box(-10, -10, 10, 10)
-    assert contradicted(box(0, 0), [ClearRegion(view, 0)], 0.3, 0.25)
-    assert not contradicted(box(9.5, 0), [ClearRegion(view, 0)], 0.3, 0.25)
-    assert not contradicted(box(0, 0), [ClearRegion(view, 40)], 0.3, 0.25)  # seen long ago
+    assert contradicted(box(0, 0), [ClearRegion(view, 0)], MODEL)
+    assert not contradicted(box(9.5, 0), [ClearRegion(view, 0)], MODEL)
+    assert not contradicted(box(0, 0), [ClearRegion(view, 40)], MODEL)  # seen long ago
 
 
 def test_kept_erosions_are_the_erosion_of_that_region_at_that_distance():

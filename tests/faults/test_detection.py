@@ -8,7 +8,7 @@ import shapely
 from synthetic import DT, PED, Harness, SensorSetup, axes, contains
 
 from sse_cosim.estimation.bus_screen import BusScreener
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.vote import READMIT_STEPS
 from sse_cosim.scenario.model import Estimator
@@ -141,8 +141,8 @@ def test_two_disagreeing_sources_give_a_conflict_and_the_hull_of_both():
 def test_a_claim_inside_a_clear_view_is_dropped_or_kept_in_conflict():
     """A phantom: beside a real claim it is left out; alone it is kept, flagged (it could be
     a real pedestrian placed wrong)."""
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
-    screener = BusScreener(model, 2.5 * DT, BUS)
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
+    screener = BusScreener(model, BUS)
     ghost = Zonotope(np.array([0.0, 0.0]), np.eye(2))
     real = Zonotope(np.array([30.0, 0.0]), np.eye(2))
     view = [ClearRegion(shapely.box(-10, -10, 10, 10), 1)]
@@ -155,8 +155,8 @@ def test_a_claim_inside_a_clear_view_is_dropped_or_kept_in_conflict():
 
 def test_a_pedestrian_nobody_detects_whose_every_set_lies_in_a_clear_view_has_left():
     """SUMO removed it at its destination: no flag, no fused set, no refined region."""
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
-    screener = BusScreener(model, 2.5 * DT, BUS)
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
+    screener = BusScreener(model, BUS)
     ghost = Zonotope(np.array([0.0, 0.0]), np.eye(2))
     view = [ClearRegion(shapely.box(-10, -10, 10, 10), 0)]
     screen = screener.screen({"p": ghost}, {"p": {"rsu1": ghost}}, {"p": view})

@@ -10,7 +10,7 @@ import shapely
 
 from sse_cosim.control.speed import SpeedLevel, fallback_floor
 from sse_cosim.errors import UserError
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.scenario.model import Controller
 from sse_cosim.sensors import SensorObservation, measure, specs_from_scenario
@@ -117,7 +117,7 @@ def test_phantom_follows_its_track_under_its_own_id():
 
 
 def test_node_faults_shift_or_shrink_what_the_node_sends():
-    model = MotionModel.from_config(
+    model = motion_model(
         scenario().estimator.model_copy(update={"position_jitter_m": 0.646}), 0.1)  # the road's
     estimate = {"pedestrian": Zonotope(TRUTH, np.eye(2))}
     snap, _ = observe_at(4.0)

@@ -8,7 +8,7 @@ import shapely
 from sse_cosim.estimation.bus_screen import BusScreen
 from sse_cosim.estimation.flags import StepFlags
 from sse_cosim.estimation.fusion_centre import BusEstimate
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.estimation.observer import EstimatorSettings, Track
 from sse_cosim.estimation.occupancy import OccupancyTracker
 from sse_cosim.estimation.v2x import SharedPicture
@@ -81,9 +81,9 @@ def test_clear_regions_and_detections_join_the_bus_and_the_senders():
 def test_the_pedestrians_in_view_are_those_some_node_detects_now():
     """The bus detects "a" now, not "c" (known from earlier); rsu1's newest message reports
     "b" detected: "a" and "b" are in view, "c" is only known."""
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
     fusion = second_level("labelled", model, EstimatorSettings("enclose", "girard", 8), "enclose",
-                          ["front"], DT, BUS)
+                          ["front"], BUS)
     z = Zonotope(np.zeros(2), np.eye(2))
     own = {"a": Track("a", z, 3, True), "c": Track("c", z + np.array([9.0, 0.0]), 1, False)}
     shared = SharedPicture({"b": {"rsu1": z + np.array([0.0, 9.0])}},
@@ -96,7 +96,7 @@ def test_the_pedestrians_in_view_are_those_some_node_detects_now():
 
 
 def test_refined_regions_forget_their_history_when_the_picture_turns_inconsistent():
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), DT)
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
     walkable = shapely.box(-20, -20, 20, 20)
     small = {"ped": Zonotope(np.zeros(2), np.eye(2) * 0.5)}
     large = {"ped": Zonotope(np.zeros(2), np.eye(2) * 3.0)}
@@ -104,7 +104,7 @@ def test_refined_regions_forget_their_history_when_the_picture_turns_inconsisten
     def estimate(fused, inconsistent: bool) -> BusEstimate:
         return BusEstimate(BusScreen(), fused, StepFlags(inconsistent=inconsistent), {})
 
-    regions = RefinedRegions(OccupancyTracker(model, DT, walkable))
+    regions = RefinedRegions(OccupancyTracker(model, walkable))
     regions.update(0, {}, estimate(small, False), {})
     kept = regions.update(1, {}, estimate(large, False), {})["ped"].area
     regions.update(2, {}, estimate(small, False), {})

@@ -13,7 +13,7 @@ import pytest
 import shapely
 
 from sse_cosim.control.speed import SpeedLevel
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import MotionModel, motion_model
 from sse_cosim.estimation.observer import Track
 from sse_cosim.memo import IdentityMemo
 from sse_cosim.pipeline.result import StepResult
@@ -80,7 +80,7 @@ def break_memo(monkeypatch: pytest.MonkeyPatch, memo: IdentityMemo,
 @pytest.fixture
 def scenario_and_model() -> tuple[Scenario, MotionModel]:
     scenario = load_scenario(SCENARIO, {"estimator.position_jitter_m": 0.646})  # the road's
-    return scenario, MotionModel.from_config(scenario.estimator,
+    return scenario, motion_model(scenario.estimator,
                                              scenario.simulation.step_length_s)
 
 
@@ -133,7 +133,7 @@ def test_without_a_broken_memo_the_lost_set_is_a_violation_all_the_same(scenario
 def test_the_checked_arrays_are_the_estimators_claim(state_model, jitter):
     """C Z ⊕ box(jitter) from the estimate's arrays: the values of ``MotionModel.position``,
     for either state layout, with every zero written as 0.0."""
-    model = MotionModel.from_config(Estimator(state_model=state_model, position_jitter_m=jitter),
+    model = motion_model(Estimator(state_model=state_model, position_jitter_m=jitter),
                                     0.1)
     rng = np.random.default_rng(7)
     for _ in range(20):

@@ -12,7 +12,7 @@ import pytest
 import shapely
 
 from sse_cosim.errors import UserError
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import motion_model
 from sse_cosim.estimation.observer import EstimatorSettings, LocalObservers
 from sse_cosim.pipeline.stages import detections_by_node
 from sse_cosim.scenario.loader import load_scenario
@@ -80,7 +80,7 @@ def test_a_node_in_the_scene_is_a_key_even_when_it_sees_nobody() -> None:
 
 
 def test_a_node_appearing_at_run_time_gets_an_observer_and_keeps_it() -> None:
-    model = MotionModel.from_config(Estimator(position_jitter_m=0.3), 0.1)
+    model = motion_model(Estimator(position_jitter_m=0.3), 0.1)
     observers = LocalObservers.labelled(["bus"], model, EstimatorSettings("enclose", "girard", 8))
     strips = Strips(np.eye(2), np.array([210.0, 2.0]), np.array([0.5, 0.5]))
     assert observers.step(0, {}) == {"bus": {}}

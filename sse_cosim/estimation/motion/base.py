@@ -1,20 +1,19 @@
-"""The pedestrian's motion model (paper eq. ``sysmodel``): x_{k+1} = F x_k + n_k, n_k in Z_Q.
+"""The motion model's seam: the :class:`MotionModel` protocol every layer uses, and the linear
+machinery (:class:`LinearModel`) the registered models share.
 
-Two state models:
-
-- ``position``: x = (p_x, p_y), F = I, n_k in the box |n_i| <= v_max * dt. Sound whenever
-  the pedestrian moves at most v_max * dt in one step (the box holds that disc).
-- ``constant-velocity``: x = (p, v) with v_k := (p_{k+1} - p_k) / dt (the displacement
-  over the next step, so the position row of F is exact), F = [[I, dt I], [0, I]], and the
-  velocity change per step bounded by ``max_velocity_change_mps`` per axis. The speed bound
-  |v| <= v_max is applied every step as pseudo-measurement strips (always true, so sound).
-
-Sensors measure the position only: ``position_matrix`` C (2, n) maps a state to it.
+Paper eq. ``sysmodel``: x_{k+1} = F x_k + n_k, n_k in Z_Q. Sensors measure the position only:
+``position_matrix`` C (2, n) maps a state to it. A model also says how far a path point can
+move (:meth:`MotionModel.reach_m`), which every polygon layer grows its regions by (the refined
+regions, the unobserved area, the bus's screen, the anonymous association), and how soon a
+pedestrian can reach a place (:meth:`MotionModel.earliest_arrival_s`), the controller's
+earliest arrivals. Both take an optional state set: a model whose reach depends on the
+velocity may use it; the speed-bounded models here ignore it (the worst case over all
+velocities within v_max).
 
 Jitter. SUMO's pedestrian models jump by up to 0.7 m in one step where a pedestrian moves
 from one lane to the next (walking area to crossing), faster than any speed bound that is
 useful. We therefore model the simulated position as p = s + e: a path s that obeys the
-bounds above plus a jitter ||e|| <= eps. Every node estimates s, so its strips widen by
+model's bounds plus a jitter ||e|| <= eps. Every node estimates s, so its strips widen by
 eps * ||h|| (|h.e| <= eps ||h||), and the position set it reports for p is C Z (+) box(eps),
 which holds the disc of radius eps. Any admissible path s lies in every node's set, hence
 in the fused one. ``tests/world`` checks that SUMO's trajectories admit such a path.
@@ -24,25 +23,103 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Protocol
 
 import numpy as np
 
 from sse_cosim.memo import IdentityMemo
-from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips, Zonotope, intersect_strips, portable
 
 POSITION_MEMO = 64  # position sets MotionModel.position keeps
 
 
+class MotionModel(Protocol):
+    """What the estimator, the polygon layers and the controller ask of a pedestrian's motion
+    model (a registered one: :data:`sse_cosim.estimation.motion.MODELS`)."""
+
+    @property
+    def transition(self) -> np.ndarray:
+        """F (n, n)."""
+
+    @property
+    def process_noise(self) -> Zonotope:
+        """Z_Q (dimension n)."""
+
+    @property
+    def position_matrix(self) -> np.ndarray:
+        """C (2, n) = [I 0]: the state's first two entries are its position."""
+
+    @property
+    def state_bounds(self) -> Strips | None:
+        """Strips about the state (m, n) that always hold (pseudo-measurements), if any."""
+
+    @property
+    def max_speed(self) -> float:
+        """v_max (m/s): no pedestrian walks faster."""
+
+    @property
+    def jitter(self) -> float:
+        """eps (m): how far the simulated position strays from its path."""
+
+    @property
+    def step_length(self) -> float:
+        """dt (s): one step of :meth:`predict`."""
+
+    @property
+    def dim(self) -> int:
+        """n: the state's dimension."""
+
+    @property
+    def jitter_box(self) -> Zonotope:
+        """box(jitter) (2-D)."""
+
+    def predict(self, estimate: Zonotope, steps: int = 1) -> Zonotope:
+        """The state set ``steps`` steps later (Definition 1)."""
+
+    def path_set(self, estimate: Zonotope) -> Zonotope:
+        """C Z: the path's 2-D position set."""
+
+    def position(self, estimate: Zonotope) -> Zonotope:
+        """C Z (+) box(jitter): the simulated 2-D position set."""
+
+    def path_strips(self, measured: Strips) -> Strips:
+        """Position strips (m, 2) widened into strips about the path."""
+
+    def state_strips(self, path: Strips) -> Strips:
+        """Path strips (m, 2) as strips about the state (m, n)."""
+
+    def initial_set(self, strips: Strips, gain_method: str) -> Zonotope:
+        """A first state set from path strips (m, 2)."""
+
+    def reach_m(self, steps: int = 1, state: Zonotope | None = None) -> float:
+        """How far (m) a path point, with its state in ``state`` (None: unknown), can move in
+        ``steps`` steps: every polygon layer grows a path region by this disc."""
+
+    def reach_during_m(self, distance_m: float, speed_mps: float,
+                       state: Zonotope | None = None) -> float:
+        """How far (m) a path point can move while something at ``speed_mps`` (> 0) covers
+        ``distance_m``."""
+
+    def earliest_arrival_s(self, distance_m: np.ndarray,
+                           state: Zonotope | None = None) -> np.ndarray:
+        """The earliest time (s) a pedestrian whose position is ``distance_m`` (shape (z,))
+        from a place can be in it."""
+
+
 @dataclass(frozen=True)
-class MotionModel:
-    """F (n, n), process-noise zonotope Q (dimension n), position matrix C (2, n)."""
+class LinearModel:
+    """A linear model with a speed bound: F (n, n), process-noise zonotope Q (dimension n),
+    position matrix C (2, n), and its path moves at most ``max_speed`` in any direction.
+
+    Its reach ignores the state set (a disc of v_max dt per step, whatever the velocity).
+    """
 
     transition: np.ndarray
     process_noise: Zonotope
     position_matrix: np.ndarray
     state_bounds: Strips | None
     max_speed: float
+    step_length: float
     jitter: float = 0.0
     # the newest POSITION_MEMO position sets, by their estimates' identities
     _positions: IdentityMemo[Zonotope] = field(
@@ -54,6 +131,8 @@ class MotionModel:
             raise ValueError(f"jitter must be finite and >= 0; got {self.jitter}")
         if not (np.isfinite(self.max_speed) and self.max_speed > 0):
             raise ValueError(f"max speed must be finite and > 0; got {self.max_speed}")
+        if not (np.isfinite(self.step_length) and self.step_length > 0):
+            raise ValueError(f"step length must be finite and > 0; got {self.step_length}")
         if not np.array_equal(self.position_matrix, np.eye(2, self.dim)):
             raise ValueError("the position matrix must pick the state's first two entries")
 
@@ -61,36 +140,31 @@ class MotionModel:
     def dim(self) -> int:
         return int(self.transition.shape[0])
 
-    @classmethod
-    def from_config(cls, config: Estimator, step_length: float) -> MotionModel:
-        """The model named by ``config.state_model`` for steps of ``step_length`` seconds;
-        ``config`` with its jitter set (a run's world measures it where a scenario leaves it
-        out, :mod:`sse_cosim.world.walker_jitter`)."""
-        if config.position_jitter_m is None:
-            raise ValueError("estimator.position_jitter_m is not set: the world resolves it "
-                             "before the estimator starts")
-        v_max = config.max_pedestrian_speed_mps
-        if config.state_model == "position":
-            return cls(
-                transition=np.eye(2),
-                process_noise=Zonotope(np.zeros(2), np.eye(2) * v_max * step_length),
-                position_matrix=np.eye(2),
-                state_bounds=None,
-                max_speed=v_max,
-                jitter=config.position_jitter_m,
-            )
-        transition = np.block([[np.eye(2), step_length * np.eye(2)], [np.zeros((2, 2)), np.eye(2)]])
-        noise = np.zeros((4, 2))
-        noise[2:, :] = np.eye(2) * config.max_velocity_change_mps
-        velocity_rows = np.hstack([np.zeros((2, 2)), np.eye(2)])
-        return cls(
-            transition=transition,
-            process_noise=Zonotope(np.zeros(4), noise),
-            position_matrix=np.hstack([np.eye(2), np.zeros((2, 2))]),
-            state_bounds=Strips(velocity_rows, np.zeros(2), np.full(2, v_max)),
-            max_speed=v_max,
-            jitter=config.position_jitter_m,
-        )
+    def reach_m(self, steps: int = 1, state: Zonotope | None = None) -> float:
+        """v_max dt ``steps``: how far a path point can move in ``steps`` steps, whatever its
+        state (``state`` is ignored)."""
+        return self.max_speed * self.step_length * steps
+
+    def reach_during_m(self, distance_m: float, speed_mps: float,
+                       state: Zonotope | None = None) -> float:
+        """v_max ``distance_m`` / ``speed_mps``: how far a path point can move while something
+        at ``speed_mps`` covers ``distance_m`` (the paper policy's "near the crossing";
+        ``state`` is ignored)."""
+        return self.max_speed * distance_m / speed_mps
+
+    def earliest_arrival_s(self, distance_m: np.ndarray,
+                           state: Zonotope | None = None) -> np.ndarray:
+        """max(0, d - 2 eps) / v_max for each distance d (m), shape (z,): the earliest time a
+        pedestrian whose position p = s + e lies d from a zone can be in it (``state`` is
+        ignored).
+
+        The path s is within eps of p, moves at most v_max per second, and the position in the
+        zone is within eps of its path, so the path covers at least d - 2 eps. The
+        straight-line distance never exceeds the walk on walkable ground, so this is an
+        under-estimate: sound (docs/controller.md, "Earliest arrival"; docs/method.md, the
+        motion model).
+        """
+        return np.maximum(0.0, distance_m - 2.0 * self.jitter) / self.max_speed
 
     def predict(self, estimate: Zonotope, steps: int = 1) -> Zonotope:
         """Predicted state set after ``steps`` steps: F Z (+) Q, repeated (Definition 1)."""
