@@ -74,6 +74,8 @@ CASES = [
          ("sensors.side.node", "drone", "use one of")),
     Case("unknown method", extend('[estimator]\ngain_method = "magic"\n'),
          ("estimator.gain_method", "frobenius")),
+    Case("unknown state model", extend('[estimator]\nstate_model = "cv"\n'),
+         ("estimator.state_model", "unknown state model 'cv'", "position, constant-velocity")),
     Case("speed levels out of order", extend("[controller]\nvery_slow_factor = 0.9\n"),
          ("controller", "very_slow_factor")),
     Case("no name", "[automated.bus]\nnominal_speed_mps = 10\n", ("name", "add this field")),

@@ -40,7 +40,7 @@ def test_initial_set_equals_the_validated_construction(state_model):
     """The parallelogram of the first two independent strips (parallel ones skipped), the
     rest intersected with it: the same bits as building it with the checked constructors."""
     model = motion_model(Estimator(state_model=state_model, position_jitter_m=0.3),
-                                    DT)
+                         DT)
     rng = np.random.default_rng(4)
     for m in (2, 3, 4):
         strips = random_strips(rng, m)

@@ -87,7 +87,7 @@ def test_dilate_circumscribes_the_disc():
 
 def test_unobserved_area_is_cleared_by_views_and_grows_back_from_unseen_ground():
     model = motion_model(Estimator(position_jitter_m=0.0, max_pedestrian_speed_mps=1.0),
-                                    DT)
+                         DT)
     walkable = shapely.box(0, 0, 20, 2)
     area = UnobservedArea(walkable, model, latency_steps=0)
     seen = shapely.box(0, -1, 10, 3)
@@ -100,7 +100,7 @@ def test_unobserved_area_is_cleared_by_views_and_grows_back_from_unseen_ground()
 
 def test_shared_views_apply_at_the_step_they_were_taken():
     model = motion_model(Estimator(position_jitter_m=0.0, max_pedestrian_speed_mps=1.0),
-                                    DT)
+                         DT)
     walkable = shapely.box(0, 0, 20, 2)
     area = UnobservedArea(walkable, model, latency_steps=2)
     for step in range(2):

@@ -81,7 +81,7 @@ def break_memo(monkeypatch: pytest.MonkeyPatch, memo: IdentityMemo,
 def scenario_and_model() -> tuple[Scenario, MotionModel]:
     scenario = load_scenario(SCENARIO, {"estimator.position_jitter_m": 0.646})  # the road's
     return scenario, motion_model(scenario.estimator,
-                                             scenario.simulation.step_length_s)
+                                  scenario.simulation.step_length_s)
 
 
 SEEN = Zonotope(np.array([183.0, -7.0]), 0.5 * np.eye(2))
@@ -134,7 +134,7 @@ def test_the_checked_arrays_are_the_estimators_claim(state_model, jitter):
     """C Z ⊕ box(jitter) from the estimate's arrays: the values of ``MotionModel.position``,
     for either state layout, with every zero written as 0.0."""
     model = motion_model(Estimator(state_model=state_model, position_jitter_m=jitter),
-                                    0.1)
+                         0.1)
     rng = np.random.default_rng(7)
     for _ in range(20):
         generators = rng.normal(size=(model.dim, 5))
