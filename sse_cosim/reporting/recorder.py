@@ -40,6 +40,7 @@ import numpy as np
 import shapely
 
 from sse_cosim.control.speed import SpeedLevel
+from sse_cosim.estimation.motion import MODELS
 from sse_cosim.reporting.replay import ReplayLog
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors.faults import FaultLog
@@ -56,7 +57,6 @@ STOPPED_SPEED_MPS = 0.1  # the bus counts as stopped below this actual speed
 UNACCOUNTED = "unaccounted"  # a pedestrian in no refined region and not in the unobserved area
 CONTAINMENT_TOL_M = 1e-7  # slack of a set's containment check (m)
 FLAT_SINE = 0.5  # a set whose generators are all within 30° of each other counts as flat
-STATE_DIMS = {"position": 2, "constant-velocity": 4}  # state model -> state dimension
 
 
 HalfSpace = tuple[float, float, float]  # (d_x, d_y, b): the points x with |d·(x − c)| <= b
@@ -276,7 +276,9 @@ class RunRecorder:
         self.anonymous = scenario.estimator.association == "anonymous"
         jitter = scenario.estimator.position_jitter_m
         self.jitter = float("nan") if jitter is None else jitter  # nan: not resolved yet
-        self.state_dim = STATE_DIMS[scenario.estimator.state_model]
+        # the registered model's dimension (its jitter does not change it)
+        self.state_dim = MODELS[scenario.estimator.state_model](
+            scenario.estimator, scenario.simulation.step_length_s, 0.0).dim
 
     def __call__(self, result: StepResult) -> None:
         t = round(result.snapshot.time, 6)
