@@ -1,6 +1,6 @@
 """Set-membership estimation of pedestrians, per node and at the bus (paper Section III).
 
-- :mod:`.motion`: the motion model (p = s + e) and its sets.
+- :mod:`.motion`: the motion models by name (p = s + e): their sets, reach and arrivals.
 - :mod:`.observer`: every node's local observer (first fusion level), whose correction step
   (Proposition 1, inconsistent sensors left out) is :mod:`.correction`.
 - :mod:`.vote`: the consistency vote and probation both levels use.

@@ -1,7 +1,7 @@
 """SUMO's pedestrians obey the estimator's motion model: a speed-bounded path plus jitter.
 
 The estimator assumes p_k = s_k + e_k with ||s_{k+1} - s_k|| <= v_max dt and ||e_k|| <= eps
-(``estimation/motion.py``). SUMO's striping model jumps at lane transitions, so v_max alone
+(``estimation/motion/``). SUMO's striping model jumps at lane transitions, so v_max alone
 would not hold; this test asks, as a convex feasibility problem, whether such a path s exists
 for SUMO's actual trajectories with the scenarios' bounds.
 """
