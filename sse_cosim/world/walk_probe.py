@@ -24,6 +24,7 @@ walk to its first step on its crossing, which is how the world starts each walk 
 
 from __future__ import annotations
 
+import gzip
 import math
 import re
 import tempfile
@@ -54,7 +55,8 @@ PROBE_SEED = 1
 DEFAULT_RADIUS_M = float(Pedestrian.model_fields["radius_m"].default)
 _VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_LANE_ID)
 _EPS = 1e-9
-SLOT_SLACK_S = 5.0  # a timed walker's slot outlasts 1.5 times its walk at its speed by this
+SLOT_SLACK_S = 3.0  # a lone walker's slot outlasts 1.5 times its walk at its speed by this (s)
+_DURATION = re.compile(r'duration="([0-9.]+)"')
 
 
 @dataclass(frozen=True)
@@ -133,9 +135,9 @@ class ProbeTimer:
     """Times pedestrians' walks on the network at ``net_path`` with lone SUMO walkers (a
     :data:`~sse_cosim.world.demand.WalkTimer`).
 
-    One session walks every pedestrian's walk, one after the other in slots of 1.5 times its
-    walk at its speed plus :data:`SLOT_SLACK_S` (so each walks alone; a walker still on the
-    network when the next departs is an error), each with the pedestrian's speed and size.
+    One session walks every pedestrian's walk, one after the other in slots of
+    :func:`slot_s` (so each walks alone; a walker still on the network when the next departs
+    is an error), each with the pedestrian's speed and size.
     A walk's time is the first step its walker is on the crossing's lane less its departure:
     a whole number of steps. The session's files go into ``work_dir`` (kept), or a temporary
     folder (removed) if None.
@@ -148,11 +150,11 @@ class ProbeTimer:
     def __call__(self, walks: Mapping[str, WalkToCrossing], step_s: float) -> dict[str, float]:
         walkers: list[Walker] = []
         depart = 0.0
+        cycle = longest_cycle_s(self.net_path)
         for pid, walk in walks.items():
             walkers.append(Walker(pid, walk.path, walk.start_pos_m, walk.end_pos_m,
                                   walk.speed_mps, depart, walk.radius_m))
-            slot = 1.5 * walk.length_m / walk.speed_mps + SLOT_SLACK_S
-            depart = round(depart + math.ceil(slot / step_s - _EPS) * step_s, 6)
+            depart = round(depart + slot_s(walk.length_m / walk.speed_mps, step_s, cycle), 6)
         if self.work_dir is not None:
             traces = walk_alone(self.net_path, walkers, step_s, self.work_dir)
         else:
@@ -174,6 +176,29 @@ class ProbeTimer:
                                       f"{', '.join(dict.fromkeys(trace.lanes))})")
             times[walker.id] = round(on - walker.depart_s, 6)
         return times
+
+
+def slot_s(walk_s: float, step_s: float, cycle_s: float = 0.0) -> float:
+    """How long (s, whole steps) a lone walker's slot lasts so that it has arrived before the
+    next walker of its slot departs: 1.5 times its walk (``walk_s`` at its speed), a whole
+    signal cycle ``cycle_s`` it may wait at a pedestrian light, and :data:`SLOT_SLACK_S`."""
+    return math.ceil((1.5 * walk_s + cycle_s + SLOT_SLACK_S) / step_s - _EPS) * step_s
+
+
+def longest_cycle_s(net_path: Path) -> float:
+    """The longest signal cycle (s) of the network's traffic lights (0 without any): the sum
+    of a ``<tlLogic>``'s phase durations, read from the file line by line."""
+    longest = cycle = 0.0
+    opener = gzip.open if net_path.name.endswith(".gz") else open
+    with opener(net_path, "rt", encoding="utf-8") as stream:
+        for line in stream:
+            if "<tlLogic" in line:
+                cycle = 0.0
+            elif "<phase " in line:
+                found = _DURATION.search(line)
+                cycle += float(found.group(1)) if found else 0.0
+                longest = max(longest, cycle)
+    return longest
 
 
 def _walk(walkers: Sequence[Walker], step_s: float,

@@ -61,12 +61,9 @@ measured yet are walked.
 
 from __future__ import annotations
 
-import gzip
 import hashlib
 import json
-import math
 import os
-import re
 import sys
 import tempfile
 import time
@@ -83,14 +80,12 @@ from sse_cosim.files import write_text_atomic
 from sse_cosim.world.assumptions import MotionBounds, admits, least_jitter, path_jitter
 from sse_cosim.world.extent import SceneExtent
 from sse_cosim.world.network import BUILD_DIR_NAME, NET_FILE_NAME
-from sse_cosim.world.walk_probe import Walker, WalkTrace, walk_alone
+from sse_cosim.world.walk_probe import Walker, WalkTrace, longest_cycle_s, slot_s, walk_alone
 
 LEAD_M = 3.0  # how far a walk starts before a walking area and ends beyond it (m)
 CACHE_FILE_NAME = "walker_jitter.json"
 _EPS_M = 1e-9  # steps longer than v dt by rounding only need no jitter
-_DURATION = re.compile(r'duration="([0-9.]+)"')
 GROUND_BAND_M = 0.25  # how far a ground patch reaches around a lone walker's stretch off it (m)
-SLOT_SLACK_S = 3.0  # a slot outlasts its longest walk at the bound by this much (and half again)
 
 
 @dataclass(frozen=True)
@@ -334,13 +329,10 @@ def _walk_junctions(net_path: Path, net: sumolib.net.Net,
     walks = passages(net, areas)
     lengths = [sum(net.getEdge(e).getLength() for e in edges[1:-1]) + 2.0 * LEAD_M
                for _, edges, _, _ in walks]
-    # a walker may wait up to a whole signal cycle at a pedestrian light
-    longest_s = 1.5 * max(lengths, default=0.0) / speed_mps + SLOT_SLACK_S + _longest_cycle_s(
-        net_path)
-    slot_s = math.ceil(longest_s / step_s) * step_s
+    slot = slot_s(max(lengths, default=0.0) / speed_mps, step_s, longest_cycle_s(net_path))
     walkers = [Walker(id=f"w{i}", edges=edges, depart_pos_m=depart, arrival_pos_m=arrival,
-                      speed_mps=speed_mps, depart_s=round(slot * slot_s, 6), radius_m=radius_m)
-               for i, ((_, edges, depart, arrival), slot)
+                      speed_mps=speed_mps, depart_s=round(k * slot, 6), radius_m=radius_m)
+               for i, ((_, edges, depart, arrival), k)
                in enumerate(zip(walks, _slots([w[1] for w in walks]), strict=True))]
     with tempfile.TemporaryDirectory(prefix="walker_jitter.") as work:
         traces = walk_alone(net_path, walkers, step_s, Path(work))
@@ -394,22 +386,6 @@ def _junction_jitter(junction: str, walks: list[tuple[tuple[str, ...], WalkTrace
         if found.jitter_m > best.jitter_m:
             best = found
     return best
-
-
-def _longest_cycle_s(net_path: Path) -> float:
-    """The longest signal cycle (s) of the network's traffic lights (0 without any): the sum
-    of a ``<tlLogic>``'s phase durations, read from the file line by line."""
-    longest = cycle = 0.0
-    opener = gzip.open if net_path.name.endswith(".gz") else open
-    with opener(net_path, "rt", encoding="utf-8") as stream:
-        for line in stream:
-            if "<tlLogic" in line:
-                cycle = 0.0
-            elif "<phase " in line:
-                found = _DURATION.search(line)
-                cycle += float(found.group(1)) if found else 0.0
-                longest = max(longest, cycle)
-    return longest
 
 
 def _slots(walks: Sequence[tuple[str, ...]]) -> list[int]:
