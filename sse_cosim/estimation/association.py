@@ -58,10 +58,12 @@ Rules of one step at one node (each proof in a line or two; "X" is a track's pre
   d, and d's new track (R5), become one track, their hull (it lies in d's set), with the
   lowest id: the pedestrian at a view's or an occluder's edge keeps its track, where R5
   started a new one every step. It is occupied if the new track is in it or d lies inside
-  one of the predictions (then d's pedestrian is in that X ∩ d). Each hidden possibility is
-  a track not known to be occupied, joined to one beside it (R7's sum test). And d needs no
-  new track if that track would claim (R2) a detection d' an existing track T claims: d's
-  pedestrian is then d''s (A2, as in R2), which is in T's set.
+  one of the predictions X whose correction left no detection out (R4): then d's pedestrian
+  is in X and kept by every other sensor's cut, so it is in that piece. (A piece of an X that
+  left out a claimed detection may have lost d's pedestrian to the claimer.) Each hidden
+  possibility is a track not known to be occupied, joined to one beside it (R7's sum test).
+  And d needs no new track if that track would claim (R2) a detection d' an existing track
+  T claims: d's pedestrian is then d''s (A2, as in R2), which is in T's set.
 
 Every rule keeps each pedestrian of a prediction in some new set, and each detected one is
 in a prediction or in a new track: by induction every pedestrian ever detected stays inside
@@ -242,7 +244,7 @@ def associate(
         updated = _correct(scene, track, view, left_out, split=not claimer)
         if isinstance(updated, _Split):
             pools.setdefault(updated.detection, []).append(
-                (updated.visible, updated.detection in view.inside))
+                (updated.visible, updated.kept_all and updated.detection in view.inside))
             if updated.hidden is not None:
                 hidden.append(updated.hidden)
         elif updated is not None:
@@ -283,11 +285,14 @@ def associate(
 class _Split:
     """R8: a track seen in part by one sensor with one candidate ``detection``, as its two
     possibilities: ``visible`` (the prediction cut with the detection, nothing known to be
-    in it) and ``hidden`` (cut to where that sensor cannot see; None if it ended, R6)."""
+    in it) and ``hidden`` (cut to where that sensor cannot see; None if it ended, R6);
+    ``kept_all``: no candidate was left out (R4), so ``visible`` holds every pedestrian of the
+    prediction whose detection is ``detection``."""
 
     visible: LocalTrack
     detection: int
     hidden: LocalTrack | None
+    kept_all: bool
 
 
 def _pool(scene: _Scene, members: Sequence[LocalTrack], occupied: bool) -> LocalTrack:
@@ -387,11 +392,11 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
     and its two possibilities are kept apart (R8) instead of their hull.
     """
     paths = scene.detections.paths
-    occupied, certain, ambiguous = track.occupied, [], []
+    kept_all, certain, ambiguous = True, [], []
     for sensor in sorted(view.wholly | view.partly):
         candidates = view.candidates.get(sensor, ())
         used = [d for d in candidates if d not in left_out]
-        occupied = occupied and len(used) == len(candidates)
+        kept_all = kept_all and len(used) == len(candidates)
         if sensor in view.partly or len(used) > 1:
             ambiguous.append((sensor, used))
         elif used:
@@ -407,14 +412,14 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
     estimate = _ambiguous(scene, track, estimate, view, ambiguous)
     joined = certain + [d for _, used in ambiguous for d in used]
     if last is None:
-        return _finish(scene, track, estimate, occupied, joined)
+        return _finish(scene, track, estimate, track.occupied and kept_all, joined)
     sensor, (d,) = last
     visible = _finish(scene, track, _cut(scene, estimate, paths[d]), False, [*joined, d])
     hidden = _finish(scene, track, _hidden(scene, estimate, track.estimate, sensor), False,
                      joined)
     if visible is None:  # off the ground: only the hidden possibility is left
         return hidden
-    return _Split(visible, d, hidden)
+    return _Split(visible, d, hidden, kept_all)
 
 
 def _ambiguous(scene: _Scene, track: LocalTrack, estimate: Zonotope, view: _View,
