@@ -194,10 +194,15 @@ class OccupancyTracker:
                     continue  # the region cannot touch dilate(path): the cut keeps path whole
                 outside = shapely.difference(self._on_foot(dilate(path, slack)), item.region)
                 path = shapely.intersection(path, dilate(outside, slack))
+            cut_path = path  # with eps = 0, cut with every region clear now (slack 0)
             paths[person_id] = path = coarsen(path)
             region = dilate(path, eps)
-            regions[person_id] = shapely.difference(region, shapely.union_all(now_clear)) \
-                if now_clear else region
+            if now_clear and region is not cut_path:
+                # (the same cut again would be the identity, and GEOS's floating overlay can
+                # return it empty when the region's edges lie on the view's, which this cut
+                # gave them: locationtech/jts#1000, tests/estimation/test_association.py)
+                region = shapely.difference(region, shapely.union_all(now_clear))
+            regions[person_id] = region
         self._paths = paths
         self._step = step
         self.beyond = frozenset(beyond)

@@ -389,9 +389,10 @@ def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined
     """The vehicle's pipeline on crossing paths with overlapping sets: own and received tracks
     fused (AnonymousFusionCentre, over a V2X link with latency), refined with the clear regions
     of each fused track: every pedestrian the vehicle or the sender (by the step of its newest
-    message) has detected is in some fused set and in some refined region (fails if a view is
-    taken as clear for a track that meets one of the viewer's detected tracks); every
-    pedestrian the vehicle detects now is in a fused set it counts as in view."""
+    message) has detected is in some fused set and in some refined region, or in a track a
+    node ended and handed over to the vehicle's unobserved area (its set predicted to now;
+    fails if a view is taken as clear for a track that meets one of the viewer's detected
+    tracks); every pedestrian the vehicle detects now is in a fused set it counts as in view."""
     rng = np.random.default_rng(seed)
     model = motion_model()
     sensors = {"bus": [random_sensor(rng, "bus_a"), random_sensor(rng, "bus_b")],
@@ -402,6 +403,7 @@ def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined
     link = V2XLink(V2X(latency_steps=1), np.random.default_rng(0))
     refined = RefinedRegions(OccupancyTracker(model), history=False)
     first_seen: dict[str, dict[int, int]] = {node: {} for node in sensors}
+    handed: list[Zonotope] = []
     for k, positions in enumerate(crossing_walks(rng, people, 12)):
         tracks = {}
         for node, mine in sensors.items():
@@ -413,9 +415,14 @@ def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined
             tracks[node] = observers[node].step(k, scan)
         link.send(Message("rsu", k, {key: t.estimate for key, t in tracks["rsu"].items()},
                           views["rsu"],
-                          frozenset(key for key, t in tracks["rsu"].items() if t.detected)),
+                          frozenset(key for key, t in tracks["rsu"].items() if t.detected),
+                          False, tracks["rsu"].ended, tracks["rsu"].ended_since),
                   0.0)
         link.deliver(k)
+        # what the nodes ended is handed to the unobserved area: here its sets, moved to now
+        handed = [model.predict(z) for z in handed]
+        handed += [model.predict(t.estimate, k - t.step)
+                   for t in (*tracks["bus"].ended_at(k), *link.take_ended())]
         shared = link.picture(k, model)
         estimate, clear = centre.step(tracks, shared, views["bus"],
                                       detected_now(tracks["bus"], shared))
@@ -428,5 +435,19 @@ def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined
         known = set(first_seen["bus"]) | {
             i for i, first in first_seen["rsu"].items() if first <= rsu_step}
         for i in known:
+            if covered(model, handed, positions[i]):
+                continue
             assert covered(model, estimate.fused.values(), positions[i]), (k, i)
             assert any(r.distance(Point(positions[i])) <= 1e-7 for r in possible.values()), (k, i)
+
+
+@pytest.mark.parametrize(("seed", "people"), [(9, 3), (94, 2), (204, 2)])
+def test_the_pipeline_keeps_the_pedestrians_of_the_cases_found_by_the_property(seed, people):
+    """9 and 204: a refined region cut empty by GEOS's difference with the view now, though
+    the pedestrian in it is 0.12 m (0.72 m) outside the view: the region's edges lay on the
+    view's, from the same cut a moment before. 94: a piece X ∩ d marked occupied (R8) though
+    d's pedestrian had been left out of X for another track's claim (R4); a step later the
+    empty track claimed that pedestrian's detection and the track holding it left it out."""
+    inner = test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined_region
+    inner.hypothesis.inner_test(seed=seed, people=people)
+
