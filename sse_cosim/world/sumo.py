@@ -141,9 +141,8 @@ def measure_walkers(net_path: Path, roadmap: RoadMap, extent: SceneExtent | None
     at ``net_path``) in ``extent`` (all for None), and where they leave its plain ground
     (:mod:`sse_cosim.world.walker_jitter`, cached)."""
     return walker_jitter.measure(
-        net_path, roadmap.net, extent,
-        walker_jitter.Ground(roadmap.ground), speed_mps, step_s,
-        radius_m, sumo_version())
+        net_path, roadmap.net, extent, roadmap.ground, speed_mps, step_s, radius_m,
+        sumo_version())
 
 
 @dataclass

@@ -40,8 +40,8 @@ of each walking area, so it is measured on the network itself:
   whose curve runs close beside the lone walker's; one that strays farther is stopped by the
   world's check, never missed); the road map adds the patches to its walkable ground
   (:attr:`sse_cosim.world.roadmap.RoadMap.walkable`), so it holds every position measured,
-  and the world checks every step that each pedestrian is on it. The ground is given as
-  geometry (:class:`Ground`).
+  and the world checks every step that each pedestrian is on it. The plain ground is given
+  as geometry.
 
 A run takes the largest over the junctions of the walking areas in its scene's extent
 (:mod:`sse_cosim.world.extent`: the pedestrians of a run cannot walk beyond it before the run
@@ -88,29 +88,21 @@ _EPS_M = 1e-9  # steps longer than v dt by rounding only need no jitter
 GROUND_BAND_M = 0.25  # how far a ground patch reaches around a lone walker's stretch off it (m)
 
 
-@dataclass(frozen=True)
-class Ground:
-    """The ground the measurement holds walkers to: the road map's sidewalks, walking areas and
-    crossings as the network draws them (``plain``)."""
-
-    plain: shapely.Geometry
-
-    def patch(self, runs: Sequence[np.ndarray]) -> shapely.Geometry:
-        """The ground patch that holds the walk pieces ``runs`` (each (k, 2)) where they are
-        off the plain ground: each stretch of consecutive positions off it, with the position
-        before and after, as a line dilated by :data:`GROUND_BAND_M` (a polygon holding the
-        disc dilation, :func:`~sse_cosim.estimation.occupancy.dilate`); empty if none is
-        off."""
-        lines = []
-        for xy in runs:
-            off = shapely.distance(self.plain, shapely.points(xy.reshape(-1, 2))) > 0.0
-            for first, last in _stretches(off):
-                piece = xy[max(first - 1, 0):last + 2]
-                lines.append(shapely.LineString(piece) if len(piece) > 1
-                             else shapely.Point(piece[0]))
-        if not lines:
-            return shapely.Polygon()
-        return dilate(shapely.union_all(lines), GROUND_BAND_M)
+def _patch_of(ground: shapely.Geometry, runs: Sequence[np.ndarray]) -> shapely.Geometry:
+    """The ground patch that holds the walk pieces ``runs`` (each (k, 2)) where they are off
+    the plain ``ground``: each stretch of consecutive positions off it, with the position
+    before and after, as a line dilated by :data:`GROUND_BAND_M` (a polygon holding the disc
+    dilation, :func:`~sse_cosim.estimation.occupancy.dilate`); empty if none is off."""
+    lines = []
+    for xy in runs:
+        off = shapely.distance(ground, shapely.points(xy.reshape(-1, 2))) > 0.0
+        for first, last in _stretches(off):
+            piece = xy[max(first - 1, 0):last + 2]
+            lines.append(shapely.LineString(piece) if len(piece) > 1
+                         else shapely.Point(piece[0]))
+    if not lines:
+        return shapely.Polygon()
+    return dilate(shapely.union_all(lines), GROUND_BAND_M)
 
 
 def _stretches(flags: np.ndarray) -> list[tuple[int, int]]:
@@ -176,7 +168,7 @@ class JitterCache:
 
     def junctions(self, key: str) -> dict[str, JunctionJitter]:
         return {jid: JunctionJitter(jid, e["jitter_m"], tuple(e["walk"]), tuple(e["step_lanes"]),
-                                    e["step_m"], _patch(e.get("ground_patch")))
+                                    e["step_m"], _from_wkb(e.get("ground_patch")))
                 for jid, e in self.entries.get(key, {}).items()}
 
     def add(self, key: str, found: Iterable[JunctionJitter]) -> None:
@@ -200,11 +192,11 @@ def cache_path(net_path: Path) -> Path:
 
 
 def measure(net_path: Path, net: sumolib.net.Net | None, extent: SceneExtent | None,
-            ground: Ground, speed_mps: float, step_s: float, radius_m: float,
+            ground: shapely.Geometry, speed_mps: float, step_s: float, radius_m: float,
             sumo_version: str) -> NetworkJitter:
     """The jitter SUMO's walkers need on the walking areas of ``net`` (the network at
     ``net_path``, read here if None) in ``extent`` (all of them for None), and each junction's
-    margin beyond ``ground``, measured where the cache lacks a junction or its margin."""
+    patch beyond the plain ``ground``, measured where the cache lacks a junction or its patch."""
     if net is None:
         net = sumolib.net.readNet(str(net_path), withInternal=True,
                                   withPedestrianConnections=True)
@@ -324,7 +316,7 @@ def _lead(edge: sumolib.net.edge.Edge, toward: str) -> float:
 
 
 def _walk_junctions(net_path: Path, net: sumolib.net.Net,
-                    areas: Sequence[sumolib.net.edge.Edge], ground: Ground,
+                    areas: Sequence[sumolib.net.edge.Edge], ground: shapely.Geometry,
                     speed_mps: float, step_s: float, radius_m: float) -> list[JunctionJitter]:
     walks = passages(net, areas)
     lengths = [sum(net.getEdge(e).getLength() for e in edges[1:-1]) + 2.0 * LEAD_M
@@ -349,19 +341,19 @@ def _walk_junctions(net_path: Path, net: sumolib.net.Net,
 
 
 def _ground_patch(net: sumolib.net.Net, walks: list[tuple[tuple[str, ...], WalkTrace]],
-                  ground: Ground) -> shapely.Geometry:
-    """The junction's ground patch (:meth:`Ground.patch`) over the stretches its walks spent on
-    its walking areas and crossings."""
+                  ground: shapely.Geometry) -> shapely.Geometry:
+    """The junction's ground patch (:func:`_patch_of`) beyond the plain ``ground``, over the
+    stretches its walks spent on its walking areas and crossings."""
     inner = {e for edges, _ in walks for e in edges
              if net.getEdge(e).getFunction() in ("walkingarea", "crossing")}
     runs = []
     for _, trace in walks:
         on = np.array([lane.rpartition("_")[0] in inner for lane in trace.lanes])
         runs.extend(trace.xy[first:last + 1] for first, last in _stretches(on))
-    return ground.patch(runs)
+    return _patch_of(ground, runs)
 
 
-def _patch(text: str | None) -> shapely.Geometry | None:
+def _from_wkb(text: str | None) -> shapely.Geometry | None:
     """A cached ground patch (hex WKB, exact), None for an entry without one."""
     return None if text is None else shapely.from_wkb(text)
 
