@@ -396,32 +396,33 @@ def _swept_walkable(route_line: shapely.LineString, corridor: shapely.Geometry,
                     walkable: shapely.Geometry) -> list[tuple[shapely.Geometry, float, float]]:
     """Each connected piece of walkable ground inside the ``corridor`` around the route, cut
     into pieces of about :data:`ZONE_PIECE_M` along it (:func:`_cut_along`), with its extent
-    along the route (min and max of its vertices' projections), in route order."""
-    pieces = []
-    for whole in shapely.get_parts(shapely.intersection(corridor, walkable)):
-        for part in _cut_along(whole, route_line, corridor):
-            if part.area <= 0.0:
-                continue
-            along = [route_line.project(shapely.Point(p)) for p in shapely.get_coordinates(part)]
-            pieces.append((part, min(along), max(along)))
+    along the route (:func:`_extent`), in route order."""
+    reach = shapely.hausdorff_distance(corridor, route_line) + 1.0  # beyond every corridor point
+    pieces = [piece for whole in shapely.get_parts(shapely.intersection(corridor, walkable))
+              if whole.area > 0.0 for piece in _cut_along(whole, route_line, reach)]
     return sorted(pieces, key=lambda piece: piece[1])
 
 
+def _extent(part: shapely.Geometry, route_line: shapely.LineString) -> tuple[float, float]:
+    """``part``'s extent along the route (m): the min and max of its vertices' projections."""
+    along = shapely.line_locate_point(route_line, shapely.points(shapely.get_coordinates(part)))
+    return float(along.min()), float(along.max())
+
+
 def _cut_along(part: shapely.Geometry, route_line: shapely.LineString,
-               corridor: shapely.Geometry) -> list[shapely.Geometry]:
-    """``part`` cut into polygons each within about :data:`ZONE_PIECE_M` of route along it:
-    ``part`` ∩ the route's stretch [a - d, b + d] widened by the corridor's reach (flat ends),
-    for consecutive [a, b] of that length (d = :data:`_CUT_OVERLAP_M`: overlapping stretches
-    leave no gap at a bend). The pieces must cover ``part`` (checked: else ``part`` stays
-    whole), so every place of it is in a zone; they may overlap, which only repeats a place.
+               reach: float) -> list[tuple[shapely.Geometry, float, float]]:
+    """``part`` cut into polygons each within about :data:`ZONE_PIECE_M` of route along it,
+    each with its extent (:func:`_extent`): ``part`` ∩ the route's stretch [a - d, b + d]
+    widened by ``reach`` (farther than any point of the corridor; flat ends), for consecutive
+    [a, b] of that length (d = :data:`_CUT_OVERLAP_M`: overlapping stretches leave no gap at a
+    bend). The pieces must cover ``part`` (checked: else ``part`` stays whole), so every place
+    of it is in a zone; they may overlap, which only repeats a place.
 
     Why: a long strip of kerb inside the corridor (sidewalk slivers joined at a walking area)
     would be one zone the bus has to clear whole before anyone could reach any of it."""
-    along = [route_line.project(shapely.Point(p)) for p in shapely.get_coordinates(part)]
-    first, last = min(along), max(along)
+    first, last = _extent(part, route_line)
     if last - first <= ZONE_PIECE_M:
-        return [part]
-    reach = shapely.hausdorff_distance(corridor, route_line) + 1.0
+        return [(part, first, last)]
     count = math.ceil((last - first) / ZONE_PIECE_M)
     edges = np.linspace(first, last, count + 1)
     cuts = []
@@ -432,8 +433,8 @@ def _cut_along(part: shapely.Geometry, route_line: shapely.LineString,
             part, stretch.buffer(reach, cap_style="flat"))))
     cuts = [c for c in cuts if c.area > 0.0]
     if shapely.difference(part, shapely.union_all(cuts)).area > _CUT_COVER_M2:
-        return [part]
-    return cuts
+        return [(part, first, last)]
+    return [(cut, *_extent(cut, route_line)) for cut in cuts]
 
 
 def route_lanes(roadmap: RoadMap, route_edges: Sequence[str]) -> list[tuple[np.ndarray, float]]:

@@ -106,7 +106,7 @@ def test_the_front_stays_on_the_band_the_rear_swings_out_and_the_side_cuts_in(
     rear = shapely.distance(band, shapely.points(rectangles[:, [0, 3]].reshape(-1, 2)))
     assert float(front.max()) <= TOLERANCE_M  # SUMO's front corners never leave the band
     assert 0.9 < float(rear.max()) < 1.0  # 0.96 m: the rear's outer corner swinging out
-    walkable = shapely.union(roadmap.sidewalks, roadmap.crossing_area)
+    walkable = roadmap.ground
     over = shapely.intersection(shapely.polygons(rectangles), walkable)  # (k,)
     cut_in = shapely.distance(band, shapely.points(shapely.get_coordinates(over)))
     assert 2.1 < float(cut_in.max()) < 2.4  # 2.24 m: the side over the corners' walkable ground
@@ -119,7 +119,7 @@ def test_a_pedestrian_where_the_front_cuts_the_corner_is_in_the_way(town_run) ->
     radius = sc.pedestrian_radius_m()
     line = roadmap.route_line(ROUTE)
     band = line.buffer(0.5 * bus.width_m, cap_style="flat")
-    assert spot.within(shapely.union(roadmap.sidewalks, roadmap.crossing_area))
+    assert spot.within(roadmap.ground)
     beyond = band.distance(spot)
     assert 1.0 < beyond < 1.2  # 1.11 m beyond the band: the old zones missed it
     # SUMO's body covers the spot, and the first footprint to reach it holds it within the
