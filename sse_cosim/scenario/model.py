@@ -193,6 +193,14 @@ class Estimator(StrictModel):
         5.0,
         description="Bound on a velocity component's change per step (m/s); constant velocity.",
     )
+    max_pedestrian_accel_mps2: PositiveFloat = Field(
+        3.2,
+        description="Acceleration bound (m/s²) of the 'bounded-acceleration' model: no "
+        "pedestrian's path speeds up, slows down or turns faster (Fugger et al. 2000: "
+        "0.14 ± 0.09 g from standstill at crosswalks; 3.2 m/s² is above their mean plus two "
+        "standard deviations; docs/method.md). With that model the world ramps every SUMO "
+        "walker's speed within it and checks it every step.",
+    )
     gain_method: str = Field(
         "enclose", description="Correction: 'enclose' (the exact 2-D intersection enclosed in a "
         "zonotope; the tightest) or a Proposition 1 gain (sets.gains)."

@@ -12,8 +12,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from sse_cosim.estimation.motion import constant_velocity, position
-from sse_cosim.estimation.motion.base import POSITION_MEMO, LinearModel, MotionModel
+from sse_cosim.estimation.motion import bounded_acceleration, constant_velocity, position
+from sse_cosim.estimation.motion.base import POSITION_MEMO, LinearModel, MotionModel, Separation
 
 if TYPE_CHECKING:
     from sse_cosim.scenario.model import Estimator
@@ -23,7 +23,8 @@ Builder = Callable[["Estimator", float, float], MotionModel]
 
 MODELS: dict[str, Builder] = {
     module.NAME: module.build
-    for module in (position, constant_velocity)  # the registration: one entry per model
+    # the registration: one entry per model
+    for module in (position, constant_velocity, bounded_acceleration)
 }
 
 
@@ -37,4 +38,4 @@ def motion_model(config: Estimator, step_length: float) -> MotionModel:
     return MODELS[config.state_model](config, step_length, config.position_jitter_m)
 
 
-__all__ = ["MODELS", "POSITION_MEMO", "LinearModel", "MotionModel", "motion_model"]
+__all__ = ["MODELS", "POSITION_MEMO", "LinearModel", "MotionModel", "Separation", "motion_model"]

@@ -91,6 +91,11 @@ class MotionModel(Protocol):
     def initial_set(self, strips: Strips, gain_method: str) -> Zonotope:
         """A first state set from path strips (m, 2)."""
 
+    @property
+    def acceleration_bound_mps2(self) -> float | None:
+        """a_max (m/s²) if the model bounds the path's acceleration (the world then ramps its
+        walkers' speeds and checks the bound), else None."""
+
     def reach_m(self, steps: int = 1, state: Zonotope | None = None) -> float:
         """How far (m) a path point, with its state in ``state`` (None: unknown), can move in
         ``steps`` steps: every polygon layer grows a path region by this disc."""
@@ -100,10 +105,22 @@ class MotionModel(Protocol):
         """How far (m) a path point can move while something at ``speed_mps`` (> 0) covers
         ``distance_m``."""
 
-    def earliest_arrival_s(self, distance_m: np.ndarray,
-                           state: Zonotope | None = None) -> np.ndarray:
+    def earliest_arrival_s(self, distance_m: np.ndarray, state: Zonotope | None = None,
+                           separation: Separation | None = None) -> np.ndarray:
         """The earliest time (s) a pedestrian whose position is ``distance_m`` (shape (z,))
-        from a place can be in it."""
+        from each of z places can be in it; ``state``: its state set, if known;
+        ``separation``: how far its position must move along each direction of a fan to be
+        in each place."""
+
+
+@dataclass(frozen=True)
+class Separation:
+    """How far a pedestrian's position must move along each of K unit ``directions`` (K, 2) to
+    be in each of z places: ``gaps_m`` (z, K), the least n.q over the place minus the largest
+    n.p over the pedestrian's region (negative where the two overlap along n)."""
+
+    directions: np.ndarray
+    gaps_m: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -140,6 +157,11 @@ class LinearModel:
     def dim(self) -> int:
         return int(self.transition.shape[0])
 
+    @property
+    def acceleration_bound_mps2(self) -> float | None:
+        """None: a linear model alone bounds the speed, not the acceleration."""
+        return None
+
     def reach_m(self, steps: int = 1, state: Zonotope | None = None) -> float:
         """v_max dt ``steps``: how far a path point can move in ``steps`` steps, whatever its
         state (``state`` is ignored)."""
@@ -152,11 +174,11 @@ class LinearModel:
         ``state`` is ignored)."""
         return self.max_speed * distance_m / speed_mps
 
-    def earliest_arrival_s(self, distance_m: np.ndarray,
-                           state: Zonotope | None = None) -> np.ndarray:
+    def earliest_arrival_s(self, distance_m: np.ndarray, state: Zonotope | None = None,
+                           separation: Separation | None = None) -> np.ndarray:
         """max(0, d - 2 eps) / v_max for each distance d (m), shape (z,): the earliest time a
-        pedestrian whose position p = s + e lies d from a zone can be in it (``state`` is
-        ignored).
+        pedestrian whose position p = s + e lies d from a zone can be in it (``state`` and
+        ``separation`` are ignored).
 
         The path s is within eps of p, moves at most v_max per second, and the position in the
         zone is within eps of its path, so the path covers at least d - 2 eps. The
