@@ -38,4 +38,12 @@ def motion_model(config: Estimator, step_length: float) -> MotionModel:
     return MODELS[config.state_model](config, step_length, config.position_jitter_m)
 
 
-__all__ = ["MODELS", "POSITION_MEMO", "LinearModel", "MotionModel", "Separation", "motion_model"]
+def acceleration_bound(config: Estimator, step_length: float) -> float | None:
+    """a_max (m/s²) of the model ``config`` names, None if it does not bound the acceleration:
+    what the world must keep (it ramps its walkers' speeds within it and checks it), asked
+    before the jitter is measured."""
+    return MODELS[config.state_model](config, step_length, 0.0).acceleration_bound_mps2
+
+
+__all__ = ["MODELS", "POSITION_MEMO", "LinearModel", "MotionModel", "Separation",
+           "acceleration_bound", "motion_model"]
