@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import shapely
 
-from sse_cosim.control.picture import SceneContext, assess
+from sse_cosim.control.picture import SceneContext, Source, assess
 from sse_cosim.control.swept import RoutePath, body_sweep, chord_footprint, swept_region
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.world.roadmap import RoadMap
@@ -74,7 +74,7 @@ def assert_in_the_way(context: SceneContext, spot: shapely.Point, radius: float,
         assert any(z.start_m <= station <= z.end_m + context.bus.length_m for z in zones), station
     front = shapely.get_coordinates(context.route_line.interpolate(front_m))[0]
     seen = assess(context, front, 6.0, shapely.Polygon(), shapely.Polygon(),
-                  [spot.buffer(0.05)], [spot.buffer(0.05)])
+                  [Source(spot.buffer(0.05))], [Source(spot.buffer(0.05))])
     outlooks = [o for o in seen.zones if any(context.zones[o.index] is z for z in zones)]
     assert outlooks
     assert all(o.arrival_s == 0.0 and o.in_view_arrival_s == 0.0 for o in outlooks)

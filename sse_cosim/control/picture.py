@@ -20,14 +20,20 @@ the bus has to clear each before anyone could reach it, not the whole strip at o
 Every step the picture says, per zone ahead, the **earliest arrival**: the soonest any
 pedestrian can be in the zone, from each known pedestrian's refined region and every walkable
 place where an undetected pedestrian may be. The motion model gives it
-(:meth:`~sse_cosim.estimation.motion.MotionModel.earliest_arrival_s`); for the registered
-speed-bounded models (the region holds the position p = s + e, the path s moves at most v per
-second, and the position strays at most eps from it):
+(:meth:`~sse_cosim.estimation.motion.MotionModel.earliest_arrival_s`); for the speed-bounded
+models (the region holds the position p = s + e, the path s moves at most v per second, and
+the position strays at most eps from it):
 
     arrival = max(0, distance(source, zone) - 2 eps) / v.
 
 The straight-line distance never exceeds the walk on walkable ground, so the arrival is an
-under-estimate: sound. The speed policies (:mod:`sse_cosim.control.speed`) decide on it.
+under-estimate: sound. A known pedestrian's source also carries its fused state set
+(:class:`Source`): a model that bounds the acceleration raises the arrival with the state's
+velocity set, from how far the region must move along each of :data:`ARRIVAL_DIRECTIONS`
+directions to reach the zone (:class:`~sse_cosim.estimation.motion.Separation`: the zone's
+least and the region's largest extent along each direction, from their vertices, so the bound
+holds for any shape). Hidden ground carries no state: an undetected pedestrian may be moving
+at v_max toward the zone. The speed policies (:mod:`sse_cosim.control.speed`) decide on it.
 
 Hidden ground is tracked in a *window*: within ``interest_radius_m`` of every crossing on the
 route and of every conflict zone; walkable ground outside it always counts as occupied. The
@@ -49,13 +55,26 @@ import shapely.ops
 
 from sse_cosim.control.kinematics import BusDynamics
 from sse_cosim.control.swept import RoutePath, SweepPiece, body_sweep, swept_region, touch_extent
-from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.motion import MotionModel, Separation
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
+from sse_cosim.sets import Zonotope
 from sse_cosim.world.roadmap import RoadMap
 
 ZONE_PIECE_M = 4.0  # conflict zones are cut into pieces about this long along the route (m)
 _CUT_OVERLAP_M = 0.5  # consecutive pieces overlap by twice this along the route (m)
 _CUT_COVER_M2 = 1e-9  # what the cut pieces may leave of a zone uncovered, by rounding (m²)
+ARRIVAL_DIRECTIONS = 32  # fan of directions along which a known pedestrian's gap is measured
+_ANGLES = np.arange(ARRIVAL_DIRECTIONS) * (2.0 * math.pi / ARRIVAL_DIRECTIONS)
+FAN = np.column_stack([np.cos(_ANGLES), np.sin(_ANGLES)])  # (K, 2) unit directions
+
+
+@dataclass(frozen=True)
+class Source:
+    """Where a pedestrian may be (``region``) and, for a known one, its fused state set
+    (``state``; None: unknown, the model's worst case)."""
+
+    region: shapely.Geometry
+    state: Zonotope | None = None
 
 
 @dataclass(frozen=True)
@@ -69,6 +88,12 @@ class ConflictZone:
     start_m: float
     end_m: float
     beyond_arrival_s: float
+
+    @cached_property
+    def least_along(self) -> np.ndarray:
+        """min over the zone's vertices q of n.q for each direction n of :data:`FAN`, shape
+        (K,) (computed once)."""
+        return (shapely.get_coordinates(self.polygon) @ FAN.T).min(axis=0)
 
 
 @dataclass(frozen=True)
@@ -115,8 +140,7 @@ class SceneContext:
         window = _window(crossings, swept, config.interest_radius_m)
         beyond = shapely.difference(walkable, window)
         zones = tuple(
-            ConflictZone(polygon, start, end,
-                         _arrival([beyond], polygon, pedestrians))
+            ConflictZone(polygon, start, end, _arrival(Source(beyond), polygon, pedestrians))
             for polygon, start, end in swept)
         return cls(route_line, walkable, crossings, bus, config, pedestrians,
                    BusDynamics.of(bus, config, step_length), window, zones)
@@ -215,8 +239,8 @@ def assess(
     speed: float,
     own_occluded: shapely.Geometry,
     unobserved: shapely.Geometry,
-    pedestrian_regions: Iterable[shapely.Geometry],
-    in_view: Iterable[shapely.Geometry] = (),
+    pedestrian_regions: Iterable[Source],
+    in_view: Iterable[Source] = (),
     in_view_beyond: bool = False,
     floors: Mapping[int, float] | None = None,
 ) -> Picture:
@@ -225,8 +249,8 @@ def assess(
     ``front_xy`` (2,) is the bus's front bumper; ``speed`` its actual speed; ``own_occluded``
     what its sensors' shadows hide inside their fields of view; ``unobserved`` the walkable
     area where a pedestrian nobody detected may be (every node's views, shared ones included);
-    ``pedestrian_regions`` where each known pedestrian may be, unless outside the window;
-    ``in_view`` the regions among them of the pedestrians some node detects now;
+    ``pedestrian_regions`` where each known pedestrian may be, unless outside the window, with
+    its state set; ``in_view`` those among them of the pedestrians some node detects now;
     ``in_view_beyond``: whether one of those may be outside the window instead; ``floors``:
     zone index -> an earliest arrival known from earlier steps (:func:`arrival_floors`).
     """
@@ -241,14 +265,15 @@ def assess(
     relevant = _around(crossing.area, reach) if crossing is not None and reach > 0 \
         else shapely.Polygon()
     hidden_in_reach = shapely.intersection(own_hidden, relevant)
-    sets = [s for s in pedestrian_regions if not s.is_empty]
+    known = [s for s in pedestrian_regions if not s.region.is_empty]
+    sets = [s.region for s in known]
     # the corridors ahead only matter to a known pedestrian's region: none, none built
     near_path = context.path_ahead(front_s, cfg.crossing_horizon_m, cfg.path_margin_m) \
         if sets else shapely.Polygon()
     stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0) \
         if sets else shapely.Polygon()
-    zones = _outlook(context, front_s, [unobserved, *sets],
-                     [s for s in in_view if not s.is_empty], in_view_beyond, floors or {})
+    zones = _outlook(context, front_s, [Source(unobserved), *known],
+                     [s for s in in_view if not s.region.is_empty], in_view_beyond, floors or {})
     return Picture(
         front_s=float(front_s),
         speed_mps=float(speed),
@@ -308,8 +333,8 @@ class ArrivalMemory:
         self._last = None if inconsistent else (step, picture)
 
 
-def _outlook(context: SceneContext, front_s: float, sources: Sequence[shapely.Geometry],
-             in_view: Sequence[shapely.Geometry], in_view_beyond: bool,
+def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
+             in_view: Sequence[Source], in_view_beyond: bool,
              floors: Mapping[int, float]) -> tuple[ZoneOutlook, ...]:
     """The zones the bus has not yet cleared, with the earliest arrival from ``sources`` (and
     from beyond the window; never before its ``floors``) and from the pedestrians in view
@@ -318,9 +343,9 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[shapely.Ge
     ahead = [(index, zone, zone.end_m + context.bus.length_m - front_s)
              for index, zone in enumerate(context.zones)]
     ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead if to_clear > 0.0]
-    polygons = [zone.polygon for _, zone, _ in ahead]
-    arrivals = _arrivals(sources, polygons, context.pedestrians)
-    in_view_arrivals = _arrivals(in_view, polygons, context.pedestrians)
+    zones = [zone for _, zone, _ in ahead]
+    arrivals = _arrivals(sources, zones, context.pedestrians)
+    in_view_arrivals = _arrivals(in_view, zones, context.pedestrians)
     return tuple(
         ZoneOutlook(index, zone.start_m - front_s, to_clear,
                     max(min(zone.beyond_arrival_s, float(arrival)), floors.get(index, 0.0)),
@@ -330,22 +355,35 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[shapely.Ge
         in zip(ahead, arrivals, in_view_arrivals, strict=True))
 
 
-def _arrivals(sources: Iterable[shapely.Geometry], zones: Sequence[shapely.Geometry],
+def _arrivals(sources: Iterable[Source], zones: Sequence[ConflictZone],
               pedestrians: MotionModel) -> np.ndarray:
     """Earliest time (s) a pedestrian somewhere in ``sources`` can be in each of ``zones``,
-    shape (z,) (inf without a source): the model's arrival from the nearest source."""
-    parts = [s for s in sources if not s.is_empty]
+    shape (z,) (inf without a source): the soonest of the model's arrivals from each source
+    (the stateless ones from their nearest, as one)."""
+    parts = [s for s in sources if not s.region.is_empty]
     if not parts or not zones:
         return np.full(len(zones), math.inf)
-    distances = shapely.distance(np.array(parts, dtype=object)[:, None],
-                                 np.array(zones, dtype=object)[None, :])  # (s, z)
-    return pedestrians.earliest_arrival_s(distances.min(axis=0))
+    polygons = np.array([zone.polygon for zone in zones], dtype=object)[None, :]
+    distances = shapely.distance(np.array([s.region for s in parts], dtype=object)[:, None],
+                                 polygons)  # (s, z)
+    stateless = [i for i, s in enumerate(parts) if s.state is None]
+    arrival = np.full(len(zones), math.inf)
+    if stateless:
+        arrival = pedestrians.earliest_arrival_s(distances[stateless].min(axis=0))
+    least = np.array([zone.least_along for zone in zones])  # (z, K)
+    for i, source in enumerate(parts):
+        if source.state is None:
+            continue
+        largest = (shapely.get_coordinates(source.region) @ FAN.T).max(axis=0)  # (K,)
+        separation = Separation(FAN, least - largest[None, :])
+        arrival = np.minimum(arrival, pedestrians.earliest_arrival_s(
+            distances[i], source.state, separation))
+    return arrival
 
 
-def _arrival(sources: Iterable[shapely.Geometry], zone: shapely.Geometry,
-             pedestrians: MotionModel) -> float:
-    """Earliest time (s) a pedestrian somewhere in ``sources`` can be in ``zone``."""
-    return float(_arrivals(sources, [zone], pedestrians)[0])
+def _arrival(source: Source, zone: shapely.Geometry, pedestrians: MotionModel) -> float:
+    """Earliest time (s) a pedestrian somewhere in ``source`` can be in ``zone``."""
+    return float(_arrivals([source], [ConflictZone(zone, 0.0, 0.0, math.inf)], pedestrians)[0])
 
 
 def route_stations(line: shapely.LineString) -> np.ndarray:

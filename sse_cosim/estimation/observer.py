@@ -23,7 +23,7 @@ from shapely.geometry.base import BaseGeometry
 
 from sse_cosim.estimation import track_kernels
 from sse_cosim.estimation.association import AnonymousDetection, Association, associate
-from sse_cosim.estimation.correction import Suspicion, correct
+from sse_cosim.estimation.correction import Suspicion, TrackCorrection, correct
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import EndedTrack
 from sse_cosim.estimation.vote import CONSISTENCY_TOL
@@ -91,6 +91,9 @@ class NodeObserver:
         self.settings = settings
         self.tracks: dict[str, Track] = {}
         self._suspicion: dict[str, Suspicion] = {}  # person id -> sensors held out
+        # person id -> step -> the path strips its correction used then, for the model's
+        # velocity windows (kept as far back as the longest)
+        self._used: dict[str, dict[int, Strips]] = {}
 
     def step(
         self, step: int, detections: Mapping[str, Sequence[Strips] | Mapping[str, Strips]]
@@ -120,13 +123,38 @@ class NodeObserver:
         update = correct(self.model, self.settings.gain_method, predicted, strips,
                          self._suspicion.get(person_id, Suspicion()))
         self._suspicion[person_id] = update.suspicion
-        estimate = update.estimate
+        estimate = self._with_windows(step, person_id, update, strips)
         if self.model.state_bounds is not None:
             estimate = intersect_strips(
                 estimate, self.model.state_bounds, self.settings.gain_method
             )
         estimate = estimate.reduce(self.settings.max_generators, self.settings.reduction_method)
         return Track(person_id, estimate, step, bool(strips), update.flagged, update.conflict)
+
+    def _with_windows(self, step: int, person_id: str, update: TrackCorrection,
+                      strips: Mapping[str, Strips]) -> Zonotope:
+        """The corrected set cut by the path strips this track used ``model.velocity_windows``
+        steps ago, moved to now (:meth:`MotionModel.velocity_strips`); this step's used ones
+        are kept for later steps (none after a conflict: the node could not tell whom to
+        trust)."""
+        windows = self.model.velocity_windows
+        if not windows:
+            return update.estimate
+        kept = self._used.setdefault(person_id, {})
+        for old in [k for k in kept if k <= step - max(windows)]:
+            del kept[old]
+        past = [self.model.velocity_strips(kept[step - n], n) for n in windows
+                if step - n in kept]
+        used = [self.model.path_strips(s) for name, s in strips.items()
+                if name not in update.flagged]
+        if used and not update.conflict:
+            kept[step] = Strips.stack(used)
+        estimate = update.estimate
+        for strips_then in past:  # each window kept only where it narrows the velocity
+            cut = intersect_strips(estimate, strips_then, self.settings.gain_method)
+            if _velocity_width(cut) < _velocity_width(estimate):
+                estimate = cut
+        return estimate
 
     def _plain_tracks(self, step: int, by_sensor: Mapping[str, Mapping[str, Strips]]
                       ) -> dict[str, Track]:
@@ -179,6 +207,11 @@ class NodeObserver:
                 and self.model.state_bounds is None
                 and self.settings.gain_method in track_kernels.GAIN_CODES
                 and self.settings.reduction_method == "girard")
+
+
+def _velocity_width(estimate: Zonotope) -> float:
+    """The widths of a (position, velocity) set's velocity interval hull, summed (m/s)."""
+    return float(np.abs(estimate.generators[2:]).sum())
 
 
 def _unsuspected(suspicion: Suspicion | None) -> bool:

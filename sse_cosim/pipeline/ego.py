@@ -18,7 +18,7 @@ from typing import Protocol
 import numpy as np
 import shapely
 
-from sse_cosim.control.picture import ArrivalMemory, Picture, SceneContext, assess
+from sse_cosim.control.picture import ArrivalMemory, Picture, SceneContext, Source, assess
 from sse_cosim.control.speed import Decision, fallback_floor, make_policy
 from sse_cosim.estimation.fusion_centre import BusEstimate
 from sse_cosim.estimation.motion import MotionModel
@@ -109,10 +109,12 @@ class Ego:
             step, union_or_empty(o.visible for o in views), received.fresh_views,
             [*received.ended, *(own.ended_at(step) if own is not None else ())])
         timer.lap("occupancy")
+        sources = {key: Source(region, estimate.fused.get(key) if self.known.with_states
+                               else None) for key, region in possible.items()}
         picture = assess(
             self.context, me.footprint.front.position, me.speed,
-            union_or_empty(o.occluded for o in views), unknown, list(possible.values()),
-            [region for key, region in possible.items() if key in estimate.in_view],
+            union_or_empty(o.occluded for o in views), unknown, list(sources.values()),
+            [source for key, source in sources.items() if key in estimate.in_view],
             in_view_beyond=not self.known.beyond.isdisjoint(estimate.in_view),
             floors=self.arrivals.floors(step, estimate.flags.inconsistent),
         )

@@ -265,6 +265,7 @@ class KnownRegions(Protocol):
     ``beyond``: the keys whose pedestrian may instead be outside the tracked window."""
 
     beyond: frozenset[str]
+    with_states: bool  # whether each region is about the fused state set of the same key
 
     def update(self, step: int, observations: Observations, estimate: BusEstimate,
                clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, shapely.Geometry]: ...
@@ -277,6 +278,8 @@ class RefinedRegions:
     ``history`` it is forgotten every step: a fused track of anonymous tracks names no
     pedestrian, and may hold another one at the next step (a merge, or a newcomer inside its
     set), whom the previous step's region need not hold."""
+
+    with_states = True  # each region refines the fused set of its key
 
     def __init__(self, tracker: OccupancyTracker, history: bool = True) -> None:
         self.tracker = tracker
@@ -301,6 +304,7 @@ class KalmanRegions:
     detections (:mod:`sse_cosim.estimation.kalman`), in place of the refined sets."""
 
     beyond: frozenset[str] = frozenset()  # its ellipses are not kept in a window
+    with_states = False  # its ellipses are not the fused sets' (baseline, not guaranteed)
 
     def __init__(self, tracker: KalmanTracker) -> None:
         self.tracker = tracker

@@ -12,8 +12,10 @@ from shapely.ops import substring
 
 from sse_cosim.control.picture import (
     ArrivalMemory,
+    ConflictZone,
     Picture,
     SceneContext,
+    Source,
     _around,
     _arrivals,
     arrival_floors,
@@ -94,8 +96,8 @@ def test_a_pedestrian_in_the_lane_ahead_triggers_an_emergency_stop(context):
     in_lane = shapely.Point(front + np.array([10.0, 0.0])).buffer(0.5)
     on_far_sidewalk = shapely.Point(front[0] + 10.0, 7.0).buffer(0.5)
     empty = shapely.Polygon()
-    stop = assess(context, front, 14.0, empty, empty, [in_lane])
-    clear = assess(context, front, 14.0, empty, empty, [on_far_sidewalk])
+    stop = assess(context, front, 14.0, empty, empty, [Source(in_lane)])
+    clear = assess(context, front, 14.0, empty, empty, [Source(on_far_sidewalk)])
     assert stop.pedestrian_in_stopping_distance and stop.pedestrian_near_path
     assert not clear.pedestrian_near_path and not clear.pedestrian_in_stopping_distance
 
@@ -131,7 +133,7 @@ def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
     south = zone.polygon.bounds[1]
     pedestrian = shapely.Point(200.0, south - 5.0).buffer(0.5)  # 4.5 m from the zone
     empty = shapely.Polygon()
-    result = assess(context, front, 10.0, empty, empty, [pedestrian])
+    result = assess(context, front, 10.0, empty, empty, [Source(pedestrian)])
     (outlook,) = result.zones
     eps, speed = context.pedestrians.jitter, context.pedestrians.max_speed
     assert outlook.arrival_s == pytest.approx((4.5 - 2 * eps) / speed, abs=1e-3)
@@ -140,9 +142,9 @@ def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
                                                + context.bus.length_m, abs=1e-6)
     at_zebra = np.array(context.route_line.interpolate(start - 3.0).coords[0])
     # from standstill the bus needs about 5 s to clear the zebra: 1.6 s is too short
-    assert not assess(context, at_zebra, 0.0, empty, empty, [pedestrian]).path_clear
+    assert not assess(context, at_zebra, 0.0, empty, empty, [Source(pedestrian)]).path_clear
     far = shapely.Point(200.0, south - 40.0).buffer(0.5)
-    assert assess(context, at_zebra, 0.0, empty, empty, [far]).path_clear
+    assert assess(context, at_zebra, 0.0, empty, empty, [Source(far)]).path_clear
 
 
 def front_before_zebra(context: SceneContext, metres: float) -> np.ndarray:
@@ -157,8 +159,9 @@ def test_a_pedestrian_in_view_who_may_be_beyond_the_window_arrives_as_early_as_f
     (zone,) = context.zones
     empty = shapely.Polygon()
     far = shapely.Point(200.0, zone.polygon.bounds[1] - 20.0).buffer(0.5)
-    inside = assess(context, front, 10.0, empty, empty, [far], [far])
-    beyond = assess(context, front, 10.0, empty, empty, [far], [far], in_view_beyond=True)
+    inside = assess(context, front, 10.0, empty, empty, [Source(far)], [Source(far)])
+    beyond = assess(context, front, 10.0, empty, empty, [Source(far)], [Source(far)],
+                    in_view_beyond=True)
     assert zone.beyond_arrival_s < inside.zones[0].in_view_arrival_s < np.inf
     assert beyond.zones[0].in_view_arrival_s == zone.beyond_arrival_s
     assert beyond.zones[0].arrival_s == inside.zones[0].arrival_s == zone.beyond_arrival_s
@@ -172,13 +175,13 @@ def test_an_arrival_comes_at_most_the_elapsed_time_sooner_than_the_last_picture_
     south = zone.polygon.bounds[1]
     far = shapely.Point(200.0, south - 8.0).buffer(0.5)
     near = shapely.Point(200.0, south - 2.0).buffer(0.5)  # the set grew faster than the bound
-    before = assess(context, front, 10.0, empty, empty, [far])
+    before = assess(context, front, 10.0, empty, empty, [Source(far)])
     floors = arrival_floors(before, 0.1)
     assert floors == {0: pytest.approx(before.zones[0].arrival_s - 0.1)}
-    now = assess(context, front, 10.0, empty, empty, [near], floors=floors)
+    now = assess(context, front, 10.0, empty, empty, [Source(near)], floors=floors)
     assert now.zones[0].arrival_s == pytest.approx(before.zones[0].arrival_s - 0.1)
-    assert assess(context, front, 10.0, empty, empty, [near]).zones[0].arrival_s < floors[0]
-    nearer_later = assess(context, front, 10.0, empty, empty, [far], floors={0: 0.0})
+    assert assess(context, front, 10.0, empty, empty, [Source(near)]).zones[0].arrival_s < floors[0]
+    nearer_later = assess(context, front, 10.0, empty, empty, [Source(far)], floors={0: 0.0})
     assert nearer_later.zones[0].arrival_s == before.zones[0].arrival_s  # sets count too
 
 
@@ -188,7 +191,7 @@ def test_floors_come_only_from_a_picture_made_while_consistent(context):
     front = front_before_zebra(context, 40.0)
     empty = shapely.Polygon()
     far = shapely.Point(200.0, context.zones[0].polygon.bounds[1] - 8.0).buffer(0.5)
-    picture = assess(context, front, 10.0, empty, empty, [far])
+    picture = assess(context, front, 10.0, empty, empty, [Source(far)])
     memory = ArrivalMemory(0.1)
     assert memory.floors(1, inconsistent=False) == {}
     memory.keep(1, picture, inconsistent=False)
@@ -212,10 +215,12 @@ def test_arrivals_in_one_call_are_the_earliest_arrival_of_each_zone():
         sources = [shapely.box(x, y, x + w, y + h).buffer(rng.uniform(0.0, 1.0), quad_segs=2)
                    for x, y, w, h in rng.uniform(0.0, 20.0, size=(rng.integers(1, 4), 4))]
         zones = [shapely.box(x, y, x + 3.0, y + 2.0) for x, y in rng.uniform(0.0, 30.0, (3, 2))]
-        got = _arrivals([shapely.Polygon(), *sources], zones, pedestrians)
+        got = _arrivals([Source(g) for g in (shapely.Polygon(), *sources)],
+                        [ConflictZone(z, 0.0, 0.0, np.inf) for z in zones], pedestrians)
         expected = [max(0.0, min(s.distance(z) for s in sources) - 0.6) / 1.5 for z in zones]
         assert got.tolist() == expected
-    assert _arrivals([shapely.Polygon()], zones, pedestrians).tolist() == [np.inf] * 3
+    as_zones = [ConflictZone(z, 0.0, 0.0, np.inf) for z in zones]
+    assert _arrivals([Source(shapely.Polygon())], as_zones, pedestrians).tolist() == [np.inf] * 3
 
 
 def test_route_pieces_are_shapelys_substrings(context):

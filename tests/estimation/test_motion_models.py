@@ -11,7 +11,7 @@ import pytest
 import shapely
 from pydantic import ValidationError
 
-from sse_cosim.control.picture import _arrivals
+from sse_cosim.control.picture import ConflictZone, Source, _arrivals
 from sse_cosim.estimation.motion import MODELS, LinearModel, motion_model
 from sse_cosim.estimation.occupancy import UnobservedArea
 from sse_cosim.scenario.model import Estimator
@@ -31,13 +31,14 @@ def config(state_model: str) -> Estimator:
 @pytest.mark.parametrize("name", list(MODELS))
 def test_every_registered_model_reaches_as_far_and_arrives_as_soon_as_the_position_model(name):
     """Without a state set (an undetected pedestrian: any velocity within v_max) every model's
-    reach is v_max dt per step and its arrival max(0, d - 2 eps) / v_max; the registered
-    speed-bounded models ignore a state set."""
+    reach is v_max dt per step and its arrival max(0, d - 2 eps) / v_max; the speed-bounded
+    models ignore a state set (the bounded-acceleration one uses it:
+    test_bounded_acceleration.py)."""
     model = motion_model(config(name), DT)
     state = Zonotope(np.zeros(model.dim), np.eye(model.dim))
     distances = np.array([0.0, 0.5, 2 * JITTER, 1.0, 7.25, 40.0])
     expected = np.array([max(0.0, d - 2 * JITTER) / SPEED for d in distances])
-    for given in (None, state):
+    for given in (None, state) if model.acceleration_bound_mps2 is None else (None,):
         for steps in (0, 1, 3, 17):
             assert model.reach_m(steps, given) == pytest.approx(SPEED * DT * steps, abs=1e-12)
         assert model.reach_m(state=given) == pytest.approx(SPEED * DT, abs=1e-12)
@@ -96,6 +97,7 @@ def test_a_registry_entry_is_all_a_new_model_needs(monkeypatch):
     assert regrown(slow) == pytest.approx(regrown(half), abs=1e-9)
     # 3 steps: it regrows 0.375 m less into the seen half (x 2 m of sidewalk, 0.81 m²)
     assert regrown(slow) < regrown(position) - 0.7
-    zone, source = shapely.box(10, 0, 12, 2), shapely.box(0, 0, 1, 2)
+    zone = ConflictZone(shapely.box(10, 0, 12, 2), 0.0, 0.0, np.inf)
+    source = Source(shapely.box(0, 0, 1, 2))
     assert _arrivals([source], [zone], slow)[0] == pytest.approx(
         2.0 * _arrivals([source], [zone], position)[0])

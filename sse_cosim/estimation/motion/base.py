@@ -96,6 +96,15 @@ class MotionModel(Protocol):
         """a_max (m/s²) if the model bounds the path's acceleration (the world then ramps its
         walkers' speeds and checks the bound), else None."""
 
+    @property
+    def velocity_windows(self) -> tuple[int, ...]:
+        """How many steps ago a node's path strips also bound the current state
+        (:meth:`velocity_strips`); empty: only the current strips are used."""
+
+    def velocity_strips(self, path: Strips, steps_ago: int) -> Strips:
+        """Path strips (m, 2) measured ``steps_ago`` steps ago as strips about the current
+        state (m, n)."""
+
     def reach_m(self, steps: int = 1, state: Zonotope | None = None) -> float:
         """How far (m) a path point, with its state in ``state`` (None: unknown), can move in
         ``steps`` steps: every polygon layer grows a path region by this disc."""
@@ -138,6 +147,7 @@ class LinearModel:
     max_speed: float
     step_length: float
     jitter: float = 0.0
+    velocity_windows: tuple[int, ...] = ()
     # the newest POSITION_MEMO position sets, by their estimates' identities
     _positions: IdentityMemo[Zonotope] = field(
         default_factory=lambda: IdentityMemo(POSITION_MEMO), init=False, repr=False,
@@ -161,6 +171,27 @@ class LinearModel:
     def acceleration_bound_mps2(self) -> float | None:
         """None: a linear model alone bounds the speed, not the acceleration."""
         return None
+
+    def velocity_strips(self, path: Strips, steps_ago: int) -> Strips:
+        """Path strips |h.s_{k-N} - y| <= r of N = ``steps_ago`` steps ago (m, 2) as strips
+        about the current state x_k = (s_k, v_k) of a model with F = [[I, dt I], [0, I]] and
+        process noise <0, [0; G_v]> (the velocity changes by w_j in <0, G_v> per step):
+
+            |h.s_k - N dt h.v_k - y| <= r + dt (N (N + 1) / 2) sum_i |h.g_i|,
+
+        since s_{k-N} = s_k - N dt v_k + dt sum_j c_j w_j, each of the N changes w_j counted
+        c_j <= N times, sum_j c_j = N (N + 1) / 2. Normals (h, -N dt h) (m, 4). With the strips
+        of now, their difference bounds h.v_k: the velocity estimated over time (eq. 2 has no
+        memory: each step's Proposition 1 keeps only what a zonotope of bounded order holds).
+        """
+        if self.dim != 4 or self.process_noise.generators[:2].any():
+            raise ValueError("velocity strips need a (position, velocity) model whose noise "
+                             "moves the velocity only")
+        reach = self.step_length * steps_ago
+        slack = self.step_length * 0.5 * steps_ago * (steps_ago + 1) * np.abs(
+            portable.matmul(path.normals, self.process_noise.generators[2:])).sum(axis=1)
+        normals = np.hstack([path.normals, -reach * path.normals])
+        return Strips(normals, path.values, path.radii + slack)
 
     def reach_m(self, steps: int = 1, state: Zonotope | None = None) -> float:
         """v_max dt ``steps``: how far a path point can move in ``steps`` steps, whatever its

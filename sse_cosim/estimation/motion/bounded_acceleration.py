@@ -10,6 +10,15 @@ weights sum to dt, so ||v_{k+1} - v_k|| <= a_max dt: the process noise is the bo
 every mean velocity; it is applied every step as strips |n.v| <= v_max along four directions
 (an octagon that holds the disc).
 
+Velocity over time. A node's strips of N steps ago bound its current state too
+(:meth:`~.base.LinearModel.velocity_strips`): with the current ones they bound the velocity to
+about (2 r + a_max T² / 2) / T over T = N dt, best near T = 2 sqrt(r / a_max), where it is
+2 sqrt(r a_max) (r: the strips' radius, the jitter included). No sound estimator does better
+than sqrt(r a_max): a path that stands and one that has sped up from standstill at a_max to
+2 sqrt(r a_max) stay within 2 r of each other, so positions measured halfway between them
+hold for both. So the velocity is known only where r is small
+against v_max² / a_max (docs/method.md). Nodes use :data:`VELOCITY_WINDOWS_S`.
+
 Reach and arrival. Along any unit direction n the path's velocity component n.v grows by at
 most a_max per second and never exceeds v_max, so from a component u the path moves at most
 
@@ -44,6 +53,7 @@ if TYPE_CHECKING:
     from sse_cosim.scenario.model import Estimator
 
 NAME = "bounded-acceleration"
+VELOCITY_WINDOWS_S = (0.3, 0.6, 1.2, 2.4)  # how long ago a node's strips bound its velocity (s)
 SPEED_DIRECTIONS = 32  # fan over which the largest speed in a velocity set is bounded
 _OCTAGON = np.array([[1.0, 0.0], [0.0, 1.0], [math.sqrt(0.5), math.sqrt(0.5)],
                      [math.sqrt(0.5), -math.sqrt(0.5)]])
@@ -64,6 +74,8 @@ def build(config: Estimator, step_length: float, jitter: float) -> BoundedAccele
         max_speed=v_max,
         step_length=step_length,
         jitter=jitter,
+        velocity_windows=tuple(sorted({max(1, round(t / step_length))
+                                       for t in VELOCITY_WINDOWS_S})),
         max_accel=a_max,
     )
 
