@@ -196,9 +196,9 @@ class Estimator(StrictModel):
     max_pedestrian_accel_mps2: PositiveFloat = Field(
         3.2,
         description="Acceleration bound (m/s²) of the 'bounded-acceleration' model: no "
-        "pedestrian's path speeds up, slows down or turns faster (Fugger et al. 2000: "
-        "0.14 ± 0.09 g from standstill at crosswalks; 3.2 m/s² is above their mean plus two "
-        "standard deviations; docs/method.md). With that model the world ramps every SUMO "
+        "pedestrian's path speeds up, slows down or turns faster (Fugger et al., TRR 1705, "
+        "2000: 0.14 ± 0.09 g from standstill at crosswalks; 3.2 m/s² is above their mean plus "
+        "two standard deviations; docs/method.md). With that model the world ramps every SUMO "
         "walker's speed within it and checks it every step.",
     )
     gain_method: str = Field(
