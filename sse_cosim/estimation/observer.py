@@ -143,8 +143,9 @@ class NodeObserver:
         kept = self._used.setdefault(person_id, {})
         for old in [k for k in kept if k <= step - max(windows)]:
             del kept[old]
-        past = [self.model.velocity_strips(kept[step - n], n) for n in windows
-                if step - n in kept]
+        past = [_narrowing(self.model.velocity_strips(kept[step - n], n), n, update.estimate,
+                           self.model) for n in windows if step - n in kept]
+        past = [strips for strips in past if strips is not None]
         used = [self.model.path_strips(s) for name, s in strips.items()
                 if name not in update.flagged]
         if used and not update.conflict:
@@ -207,6 +208,24 @@ class NodeObserver:
                 and self.model.state_bounds is None
                 and self.settings.gain_method in track_kernels.GAIN_CODES
                 and self.settings.reduction_method == "girard")
+
+
+def _narrowing(strips: Strips, steps_ago: int, estimate: Zonotope,
+               model: MotionModel) -> Strips | None:
+    """Those of a window's ``strips`` (normals (h, -N dt h), m x 4) that can narrow the velocity
+    below the speed bound: with the position part of ``estimate`` each bounds h.v to
+    [(lo - y - r) / (N dt), (hi - y + r) / (N dt)] ([lo, hi]: h.s over the set); one whose
+    interval holds [-v_max ||h||, v_max ||h||] says nothing the speed bound does not, and is
+    left out (leaving out a true constraint is always sound), saving its linear program.
+    None if no strip is left."""
+    h = strips.normals[:, :2]
+    support = np.abs(h @ estimate.generators[:2]).sum(axis=1)
+    middle = h @ estimate.center[:2] - strips.values
+    reach = model.step_length * steps_ago
+    bound = model.max_speed * np.sqrt((h * h).sum(axis=1))
+    useful = ((middle - support - strips.radii) / reach > -bound) \
+        | ((middle + support + strips.radii) / reach < bound)
+    return strips.select(useful) if useful.any() else None
 
 
 def _velocity_width(estimate: Zonotope) -> float:
