@@ -187,3 +187,16 @@ def test_velocity_windows_bring_the_velocity_below_the_speed_bound():
             alone.step(k, {"p": {"s": strips}})
     assert np.mean(known) < 1.85
     assert np.mean(known) < np.mean(plain) - 0.3
+
+
+def test_the_reach_from_a_state_set_grows_from_its_speed():
+    """From standstill a path moves a_max t² / 2 in t until v_max: 0.4 m in 0.5 s (5 steps),
+    against the speed bound's 1.25 m; walking at 1.5 m/s (bounded from above through a fan of
+    directions: 1.5 / cos(pi / 32)), it speeds up to v_max and keeps it; unknown, 1.25 m."""
+    m = model()
+    assert m.reach_m(5, state((0, 0), (0, 0))) == pytest.approx(0.4)
+    u = 1.5 / math.cos(math.pi / 32)
+    ramp = (V_MAX - u) / A_MAX
+    assert m.reach_m(5, state((0, 0), (1.5, 0))) == pytest.approx(
+        u * ramp + 0.5 * A_MAX * ramp**2 + V_MAX * (0.5 - ramp))
+    assert m.reach_m(5) == pytest.approx(V_MAX * 0.5)
