@@ -7,7 +7,8 @@ A scenario's run (:class:`sse_cosim.world.sumo.SumoWorld`) and a probe of lone w
 model, no dawdling, stripes of :data:`~sse_cosim.world.demand.STRIPE_WIDTH_M` (where the plan
 expects a walk to begin), the step length, nobody teleported,
 collisions reported (junctions included). Both read a walking person's centre with
-:func:`person_centre`.
+:func:`person_centre`, and both ramp their walkers' speeds with :class:`SpeedRamp` when the
+estimator's motion model bounds the acceleration.
 """
 
 from __future__ import annotations
@@ -16,7 +17,8 @@ import contextlib
 import io
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -75,6 +77,31 @@ def write_config(folder: Path, net_path: Path, route_files: Sequence[Path], step
 def relative(path: Path, folder: Path) -> str:
     """``path`` relative to ``folder``."""
     return os.path.relpath(Path(path).resolve(), Path(folder).resolve())
+
+
+@dataclass(frozen=True)
+class SpeedRamp:
+    """Keeps SUMO's walkers within an acceleration bound where they speed up.
+
+    SUMO's striping model walks a person at its full speed from its first step (15 m/s² at
+    1.5 m/s and 0.1 s steps). Its speed in a step is at most the one ``person.setSpeed`` set
+    last, and a setting before a step applies to that step: so before every step each
+    walker's speed is set to min(its walking speed, its speed now + ``accel_mps2`` x
+    ``step_s``), and no walker speeds up faster than that. (SUMO's speed is along its lane;
+    where it turns or changes its stripe, and where something stops it, the jitter and the
+    world's check cover the rest.) A walker that has not walked yet has speed 0: its first
+    step is ``accel_mps2`` x ``step_s``.
+    """
+
+    accel_mps2: float
+    step_s: float
+
+    def apply(self, walkers: Mapping[str, tuple[float, float]]) -> None:
+        """Set the speed of every person of ``walkers`` (id -> (its walking speed, its
+        speed now), m/s) for the next step."""
+        rise = self.accel_mps2 * self.step_s
+        for pid, (walking, now) in walkers.items():
+            libsumo.person.setSpeed(pid, min(walking, now + rise))
 
 
 def heading(nav_angle_deg: float) -> float:

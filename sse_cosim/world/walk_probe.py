@@ -17,6 +17,11 @@ libsumo holds one simulation per process: a probe refuses to start while one is 
 the same process. Its files (``walkers.rou.xml``, ``sumo.sumocfg``, ``sumo.log``) go into
 ``work_dir``, a folder the caller owns.
 
+Speed ramp. Given an acceleration bound (``accel_mps2``: the estimator's motion model bounds
+the acceleration), the walkers' speeds are ramped as in a run
+(:class:`~sse_cosim.world.sumo_setup.SpeedRamp`), so that a walker walks as a scenario's
+pedestrian of that run does; without one, SUMO walks them as it does.
+
 :class:`ProbeTimer` times the scenario's pedestrians with it (a
 :data:`~sse_cosim.world.demand.WalkTimer`): how long SUMO's walker takes from the start of its
 walk to its first step on its crossing, which is how the world starts each walk in time.
@@ -31,6 +36,7 @@ import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
@@ -42,6 +48,7 @@ from sse_cosim.world.demand import WalkToCrossing, pedestrian_vtype
 from sse_cosim.world.sumo_setup import (
     LIBSUMO_ERRORS,
     LOG_FILE_NAME,
+    SpeedRamp,
     libsumo,
     message,
     person_centre,
@@ -53,7 +60,7 @@ ROUTE_FILE_NAME = "walkers.rou.xml"
 # walkers draw no random numbers (no dawdling, no speed deviation): any seed gives the same run
 PROBE_SEED = 1
 DEFAULT_RADIUS_M = float(Pedestrian.model_fields["radius_m"].default)
-_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_LANE_ID)
+_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_LANE_ID, libsumo.VAR_SPEED)
 _EPS = 1e-9
 SLOT_SLACK_S = 3.0  # a lone walker's slot outlasts 1.5 times its walk at its speed by this (s)
 _DURATION = re.compile(r'duration="([0-9.]+)"')
@@ -94,11 +101,13 @@ class WalkTrace:
 
 
 def walk_alone(net_path: Path, walkers: Sequence[Walker], step_s: float, work_dir: Path,
-               until_s: float | None = None) -> dict[str, WalkTrace]:
+               until_s: float | None = None,
+               accel_mps2: float | None = None) -> dict[str, WalkTrace]:
     """Run the walkers (and nothing else) on the network; every walker's trace by id.
 
     SUMO steps until every walker has arrived, or until the state at time ``until_s`` if
-    given. Raises :class:`SimulationError` (one line) when a SUMO simulation is already open in
+    given; ``accel_mps2``: the speed ramp's acceleration (module docstring), None for none.
+    Raises :class:`SimulationError` (one line) when a SUMO simulation is already open in
     this process, when SUMO cannot route a walker (naming it, see ``work_dir/sumo.log``), and
     when a walker is not on the network at its departure.
     """
@@ -123,7 +132,8 @@ def walk_alone(net_path: Path, walkers: Sequence[Walker], step_s: float, work_di
                               f"(see {work_dir / LOG_FILE_NAME})") from exc
     try:
         _check_positions(walkers)
-        return _walk(walkers, step_s, until_s)
+        ramp = None if accel_mps2 is None else SpeedRamp(accel_mps2, step_s)
+        return _walk(walkers, step_s, until_s, ramp)
     except LIBSUMO_ERRORS as exc:
         raise SimulationError(PROBE, f"SUMO failed{_named(exc, walkers)}: {message(exc)} "
                               f"(see {work_dir / LOG_FILE_NAME})") from exc
@@ -137,15 +147,18 @@ class ProbeTimer:
 
     One session walks every pedestrian's walk, one after the other in slots of
     :func:`slot_s` (so each walks alone; a walker still on the network when the next departs
-    is an error), each with the pedestrian's speed and size.
+    is an error), each with the pedestrian's speed and size, and with the run's speed ramp
+    if ``accel_mps2`` is given (the motion model's acceleration bound: module docstring).
     A walk's time is the first step its walker is on the crossing's lane less its departure:
     a whole number of steps. The session's files go into ``work_dir`` (kept), or a temporary
     folder (removed) if None.
     """
 
-    def __init__(self, net_path: Path, work_dir: Path | None = None) -> None:
+    def __init__(self, net_path: Path, work_dir: Path | None = None,
+                 accel_mps2: float | None = None) -> None:
         self.net_path = Path(net_path)
         self.work_dir = work_dir
+        self.accel_mps2 = accel_mps2
 
     def __call__(self, walks: Mapping[str, WalkToCrossing], step_s: float) -> dict[str, float]:
         walkers: list[Walker] = []
@@ -156,10 +169,12 @@ class ProbeTimer:
                                   walk.speed_mps, depart, walk.radius_m))
             depart = round(depart + slot_s(walk.length_m / walk.speed_mps, step_s, cycle), 6)
         if self.work_dir is not None:
-            traces = walk_alone(self.net_path, walkers, step_s, self.work_dir)
+            traces = walk_alone(self.net_path, walkers, step_s, self.work_dir,
+                                accel_mps2=self.accel_mps2)
         else:
             with tempfile.TemporaryDirectory(prefix="sse-cosim-walk-probe-") as folder:
-                traces = walk_alone(self.net_path, walkers, step_s, Path(folder))
+                traces = walk_alone(self.net_path, walkers, step_s, Path(folder),
+                                    accel_mps2=self.accel_mps2)
         times: dict[str, float] = {}
         for walker, following in zip(walkers, [*walkers[1:], None], strict=True):
             trace = traces[walker.id]
@@ -201,10 +216,13 @@ def longest_cycle_s(net_path: Path) -> float:
     return longest
 
 
-def _walk(walkers: Sequence[Walker], step_s: float,
-          until_s: float | None) -> dict[str, WalkTrace]:
-    """Step the open session and collect the traces (see :func:`walk_alone`)."""
+def _walk(walkers: Sequence[Walker], step_s: float, until_s: float | None,
+          ramp: SpeedRamp | None) -> dict[str, WalkTrace]:
+    """Step the open session and collect the traces (see :func:`walk_alone`), ramping the
+    walkers' speeds with ``ramp`` if given."""
     radius = {w.id: w.radius_m for w in walkers}
+    walking = {w.id: w.speed_mps for w in walkers}
+    present: dict[str, dict[int, Any]] = {}  # the walkers on the network after the step
     waiting = sorted(walkers, key=lambda w: w.depart_s)  # not yet seen on the network
     seen: set[str] = set()
     times: dict[str, list[float]] = {w.id: [] for w in walkers}
@@ -212,6 +230,9 @@ def _walk(walkers: Sequence[Walker], step_s: float,
     lanes: dict[str, list[str]] = {w.id: [] for w in walkers}
     sim = libsumo.simulation
     while sim.getMinExpectedNumber() > 0:
+        if ramp is not None:
+            ramp.apply({pid: (walking[pid], float(values[libsumo.VAR_SPEED]))
+                        for pid, values in present.items()})
         libsumo.simulationStep()
         t = round(sim.getTime() - step_s, 6)
         for pid in sim.getDepartedPersonIDList():
@@ -224,7 +245,8 @@ def _walk(walkers: Sequence[Walker], step_s: float,
                                       f"its departure ({walker.depart_s:g} s): SUMO did not "
                                       f"insert it at {walker.depart_pos_m:g} m on edge "
                                       f"{walker.edges[0]!r}")
-        for pid, values in libsumo.person.getAllSubscriptionResults().items():
+        present = libsumo.person.getAllSubscriptionResults()
+        for pid, values in present.items():
             lane = str(values[libsumo.VAR_LANE_ID])
             if not lane:
                 continue  # not walking (SUMO has none of these in a probe: no stops)
