@@ -91,7 +91,11 @@ class MotionBreak:
     ``distance_m``: how far the position was from the nearest path point the model admits
     after the previous step (the jitter allows ``jitter_m``); ``step_m``: how far it moved in
     that one step; ``needed_jitter_m``: the least jitter (rounded up to 1 mm) that admits
-    its walk up to now (None when not computed).
+    its walk up to now (None when not computed). A model that bounds the acceleration
+    (:mod:`sse_cosim.world.acceleration_assumption`) also gives ``velocity_change_mps``, how
+    much the walk's mean velocity changed in that step (m/s), and ``broke``, which bound the
+    walk breaks within the jitter, as words ('the acceleration bound', ...; None when not
+    computed).
     """
 
     person: str
@@ -100,6 +104,8 @@ class MotionBreak:
     jitter_m: float
     step_m: float
     needed_jitter_m: float | None = None
+    velocity_change_mps: float | None = None
+    broke: str | None = None
 
     @property
     def beyond_m(self) -> float:
