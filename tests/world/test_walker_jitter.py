@@ -114,9 +114,9 @@ def test_a_cache_entry_without_a_ground_patch_is_measured_again(paper, monkeypat
     walked: list[int] = []
     real = walker_jitter.walk_alone
 
-    def counted(net: Path, walkers: list[Walker], *args: object) -> dict:
+    def counted(net: Path, walkers: list[Walker], *args: object, **kwargs: object) -> dict:
         walked.append(len(walkers))
-        return real(net, walkers, *args)
+        return real(net, walkers, *args, **kwargs)
 
     monkeypatch.setattr(walker_jitter, "walk_alone", counted)
     assert _measure(net_path, SPEED) == first and len(walked) == 1
