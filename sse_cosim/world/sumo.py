@@ -56,6 +56,17 @@ a time: a second ``SumoWorld`` entered while one is open raises :class:`Simulati
 ``close()`` a new simulation can be started in the same process (the tests do so), but sweeps
 run each simulation in its own process so that they can run in parallel.
 
+Bounded acceleration. When the estimator's motion model bounds the acceleration
+(:func:`sse_cosim.estimation.motion.acceleration_bound`: the ``bounded-acceleration`` model),
+SUMO's walkers, which start and stop within one step, are ramped: before every step each
+person's speed is capped at min(its own walking speed, its speed now + a_max dt)
+(:class:`~sse_cosim.world.sumo_setup.SpeedRamp`; a scenario pedestrian's own speed is its
+``walking_speed_mps``, a route file's person's the one SUMO gives it at its departure). The
+lone walkers that time the walks and measure the jitter walk the same ramp, and the motion
+check is :mod:`sse_cosim.world.acceleration_assumption`'s: one path keeping the speed bound,
+the acceleration bound and the jitter at once (it implies the speed check, which then does
+not run). Its breaks are ``pedestrian_speed``'s, as the speed check's are.
+
 Walkable ground. The estimator assumes every pedestrian's centre lies on the road map's
 walkable ground (:attr:`sse_cosim.world.roadmap.RoadMap.walkable`): sidewalks, walking areas and
 crossings, and the patches where SUMO's lone walkers were measured to leave them
@@ -87,8 +98,10 @@ from typing import Any
 import shapely
 
 from sse_cosim.errors import AssumptionBroken, SimulationError, UserError
+from sse_cosim.estimation.motion import acceleration_bound
 from sse_cosim.scenario.model import AutomatedVehicle, Scenario, present
 from sse_cosim.world import demand, walker_jitter
+from sse_cosim.world.acceleration_assumption import AccelerationBounds, AccelerationCheck
 from sse_cosim.world.assumptions import MotionBounds, MotionBreak, PedestrianMotionCheck
 from sse_cosim.world.demand import ActorPlan, PedestrianPlan
 from sse_cosim.world.extent import MAX_MEASURED_JITTER_M, SceneExtent, scene_extent
@@ -102,6 +115,7 @@ from sse_cosim.world.sumo_setup import (
 from sse_cosim.world.sumo_setup import (
     LIBSUMO_ERRORS,
     LOG_FILE_NAME,
+    SpeedRamp,
     heading,
     libsumo,
     message,
@@ -135,14 +149,15 @@ def sumo_version() -> str:
 
 
 def measure_walkers(net_path: Path, roadmap: RoadMap, extent: SceneExtent | None,
-                    speed_mps: float, step_s: float, radius_m: float
-                    ) -> walker_jitter.NetworkJitter:
+                    speed_mps: float, step_s: float, radius_m: float,
+                    accel_mps2: float | None = None) -> walker_jitter.NetworkJitter:
     """The jitter SUMO's lone walkers need on the walking areas of ``roadmap`` (of the network
     at ``net_path``) in ``extent`` (all for None), and where they leave its plain ground
-    (:mod:`sse_cosim.world.walker_jitter`, cached)."""
+    (:mod:`sse_cosim.world.walker_jitter`, cached); with ``accel_mps2`` (a motion model that
+    bounds the acceleration), walkers ramped within it and the jitter that model needs."""
     return walker_jitter.measure(
         net_path, roadmap.net, extent, roadmap.ground, speed_mps, step_s, radius_m,
-        sumo_version())
+        sumo_version(), accel_mps2)
 
 
 @dataclass
@@ -196,7 +211,12 @@ class SumoWorld:
         self._statics: dict[str, tuple[float, float, str]] = {}
         self._person_length: dict[str, float] = {}
         self._motion_declared = MOTION_ASSUMPTION in scenario.breaks_assumptions
-        self._motion: PedestrianMotionCheck | None = None  # once the jitter is known
+        self._accel = acceleration_bound(scenario.estimator, self._dt)
+        self._ramp = None if self._accel is None else SpeedRamp(self._accel, self._dt)
+        self._walking_speeds: dict[str, float] = {}  # each person's own speed (ramped walkers)
+        self._person_speeds: dict[str, float] = {}  # each person's speed at the latest snapshot
+        # once the jitter is known
+        self._motion: PedestrianMotionCheck | AccelerationCheck | None = None
         self._motion_breaks: list[tuple[MotionBreak, str, str]] = []
         self._motion_break_count = 0
         self._ground_declared = GROUND_ASSUMPTION in scenario.breaks_assumptions
@@ -234,16 +254,13 @@ class SumoWorld:
         with self._walking_alone():
             self._plan = demand.plan_actors(self.scenario, self._net_path, self._roadmap,
                                             source=self.scenario_name,
-                                            timer=ProbeTimer(self._net_path))
+                                            timer=ProbeTimer(self._net_path,
+                                                             accel_mps2=self._accel))
             measured = self._measure()
             self.scenario = self._with_jitter(measured)
         self._roadmap = self._roadmap.with_ground_patches(measured.ground_patches)
         shapely.prepare(self._roadmap.walkable)
-        estimator = self.scenario.estimator
-        assert estimator.position_jitter_m is not None
-        self._motion = PedestrianMotionCheck(
-            MotionBounds(estimator.max_pedestrian_speed_mps, estimator.position_jitter_m,
-                         self._dt), needed_jitter=not self._motion_declared)
+        self._motion = self._motion_check()
         config = self._write_files()
         try:
             libsumo.start(["sumo", "-c", str(config)])
@@ -285,6 +302,9 @@ class SumoWorld:
         """
         self._require_open()
         try:
+            if self._ramp is not None:
+                self._ramp.apply({pid: (self._walking_speeds[pid], speed)
+                                  for pid, speed in self._person_speeds.items()})
             libsumo.simulationStep()
             snapshot = self._snapshot()
         except LIBSUMO_ERRORS as exc:
@@ -317,7 +337,21 @@ class SumoWorld:
         return measure_walkers(self._net_path, self._roadmap,
                                None if net is None else scene_extent(self.scenario, net),
                                self.scenario.estimator.max_pedestrian_speed_mps, self._dt,
-                               self.scenario.pedestrian_radius_m())
+                               self.scenario.pedestrian_radius_m(), self._accel)
+
+    def _motion_check(self) -> PedestrianMotionCheck | AccelerationCheck:
+        """The check of the estimator's motion model (its jitter resolved): a speed-bounded
+        path within the jitter (:mod:`sse_cosim.world.assumptions`), or for a model that bounds
+        the acceleration one path that keeps both bounds within it
+        (:mod:`sse_cosim.world.acceleration_assumption`; it keeps the speed bound too)."""
+        estimator = self.scenario.estimator
+        assert estimator.position_jitter_m is not None
+        speed, jitter = estimator.max_pedestrian_speed_mps, estimator.position_jitter_m
+        if self._accel is None:
+            return PedestrianMotionCheck(MotionBounds(speed, jitter, self._dt),
+                                         needed_jitter=not self._motion_declared)
+        return AccelerationCheck(AccelerationBounds(speed, self._accel, jitter, self._dt),
+                                 diagnose=not self._motion_declared)
 
     def _with_jitter(self, measured: walker_jitter.NetworkJitter) -> Scenario:
         """The scenario with the position jitter its network needs: the ``measured`` one where
@@ -351,10 +385,13 @@ class SumoWorld:
     def _check_motion(self, snapshot: Snapshot) -> None:
         """Every pedestrian's true position keeps the estimator's motion model: a path with
         steps of at most max_pedestrian_speed_mps * step length plus a jitter of at most
-        position_jitter_m (:mod:`sse_cosim.world.assumptions`). A break stops the run, naming
-        the pedestrian, the time, its lanes before and after and the fix -- unless the study
-        lists ``pedestrian_speed``: then it is counted (:attr:`motion_breaks`) and the run goes
-        on."""
+        position_jitter_m (:mod:`sse_cosim.world.assumptions`), and for a model that bounds
+        the acceleration one path that also changes its mean velocity by at most
+        max_pedestrian_accel_mps2 * step length per step
+        (:mod:`sse_cosim.world.acceleration_assumption`). A break stops the run, naming the
+        pedestrian, the time, its lanes before and after, what it broke and the fix -- unless
+        the study lists ``pedestrian_speed``: then it is counted (:attr:`motion_breaks`) and
+        the run goes on."""
         assert self._motion is not None
         found = self._motion.step(snapshot.time, {pid: person.position
                                                   for pid, person in snapshot.persons.items()})
@@ -370,15 +407,30 @@ class SumoWorld:
             raise AssumptionBroken(
                 self.scenario_name, MOTION_ASSUMPTION,
                 f"pedestrian {brk.person!r} at t={brk.time:.2f} s moved {brk.step_m:.3f} m in "
-                f"one step (lane {_lane(before)} -> {_lane(after)}), to {brk.distance_m:.3f} m "
-                f"from every path point the model admits, {brk.beyond_m:.3f} m beyond "
-                f"estimator.position_jitter_m = {estimator.position_jitter_m:g} m (path steps "
-                f"of at most {estimator.max_pedestrian_speed_mps:g} m/s x {self._dt:g} s); "
-                "the run stops "
+                f"one step{self._velocity_change(brk)} (lane {_lane(before)} -> "
+                f"{_lane(after)}), to {brk.distance_m:.3f} m from every path point the model "
+                f"admits, {brk.beyond_m:.3f} m beyond estimator.position_jitter_m = "
+                f"{estimator.position_jitter_m:g} m ({self._path_bounds(brk)}); the run stops "
                 "before the estimator's sets are checked against a truth outside its model",
                 f"raise estimator.position_jitter_m to at least {brk.needed_jitter_m:.3f} m "
                 "(what its walk so far needs), "
                 f"or list '{MOTION_ASSUMPTION}' in breaks_assumptions")
+
+    def _velocity_change(self, brk: MotionBreak) -> str:
+        """How much the walk's mean velocity changed in the break's step, for its message
+        (the acceleration's check measures it)."""
+        if brk.velocity_change_mps is None:
+            return ""
+        return f", its mean velocity changing by {brk.velocity_change_mps:.2f} m/s"
+
+    def _path_bounds(self, brk: MotionBreak) -> str:
+        """The model's path bounds for a break's message, and which the walk broke."""
+        speed = self.scenario.estimator.max_pedestrian_speed_mps
+        if self._accel is None:
+            return f"path steps of at most {speed:g} m/s x {self._dt:g} s"
+        return (f"no path keeps both the speed bound {speed:g} m/s and the acceleration bound "
+                f"{self._accel:g} m/s² in steps of {self._dt:g} s within it: its walk breaks "
+                f"{brk.broke}")
 
     def _check_ground(self, snapshot: Snapshot) -> None:
         """Every pedestrian's true centre lies on the walkable ground (the road map's
@@ -630,6 +682,8 @@ class SumoWorld:
                 self._apply_command(vid)
         for pid in sim.getDepartedPersonIDList():
             libsumo.person.subscribe(pid, _PERSON_VARS)
+            if self._ramp is not None:
+                self._walking_speeds[pid] = self._walking_speed(pid)
         for vid in sim.getArrivedIDList():
             if vid in self._automated:
                 self._automated[vid].arrived = True
@@ -650,8 +704,10 @@ class SumoWorld:
         persons: dict[str, PersonState] = {}
         self._previous_lanes = self._person_lanes
         self._person_lanes = {}
+        self._person_speeds = {}
         for pid, values in libsumo.person.getAllSubscriptionResults().items():
             self._person_lanes[pid] = str(values[libsumo.VAR_LANE_ID])
+            self._person_speeds[pid] = float(values[libsumo.VAR_SPEED])
             persons[pid] = PersonState(
                 id=pid,
                 position=self._person_position(pid, values),
@@ -668,6 +724,13 @@ class SumoWorld:
             return plan.standing_xy
         x, y = values[libsumo.VAR_POSITION]
         return person_centre(x, y, values[libsumo.VAR_ANGLE], self._person_size(pid))
+
+    def _walking_speed(self, pid: str) -> float:
+        """The speed (m/s) person ``pid`` walks at unramped: a scenario pedestrian's
+        ``walking_speed_mps``; a route file's person's speed as SUMO gives it at its departure
+        (its type's, with its speed factor), before the ramp first sets it."""
+        ped = self.scenario.pedestrians.get(pid)
+        return ped.walking_speed_mps if ped is not None else float(libsumo.person.getMaxSpeed(pid))
 
     def _static(self, vid: str) -> tuple[float, float, str]:
         """A vehicle's length, width (m) and type id, which do not change during a run."""
