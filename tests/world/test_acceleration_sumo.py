@@ -2,18 +2,22 @@
 every walker's speed within a_max (read back from SUMO), S1's pedestrian still steps onto
 its crossing on time and keeps the model's check; the lone walkers' jitter for the model is
 measured with the same ramp, cached apart from the position model's, and is the least the
-worst walk needs."""
+worst walk needs; a break stops the run in one line naming what broke and the jitter
+needed, or is counted in a study that lists 'pedestrian_speed'."""
 
 from __future__ import annotations
 
 import json
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 from world_helpers import REPO, run_world, scenario
 
+from sse_cosim.errors import AssumptionBroken
+from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.world import walker_jitter
 from sse_cosim.world.acceleration_assumption import (
     AccelerationBounds,
@@ -22,7 +26,7 @@ from sse_cosim.world.acceleration_assumption import (
 )
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import load_roadmap
-from sse_cosim.world.sumo import measure_walkers, sumo_version
+from sse_cosim.world.sumo import SumoWorld, measure_walkers, sumo_version
 from sse_cosim.world.walk_probe import Walker, walk_alone
 
 pytestmark = pytest.mark.sumo
@@ -105,3 +109,33 @@ def _ends(net_path: Path, walk: tuple[str, ...]) -> tuple[float, float]:
     areas = [e for e in net.getEdges(withInternal=True) if e.getFunction() == "walkingarea"]
     return next((depart, arrival) for _, edges, depart, arrival
                 in walker_jitter.passages(net, areas) if edges == walk)
+
+
+def test_a_break_stops_the_run_in_one_line_or_is_counted(tmp_path, paper) -> None:
+    """S1 on a copy of the paper road whose cached measurement for the model says 0.05 m (as
+    if it had missed the walking area's jump): the world stops at the jump, in one line with
+    the pedestrian, the time, what broke and the jitter its walk needs. A study that lists
+    'pedestrian_speed' and sets 0.05 m itself runs on and counts the breaks."""
+    key = walker_jitter.cache_key(sumo_version(), STEP, SPEED, RADIUS, ACCEL)
+    measure_walkers(paper, load_roadmap(paper), None, SPEED, STEP, RADIUS, ACCEL)
+    cache = walker_jitter.JitterCache(paper)
+    cache.add(key, [replace(j, jitter_m=0.05) for j in cache.junctions(key).values()])
+    on_copy = tmp_path / "on_copy.toml"
+    on_copy.write_text(f'extends = "{(REPO / "scenarios" / "s1_pedestrian.toml").as_posix()}"'
+                       f'\n[network]\nnet_file = "{paper.as_posix()}"\n', encoding="utf-8")
+    with pytest.raises(AssumptionBroken) as info:
+        run_world(load_scenario(on_copy, MODEL), tmp_path / "stopped", steps=110)
+    text = str(info.value)
+    assert "\n" not in text and info.value.assumption == "pedestrian_speed"
+    for words in ("pedestrian 'pedestrian' at t=", "its mean velocity changing by",
+                  "estimator.position_jitter_m = 0.05 m", "acceleration bound 3.2 m/s²",
+                  "its walk breaks ", "raise estimator.position_jitter_m to at least 0."):
+        assert words in text, (words, text)
+    declared = load_scenario(on_copy, {**MODEL, "estimator.position_jitter_m": 0.05,
+                                       "breaks_assumptions": ["pedestrian_speed"]})
+    with SumoWorld(declared, tmp_path / "counted", "counted") as world:
+        for _ in range(110):
+            world.step()
+        breaks = world.motion_breaks
+    assert breaks["count"] >= 1 and breaks["first"][0]["pedestrian"] == "pedestrian"
+    assert breaks["first"][0]["beyond_m"] > 0.0
