@@ -27,6 +27,7 @@ from sse_cosim.sets.kernels import PARALLEL_RTOL, area_2d, contains_2d, full_ran
 from sse_cosim.sets.lp import linprog
 from sse_cosim.sets.portable import matmul
 from sse_cosim.sets.reduction import REDUCTION_METHODS
+from sse_cosim.sets.volume_gain_kernels import generator_volume_nd
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -52,15 +53,20 @@ def generator_volume(generators: FloatArray) -> float:
     """Volume of ⟨c, G⟩, G (n, e): 2ⁿ Σ over n-subsets S of |det G_S| (2-D: 2 Σ_ij |g_i × g_j|).
 
     2-D by the compiled :func:`~sse_cosim.sets.kernels.area_2d` (the same bits as the
-    reference), other dimensions by :func:`generator_volume_reference`.
+    reference), n >= 3 by the compiled
+    :func:`~sse_cosim.sets.volume_gain_kernels.generator_volume_nd` (the reference's value
+    up to rounding), 1-D by :func:`generator_volume_reference`.
     """
-    if generators.shape[0] == 2:
+    n = generators.shape[0]
+    if n == 2:
         return area_2d(generators)
+    if n >= 3:
+        return generator_volume_nd(np.ascontiguousarray(generators, dtype=np.float64))
     return generator_volume_reference(generators)
 
 
 def generator_volume_reference(generators: FloatArray) -> float:
-    """:func:`generator_volume` in NumPy, any n (the reference of the compiled 2-D kernel).
+    """:func:`generator_volume` in NumPy, any n (the reference of the compiled kernels).
 
     Zero columns are skipped first, so adding or dropping them never changes the rounding.
     """
