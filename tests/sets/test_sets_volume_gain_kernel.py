@@ -28,7 +28,7 @@ from sse_cosim.sets.zonotope import (
 pytestmark = pytest.mark.kernels
 
 WELL_CONDITIONED = ("well", "zero-and-parallel", "axis", "grid")
-ILL_CONDITIONED = ("elongated", "near-parallel")
+ILL_CONDITIONED = ("elongated", "near-parallel")  # nearly flat or nearly parallel
 NORMALS = ("random", "axis", "generator", "across")
 RADII = (0.0, 1e-6, 0.05, 0.3, 0.9, 1.5)  # fractions of Z's half-width along h
 
@@ -108,20 +108,14 @@ def brute_force_minimum(g: np.ndarray, h: np.ndarray, r: float) -> float:
 
 
 @SETTINGS
-@given(gain_problems(WELL_CONDITIONED))
-def test_simplex_gain_reaches_the_lp_minimum(problem):
-    g, h, r = problem
-    lam, lp = gains.volume_gain_simplex(g, h, r), gains.volume_gain_lp(g, h, r)
-    (simplex, solved), slack = values_and_slack(g, h, r, lam, lp)
-    assert abs(simplex - solved) <= 1e-9 * solved + slack, (simplex, solved)
-
-
-@SETTINGS
-@given(gain_problems(ILL_CONDITIONED))
-def test_simplex_gain_is_never_above_the_lp_on_ill_conditioned_sets(problem):
-    # HiGHS stops within its feasibility tolerance (1e-7), scaled by the tiny determinants of
-    # these sets: there it returns up to 90 % more than the minimum the brute force confirms
-    # (test below) in about one case in five. The simplex gain is never above it.
+@given(gain_problems(WELL_CONDITIONED + ILL_CONDITIONED))
+def test_simplex_gain_is_never_above_the_lp(problem):
+    # Equal to the LP's minimum wherever HiGHS finds it; but HiGHS stops within its
+    # feasibility tolerance (1e-7) of problems scaled by tiny determinants, and in random
+    # cases it returned up to 90 % above the minimum (of the ill-conditioned kinds, about one
+    # case in five; of the others, a few in a thousand), a minimum the brute force below
+    # confirms. So the comparison with the LP is one-sided, and the one with the exact
+    # minimum two-sided.
     g, h, r = problem
     lam, lp = gains.volume_gain_simplex(g, h, r), gains.volume_gain_lp(g, h, r)
     (simplex, solved), slack = values_and_slack(g, h, r, lam, lp)
@@ -130,9 +124,10 @@ def test_simplex_gain_is_never_above_the_lp_on_ill_conditioned_sets(problem):
 
 @SETTINGS
 @given(st.one_of(gain_problems(WELL_CONDITIONED + ILL_CONDITIONED, dims=(3,), max_generators=7),
-                 gain_problems(WELL_CONDITIONED + ILL_CONDITIONED, dims=(4,), max_generators=6)))
+                 gain_problems(WELL_CONDITIONED + ILL_CONDITIONED, dims=(4,), max_generators=6),
+                 gain_problems(WELL_CONDITIONED + ILL_CONDITIONED, dims=(5,), max_generators=6)))
 def test_simplex_gain_is_the_exact_minimum_over_the_vertices(problem):
-    # Up to C(21, 2) and C(20, 3) vertices: every one of them tried.
+    # Up to C(21, 2), C(20, 3) and C(15, 4) vertices: every one of them tried.
     g, h, r = problem
     lam = gains.volume_gain_simplex(g, h, r)
     (simplex,), slack = values_and_slack(g, h, r, lam)
