@@ -55,17 +55,16 @@ import shapely.ops
 
 from sse_cosim.control.kinematics import BusDynamics
 from sse_cosim.control.swept import RoutePath, SweepPiece, body_sweep, swept_region, touch_extent
-from sse_cosim.estimation.motion import MotionModel, Separation
+from sse_cosim.estimation.motion import MotionModel, Separation, unit_fan
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
-from sse_cosim.sets import Zonotope
+from sse_cosim.sets import Zonotope, portable
 from sse_cosim.world.roadmap import RoadMap
 
 ZONE_PIECE_M = 4.0  # conflict zones are cut into pieces about this long along the route (m)
 _CUT_OVERLAP_M = 0.5  # consecutive pieces overlap by twice this along the route (m)
 _CUT_COVER_M2 = 1e-9  # what the cut pieces may leave of a zone uncovered, by rounding (m²)
 ARRIVAL_DIRECTIONS = 32  # fan of directions along which a known pedestrian's gap is measured
-_ANGLES = np.arange(ARRIVAL_DIRECTIONS) * (2.0 * math.pi / ARRIVAL_DIRECTIONS)
-FAN = np.column_stack([np.cos(_ANGLES), np.sin(_ANGLES)])  # (K, 2) unit directions
+FAN = unit_fan(ARRIVAL_DIRECTIONS)  # (K, 2) unit directions
 
 
 @dataclass(frozen=True)
@@ -93,7 +92,7 @@ class ConflictZone:
     def least_along(self) -> np.ndarray:
         """min over the zone's vertices q of n.q for each direction n of :data:`FAN`, shape
         (K,) (computed once)."""
-        return (shapely.get_coordinates(self.polygon) @ FAN.T).min(axis=0)
+        return portable.matmul(shapely.get_coordinates(self.polygon), FAN.T).min(axis=0)
 
 
 @dataclass(frozen=True)
@@ -374,7 +373,7 @@ def _arrivals(sources: Iterable[Source], zones: Sequence[ConflictZone],
     for i, source in enumerate(parts):
         if source.state is None:
             continue
-        largest = (shapely.get_coordinates(source.region) @ FAN.T).max(axis=0)  # (K,)
+        largest = portable.matmul(shapely.get_coordinates(source.region), FAN.T).max(axis=0)
         separation = Separation(FAN, least - largest[None, :])
         arrival = np.minimum(arrival, pedestrians.earliest_arrival_s(
             distances[i], source.state, separation))

@@ -27,7 +27,7 @@ from sse_cosim.estimation.correction import Suspicion, TrackCorrection, correct
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import EndedTrack
 from sse_cosim.estimation.vote import CONSISTENCY_TOL
-from sse_cosim.sets import Strips, Zonotope, intersect_strips
+from sse_cosim.sets import Strips, Zonotope, intersect_strips, portable
 
 END_AFTER_STEPS = 10
 """An anonymous track that joined no detection at this many steps in a row ends (its set
@@ -219,8 +219,8 @@ def _narrowing(strips: Strips, steps_ago: int, estimate: Zonotope,
     left out (leaving out a true constraint is always sound), saving its linear program.
     None if no strip is left."""
     h = strips.normals[:, :2]
-    support = np.abs(h @ estimate.generators[:2]).sum(axis=1)
-    middle = h @ estimate.center[:2] - strips.values
+    support = np.abs(portable.matmul(h, estimate.generators[:2])).sum(axis=1)
+    middle = portable.matmul(h, estimate.center[:2]) - strips.values
     reach = model.step_length * steps_ago
     bound = model.max_speed * np.sqrt((h * h).sum(axis=1))
     useful = ((middle - support - strips.radii) / reach > -bound) \

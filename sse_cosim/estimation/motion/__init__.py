@@ -13,7 +13,13 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from sse_cosim.estimation.motion import bounded_acceleration, constant_velocity, position
-from sse_cosim.estimation.motion.base import POSITION_MEMO, LinearModel, MotionModel, Separation
+from sse_cosim.estimation.motion.base import (
+    POSITION_MEMO,
+    LinearModel,
+    MotionModel,
+    Separation,
+    unit_fan,
+)
 
 if TYPE_CHECKING:
     from sse_cosim.scenario.model import Estimator
@@ -46,4 +52,4 @@ def acceleration_bound(config: Estimator, step_length: float) -> float | None:
 
 
 __all__ = ["MODELS", "POSITION_MEMO", "LinearModel", "MotionModel", "Separation",
-           "acceleration_bound", "motion_model"]
+           "acceleration_bound", "motion_model", "unit_fan"]

@@ -21,6 +21,7 @@ in the fused one. ``tests/world`` checks that SUMO's trajectories admit such a p
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Protocol
@@ -31,6 +32,13 @@ from sse_cosim.memo import IdentityMemo
 from sse_cosim.sets import Strips, Zonotope, intersect_strips, portable
 
 POSITION_MEMO = 64  # position sets MotionModel.position keeps
+
+
+def unit_fan(count: int) -> np.ndarray:
+    """``count`` unit directions evenly around the circle from east, shape (count, 2)
+    (libm's sine and cosine: the same on every machine)."""
+    angles = [2.0 * math.pi * i / count for i in range(count)]
+    return np.array([[portable.cos(a), portable.sin(a)] for a in angles])
 
 
 class MotionModel(Protocol):

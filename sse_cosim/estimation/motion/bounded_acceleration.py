@@ -42,12 +42,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sse_cosim.estimation.motion.base import LinearModel, Separation
-from sse_cosim.sets import Strips, Zonotope
+from sse_cosim.estimation.motion.base import LinearModel, Separation, unit_fan
+from sse_cosim.sets import Strips, Zonotope, portable
 
 if TYPE_CHECKING:
     from sse_cosim.scenario.model import Estimator
@@ -129,18 +130,22 @@ class BoundedAcceleration(LinearModel):
         """h_V(n) = n.c + sum_i |n.g_i| for each unit direction n of ``directions`` (K, 2), with
         V = ⟨c, G⟩ the velocity part of ``state``; shape (K,), capped at v_max."""
         center, generators = state.center[2:], state.generators[2:, :]
-        support = directions @ center + np.abs(directions @ generators).sum(axis=1)
+        support = portable.matmul(directions, center) + np.abs(
+            portable.matmul(directions, generators)).sum(axis=1)
         return np.minimum(support, self.max_speed)
 
     def largest_speed(self, state: Zonotope) -> float:
         """An upper bound of ||v|| over ``state``'s velocity set, capped at v_max: the largest
         support over a fan of :data:`SPEED_DIRECTIONS` directions divided by cos(pi / K) (every
         vector lies within pi / K of a fan direction)."""
-        angles = np.arange(SPEED_DIRECTIONS) * (2.0 * math.pi / SPEED_DIRECTIONS)
-        fan = np.column_stack([np.cos(angles), np.sin(angles)])
-        support = fan @ state.center[2:] + np.abs(fan @ state.generators[2:, :]).sum(axis=1)
-        bound = float(support.max()) / math.cos(math.pi / SPEED_DIRECTIONS)
+        support = self.velocity_support(state, self._speed_fan)
+        bound = float(support.max()) / portable.cos(math.pi / SPEED_DIRECTIONS)
         return min(max(bound, 0.0), self.max_speed)
+
+    @cached_property
+    def _speed_fan(self) -> np.ndarray:
+        """:data:`SPEED_DIRECTIONS` unit directions, shape (K, 2) (built once)."""
+        return unit_fan(SPEED_DIRECTIONS)
 
     def distance_within(self, time_s: np.ndarray, toward_mps: np.ndarray) -> np.ndarray:
         """D(t; u) (m): the farthest the path moves along a direction in ``time_s`` seconds from
