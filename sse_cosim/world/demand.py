@@ -52,6 +52,7 @@ from xml.sax.saxutils import quoteattr
 import sumolib
 
 from sse_cosim.errors import UserError
+from sse_cosim.estimation.motion import acceleration_bound
 from sse_cosim.files import write_text_atomic
 from sse_cosim.scenario.model import (
     AutomatedVehicle,
@@ -143,7 +144,9 @@ def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: st
                 timer: WalkTimer | None = None) -> ActorPlan:
     """Check the actors against the network (UserError naming ``source`` and the field) and plan
     the automated vehicles' lanes and the pedestrians' walks, timed by ``timer`` (default: a
-    :class:`~sse_cosim.world.walk_probe.ProbeTimer` of the network in a temporary folder)."""
+    :class:`~sse_cosim.world.walk_probe.ProbeTimer` of the network in a temporary folder,
+    walking the speed ramp of the scenario's motion model if it bounds the acceleration: the
+    safety campaign's feasibility is the run's)."""
     net = _read_net(net_path) if roadmap.net is None else roadmap.net  # read once
     lanes = {vid: _check_automated(net, vid, av, source)
              for vid, av in present(scenario.automated).items()}
@@ -164,7 +167,7 @@ def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: st
         if timer is None:
             from sse_cosim.world.walk_probe import ProbeTimer  # imported here: it imports demand
 
-            timer = ProbeTimer(net_path)
+            timer = ProbeTimer(net_path, accel_mps2=acceleration_bound(scenario.estimator, dt))
         times = timer(walks, dt)
         plans = {pid: _time_pedestrian(net, pid, pedestrians[pid], walk, times[pid], dt, source)
                  for pid, walk in walks.items()}
