@@ -66,13 +66,12 @@ solver's tolerance (rounded up to 1 mm and verified), no bisection.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sparse
 
-from sse_cosim.world.assumptions import MotionBreak
+from sse_cosim.world.assumptions import MotionBreak, WalkCheck
 
 TOLERANCE_M = 1e-6
 SHRINK_M = 1e-6  # the programs' radii are the model's less this (m)
@@ -285,42 +284,28 @@ class _Walk:
     path: list[tuple[float, float]] = field(default_factory=list)
 
 
-class AccelerationCheck:
+class AccelerationCheck(WalkCheck):
     """Keeps a witness path of every pedestrian's walk (see the module docstring).
 
-    ``step(time, positions)`` takes each present pedestrian's position (x, y) and returns the
-    breaks of this step; a pedestrian absent from a step is forgotten (one that comes back
-    starts afresh), and one that broke starts afresh at its position. ``diagnose``: whether a
-    break is given its needed jitter and the bounds it broke (a run that stops on it) or not
+    One that broke starts afresh at its position (:class:`WalkCheck`). ``diagnose``: whether
+    a break is given its needed jitter and the bounds it broke (a run that stops on it) or not
     (a study that counts breaks).
     """
 
     def __init__(self, bounds: AccelerationBounds, diagnose: bool = True) -> None:
+        super().__init__()
         self.bounds = bounds
         self.diagnose = diagnose
-        self._walks: dict[str, _Walk] = {}
-        self._full: dict[str, list[np.ndarray]] = {}
 
-    def step(self, time: float, positions: Mapping[str, tuple[float, float]]) -> list[MotionBreak]:
-        """Check this step's ``positions`` by pedestrian id; the breaks found (usually none)."""
-        for gone in [pid for pid in self._walks if pid not in positions]:
-            del self._walks[gone]
-            del self._full[gone]
-        breaks = []
-        for pid, xy in positions.items():
-            point = np.array([float(xy[0]), float(xy[1])])
-            walk = self._walks.get(pid)
-            if walk is None:
-                self._start(pid, point, [])
-                continue
-            self._full[pid].append(point)
-            local = (float(point[0] - walk.origin[0]), float(point[1] - walk.origin[1]))
-            walk.positions.append(local)
-            if self._greedy(walk) or self._solved(walk):
-                continue
-            breaks.append(self._break(pid, walk, time))
-            self._start(pid, point, self._full[pid][:-1])
-        return breaks
+    def _advance(self, pid: str, walk: _Walk, time: float, point: np.ndarray) -> MotionBreak | None:
+        self._full[pid].append(point)
+        local = (float(point[0] - walk.origin[0]), float(point[1] - walk.origin[1]))
+        walk.positions.append(local)
+        if self._greedy(walk) or self._solved(walk):
+            return None
+        found = self._break(pid, walk, time)
+        self._start(pid, point, self._full[pid][:-1])
+        return found
 
     def _start(self, pid: str, point: np.ndarray, full: list[np.ndarray]) -> None:
         self._walks[pid] = _Walk(origin=point, positions=[(0.0, 0.0)], path=[(0.0, 0.0)])
@@ -381,7 +366,7 @@ class AccelerationCheck:
         change = None
         if len(positions) >= 3:
             second = positions[-1] - 2.0 * positions[-2] + positions[-3]
-            change = float(np.sqrt(second @ second)) / self.bounds.step_s
+            change = float(np.sqrt((second * second).sum())) / self.bounds.step_s
         needed = broke = None
         if self.diagnose:
             needed = needed_jitter(np.array(self._full[pid]), self.bounds)
@@ -389,7 +374,7 @@ class AccelerationCheck:
         return MotionBreak(person=pid, time=time,
                            distance_m=nearest_distance(positions, self.bounds),
                            jitter_m=self.bounds.jitter_m,
-                           step_m=float(np.sqrt(moved @ moved)), needed_jitter_m=needed,
+                           step_m=float(np.sqrt((moved * moved).sum())), needed_jitter_m=needed,
                            velocity_change_mps=change, broke=broke)
 
 

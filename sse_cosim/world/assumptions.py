@@ -51,9 +51,11 @@ a walk that keeps the disc model keeps the box model too (this test is the stric
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 import shapely
@@ -301,18 +303,17 @@ class _Walk:
     fine_at: int = 0
 
 
-class PedestrianMotionCheck:
-    """Follows every pedestrian's admissible path points S_k (see the module docstring).
+class WalkCheck(ABC):
+    """What the pedestrian checks share: each present pedestrian's walk, followed step by step.
 
     ``step(time, positions)`` takes each present pedestrian's position (x, y) and returns the
     breaks of this step; a pedestrian absent from a step is forgotten (one that comes back
-    starts afresh), and one that broke starts afresh at its position.
+    starts afresh). A subclass starts a walk (:meth:`_start`) and advances it by one position,
+    returning a break if there is one (:meth:`_advance`).
     """
 
-    def __init__(self, bounds: MotionBounds, needed_jitter: bool = True) -> None:
-        self.bounds = bounds
-        self.needed_jitter = needed_jitter
-        self._walks: dict[str, _Walk] = {}
+    def __init__(self) -> None:
+        self._walks: dict[str, Any] = {}
         self._full: dict[str, list[np.ndarray]] = {}
 
     def step(self, time: float, positions: Mapping[str, tuple[float, float]]) -> list[MotionBreak]:
@@ -331,6 +332,25 @@ class PedestrianMotionCheck:
             if found is not None:
                 breaks.append(found)
         return breaks
+
+    @abstractmethod
+    def _start(self, pid: str, point: np.ndarray, full: list[np.ndarray]) -> None:
+        """Start ``pid``'s walk at ``point`` after the positions ``full`` (kept for a needed
+        jitter)."""
+
+    @abstractmethod
+    def _advance(self, pid: str, walk: Any, time: float, point: np.ndarray) -> MotionBreak | None:
+        """Advance ``walk`` by ``point``; the break at it, if any."""
+
+
+class PedestrianMotionCheck(WalkCheck):
+    """Follows every pedestrian's admissible path points S_k (see the module docstring); one
+    that broke starts afresh at its position (:class:`WalkCheck`)."""
+
+    def __init__(self, bounds: MotionBounds, needed_jitter: bool = True) -> None:
+        super().__init__()
+        self.bounds = bounds
+        self.needed_jitter = needed_jitter
 
     def _start(self, pid: str, point: np.ndarray, full: list[np.ndarray]) -> None:
         walk = _Walk(origin=point, positions=[np.zeros(2)], center=np.zeros(2))
