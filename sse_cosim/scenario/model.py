@@ -180,10 +180,11 @@ class Estimator(StrictModel):
     )
     position_jitter_m: NonNegativeFloat | None = Field(
         None,
-        description="How far the simulated position may stray from a speed-bounded path (m); "
-        "covers SUMO's pedestrian jumps at lane transitions. Left out: the value measured for "
-        "the network, step length and speed bound (a lone SUMO walker at the speed bound through "
-        "every passage of every walking area of the scene, cached with the network; "
+        description="How far the simulated position may stray from a path that keeps the motion "
+        "model's bounds (m); covers SUMO's pedestrian jumps at lane transitions. Left out: the "
+        "value measured for the network, step length and bounds (a lone SUMO walker at the "
+        "speed bound through every passage of every walking area of the scene, ramped within "
+        "the acceleration bound for 'bounded-acceleration', cached with the network; "
         "`sse-cosim network` reports it). A value below the measured one is refused unless "
         "breaks_assumptions lists 'pedestrian_speed'. Every step checks that each pedestrian's "
         "true motion keeps it; a run that breaks it stops (exit status 5) naming the jitter its "
@@ -451,8 +452,10 @@ class Scenario(StrictModel):
         default_factory=list,
         description="Assumptions of the estimator this study breaks on purpose (anything else "
         "that would break one is an error): 'pedestrian_speed': a pedestrian walks faster than "
-        "estimator.max_pedestrian_speed_mps, or SUMO moves it farther off a speed-bounded path "
-        "than estimator.position_jitter_m (the run counts these breaks and goes on); "
+        "estimator.max_pedestrian_speed_mps, or (with the 'bounded-acceleration' model) speeds up, "
+        "slows down or turns faster than estimator.max_pedestrian_accel_mps2, or SUMO moves it "
+        "farther off such a path than estimator.position_jitter_m (the run counts these breaks "
+        "and goes on); "
         "'walkable_ground': a pedestrian's centre leaves the walkable ground (sidewalks, "
         "walking areas and crossings, each junction's grown by the margin SUMO's lone walkers "
         "were measured to need there; the run counts these steps and goes on); "

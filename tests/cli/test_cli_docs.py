@@ -26,7 +26,7 @@ def test_help_explains_every_command(command, capsys):
 
 @pytest.mark.parametrize(("path", "values"), [
     ("sensors.<sensor name>.noise", ["uniform", "worst-case"]),
-    ("estimator.state_model", ["position", "constant-velocity"]),
+    ("estimator.state_model", ["position", "constant-velocity", "bounded-acceleration"]),
     ("breaks_assumptions", ["pedestrian_speed", "walkable_ground", "sensor_bounds",
                             "shared_estimates"]),
 ])
