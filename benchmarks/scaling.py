@@ -19,7 +19,7 @@ import shapely
 
 from benchmarks.common import PlainObserver, fuse_inputs, median
 from benchmarks.loop_cost import profile_call
-from sse_cosim.control.picture import SceneContext, assess
+from sse_cosim.control.picture import SceneContext, Source, assess
 from sse_cosim.estimation.motion import motion_model
 from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea
 from sse_cosim.scenario.model import AutomatedVehicle, Controller, Estimator
@@ -102,7 +102,7 @@ def measure(pedestrians: int, sensors: int, steps: int, warmup: int, roadmap) ->
         unknown = unobserved.update(step, own_view, [r for _, _, _, r in delivered])
         assess(context, np.array([bus_x, -1.6]), 10.0,
                shapely.union_all([o.occluded for o in bus_views]), unknown,
-               list(possible.values()))
+               [Source(region, fused.get(pid)) for pid, region in possible.items()])
         inbox = {
             n: (step, estimates[n], shapely.union_all(
                 [o.visible for o in observations.values() if o.node == n]))
