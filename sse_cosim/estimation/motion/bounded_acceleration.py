@@ -48,6 +48,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from sse_cosim.estimation.motion.base import LinearModel, Separation, unit_fan
+from sse_cosim.estimation.motion.constant_velocity import linear_parts
 from sse_cosim.sets import Strips, Zonotope, portable
 
 if TYPE_CHECKING:
@@ -63,14 +64,9 @@ _OCTAGON = np.array([[1.0, 0.0], [0.0, 1.0], [math.sqrt(0.5), math.sqrt(0.5)],
 def build(config: Estimator, step_length: float, jitter: float) -> BoundedAcceleration:
     """The bounded-acceleration model of ``config`` for steps of ``step_length`` seconds."""
     v_max, a_max = config.max_pedestrian_speed_mps, config.max_pedestrian_accel_mps2
-    transition = np.block([[np.eye(2), step_length * np.eye(2)], [np.zeros((2, 2)), np.eye(2)]])
-    noise = np.zeros((4, 2))
-    noise[2:, :] = np.eye(2) * (a_max * step_length)
     speed_rows = np.hstack([np.zeros((4, 2)), _OCTAGON])
     return BoundedAcceleration(
-        transition=transition,
-        process_noise=Zonotope(np.zeros(4), noise),
-        position_matrix=np.hstack([np.eye(2), np.zeros((2, 2))]),
+        **linear_parts(step_length, a_max * step_length),
         state_bounds=Strips(speed_rows, np.zeros(4), np.full(4, v_max)),
         max_speed=v_max,
         step_length=step_length,

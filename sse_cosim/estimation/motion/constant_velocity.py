@@ -22,17 +22,25 @@ if TYPE_CHECKING:
 NAME = "constant-velocity"
 
 
+def linear_parts(step_length: float, velocity_change: float) -> dict[str, object]:
+    """F = [[I, dt I], [0, I]], the process noise <0, [0; velocity_change I]> and C = [I 0] of a
+    (position, velocity) model: :class:`LinearModel`'s fields every such model shares."""
+    noise = np.zeros((4, 2))
+    noise[2:, :] = np.eye(2) * velocity_change
+    return {
+        "transition": np.block([[np.eye(2), step_length * np.eye(2)],
+                                [np.zeros((2, 2)), np.eye(2)]]),
+        "process_noise": Zonotope(np.zeros(4), noise),
+        "position_matrix": np.hstack([np.eye(2), np.zeros((2, 2))]),
+    }
+
+
 def build(config: Estimator, step_length: float, jitter: float) -> LinearModel:
     """The constant-velocity model of ``config`` for steps of ``step_length`` seconds."""
     v_max = config.max_pedestrian_speed_mps
-    transition = np.block([[np.eye(2), step_length * np.eye(2)], [np.zeros((2, 2)), np.eye(2)]])
-    noise = np.zeros((4, 2))
-    noise[2:, :] = np.eye(2) * config.max_velocity_change_mps
     velocity_rows = np.hstack([np.zeros((2, 2)), np.eye(2)])
     return LinearModel(
-        transition=transition,
-        process_noise=Zonotope(np.zeros(4), noise),
-        position_matrix=np.hstack([np.eye(2), np.zeros((2, 2))]),
+        **linear_parts(step_length, config.max_velocity_change_mps),
         state_bounds=Strips(velocity_rows, np.zeros(2), np.full(2, v_max)),
         max_speed=v_max,
         step_length=step_length,
