@@ -358,21 +358,24 @@ def _arrivals(sources: Iterable[Source], zones: Sequence[ConflictZone],
               pedestrians: MotionModel) -> np.ndarray:
     """Earliest time (s) a pedestrian somewhere in ``sources`` can be in each of ``zones``,
     shape (z,) (inf without a source): the soonest of the model's arrivals from each source
-    (the stateless ones from their nearest, as one)."""
+    (those without a state, or all if the model uses none, from their nearest, as one)."""
     parts = [s for s in sources if not s.region.is_empty]
     if not parts or not zones:
         return np.full(len(zones), math.inf)
     polygons = np.array([zone.polygon for zone in zones], dtype=object)[None, :]
     distances = shapely.distance(np.array([s.region for s in parts], dtype=object)[:, None],
                                  polygons)  # (s, z)
-    stateless = [i for i, s in enumerate(parts) if s.state is None]
+    with_state = [s.state is not None and pedestrians.uses_state for s in parts]
+    known = [i for i, used in enumerate(with_state) if used]
+    stateless = [i for i, used in enumerate(with_state) if not used]
     arrival = np.full(len(zones), math.inf)
     if stateless:
         arrival = pedestrians.earliest_arrival_s(distances[stateless].min(axis=0))
+    if not known:
+        return arrival
     least = np.array([zone.least_along for zone in zones])  # (z, K)
-    for i, source in enumerate(parts):
-        if source.state is None:
-            continue
+    for i in known:
+        source = parts[i]
         largest = portable.matmul(shapely.get_coordinates(source.region), FAN.T).max(axis=0)
         separation = Separation(FAN, least - largest[None, :])
         arrival = np.minimum(arrival, pedestrians.earliest_arrival_s(

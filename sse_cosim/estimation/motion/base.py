@@ -105,6 +105,11 @@ class MotionModel(Protocol):
         walkers' speeds and checks the bound), else None."""
 
     @property
+    def uses_state(self) -> bool:
+        """Whether :meth:`reach_m` and :meth:`earliest_arrival_s` use a state set (else a
+        caller need not build one, nor a separation)."""
+
+    @property
     def velocity_windows(self) -> tuple[int, ...]:
         """How many steps ago a node's path strips also bound the current state
         (:meth:`velocity_strips`); empty: only the current strips are used."""
@@ -179,6 +184,11 @@ class LinearModel:
     def acceleration_bound_mps2(self) -> float | None:
         """None: a linear model alone bounds the speed, not the acceleration."""
         return None
+
+    @property
+    def uses_state(self) -> bool:
+        """False: its reach and arrivals are the speed bound's, whatever the state."""
+        return False
 
     def velocity_strips(self, path: Strips, steps_ago: int) -> Strips:
         """Path strips |h.s_{k-N} - y| <= r of N = ``steps_ago`` steps ago (m, 2) as strips

@@ -95,6 +95,10 @@ class BoundedAcceleration(LinearModel):
     def acceleration_bound_mps2(self) -> float:
         return self.max_accel
 
+    @property
+    def uses_state(self) -> bool:
+        return True
+
     def reach_m(self, steps: int = 1, state: Zonotope | None = None) -> float:
         """D(steps dt; u) with u the largest speed in ``state``'s velocity set (v_max without
         a state): how far the path can move in ``steps`` steps."""
