@@ -75,26 +75,25 @@ stops it uncertified."""
 
 @njit(cache=True)
 def _eliminated_determinant(a: FloatArray) -> float:
-    """det of a square (k, k) matrix by Gaussian elimination with partial pivoting, in place
-    (``a`` is overwritten); 0 when a pivot column is all zero."""
+    """det of a square (k, k) matrix from its :func:`_lu` (partial pivoting): the product of
+    the pivots, negated for an odd row order; 0 when a pivot column is all zero."""
+    lu, order, regular = _lu(a)
+    if not regular:
+        return 0.0
     k = a.shape[0]
     det = 1.0
     for col in range(k):
-        pivot = col
-        for row in range(col + 1, k):
-            if abs(a[row, col]) > abs(a[pivot, col]):
-                pivot = row
-        if a[pivot, col] == 0.0:
-            return 0.0
-        if pivot != col:
-            for j in range(col, k):
-                a[col, j], a[pivot, j] = a[pivot, j], a[col, j]
+        det *= lu[col, col]
+    seen = np.zeros(k, dtype=np.bool_)
+    for start in range(k):  # each cycle of length c flips the sign c - 1 times
+        length = 0
+        i = start
+        while not seen[i]:
+            seen[i] = True
+            i = order[i]
+            length += 1
+        if length > 0 and length % 2 == 0:
             det = -det
-        det *= a[col, col]
-        for row in range(col + 1, k):
-            factor = a[row, col] / a[col, col]
-            for j in range(col + 1, k):
-                a[row, j] -= factor * a[col, j]
     return det
 
 
