@@ -140,7 +140,13 @@ def fields() -> None:
               help="Step length (s) the walkers are measured at [default: a scenario's, 0.1].")
 @click.option("--speed-mps", type=click.FloatRange(min=0.01), default=None,
               help="Speed bound (m/s) the walkers walk at [default: the estimator's, 2.5].")
-def network(network_path: Path, step_length_s: float | None, speed_mps: float | None) -> None:
+@click.option("--accel-mps2", type=click.FloatRange(min=0.01), default=None,
+              help="Ramp the walkers' speed within this acceleration bound (m/s²), as runs "
+                   "with estimator.state_model = 'bounded-acceleration' do (its bound: "
+                   "estimator.max_pedestrian_accel_mps2, 3.2) [default: no ramp, as the "
+                   "position model's runs].")
+def network(network_path: Path, step_length_s: float | None, speed_mps: float | None,
+            accel_mps2: float | None) -> None:
     """Build the road network and measure the position jitter its walkers need.
 
     SOURCES_OR_NET is a folder of plain-XML sources (default: sumo_net/; netconvert from the
@@ -168,9 +174,10 @@ def network(network_path: Path, step_length_s: float | None, speed_mps: float | 
     speed = speed_mps or Estimator.model_fields["max_pedestrian_speed_mps"].default
     roadmap = load_roadmap(net_path)
     measured = measure_walkers(net_path, roadmap, None, speed, step,
-                               Pedestrian.model_fields["radius_m"].default)
-    click.echo(f"walker jitter: {measured.jitter_m:.3f} m at {speed:g} m/s and {step:g} s steps "
-               f"over {measured.junctions} junctions with walking areas; the most "
+                               Pedestrian.model_fields["radius_m"].default, accel_mps2)
+    ramp = "" if accel_mps2 is None else f", ramped within {accel_mps2:g} m/s²"
+    click.echo(f"walker jitter: {measured.jitter_m:.3f} m at {speed:g} m/s{ramp} and {step:g} s "
+               f"steps over {measured.junctions} junctions with walking areas; the most "
                f"{measured.where()}")
     patches = measured.ground_patches
     beyond = roadmap.with_ground_patches(patches).walkable.area - roadmap.ground.area

@@ -139,3 +139,18 @@ def test_a_break_stops_the_run_in_one_line_or_is_counted(tmp_path, paper) -> Non
         breaks = world.motion_breaks
     assert breaks["count"] >= 1 and breaks["first"][0]["pedestrian"] == "pedestrian"
     assert breaks["first"][0]["beyond_m"] > 0.0
+
+
+def test_the_network_command_measures_the_ramped_walkers_with_accel(paper, capsys) -> None:
+    """`sse-cosim network NET --accel-mps2 A` prints the jitter and patches the ramped
+    walkers need (the runs of the acceleration model take the same), and says so; without
+    the option it prints the position model's."""
+    from sse_cosim.cli.main import main
+
+    roadmap = load_roadmap(paper)
+    for accel, said in ((ACCEL, f"at {SPEED:g} m/s, ramped within {ACCEL:g} m/s² and"),
+                        (None, f"at {SPEED:g} m/s and")):
+        main(["network", str(paper), *(["--accel-mps2", str(accel)] if accel else [])])
+        line = capsys.readouterr().out.splitlines()[1]
+        measured = measure_walkers(paper, roadmap, None, SPEED, STEP, RADIUS, accel)
+        assert line.startswith(f"walker jitter: {measured.jitter_m:.3f} m {said}")
