@@ -28,9 +28,25 @@ FusionMethod = Callable[[Sequence[Zonotope]], Zonotope]
 WeightChooser = Callable[[Sequence[Zonotope]], FloatArray]
 
 
+EXACT_SIZE_GENERATORS = 16
+"""An n-D input (n >= 3) with more generators than this is sized by the volume of its Girard
+reduction to this many, an enclosure (so an upper bound of its volume): the exact volume sums
+C(e, n) determinants (in 4-D, e = 68: 814,385 of them, 80 ms), and a shared estimate that has
+aged k steps is predicted with two generators more a step. Which input is chosen never
+affects soundness: each contains the truth."""
+
+
+def _size(zonotope: Zonotope) -> float:
+    """The input's volume (2-D, or at most :data:`EXACT_SIZE_GENERATORS` generators), else the
+    volume of its reduction to that many generators."""
+    if zonotope.dim == 2 or zonotope.n_generators <= EXACT_SIZE_GENERATORS:
+        return zonotope.volume()
+    return zonotope.reduce(EXACT_SIZE_GENERATORS).volume()
+
+
 def _smallest(zonotopes: Sequence[Zonotope]) -> int:
-    """Index of the input with the least volume (first on ties)."""
-    return int(np.argmin([z.volume() for z in zonotopes]))
+    """Index of the input with the least :func:`_size` (first on ties)."""
+    return int(np.argmin([_size(z) for z in zonotopes]))
 
 
 def fuse_with_weights(zonotopes: Sequence[Zonotope], weights: ArrayLike) -> Zonotope:
@@ -63,7 +79,9 @@ def frobenius_weights(zonotopes: Sequence[Zonotope]) -> FloatArray:
 
 def volume_weights(zonotopes: Sequence[Zonotope]) -> FloatArray:
     """One-hot on the smallest-volume input: the exact minimizer of the fused volume over ALL
-    weights with Σ w ≠ 0 (so never larger than the smallest input, unlike the paper's example).
+    weights with Σ w ≠ 0 (so never larger than the smallest input, unlike the paper's example;
+    an n-D input of more than :data:`EXACT_SIZE_GENERATORS` generators is sized by an upper
+    bound, :func:`_size`).
 
     With Σ w = 1 the fused set is ĉ + Σ_j |w_j| ⟨0, G_j⟩, so Brunn-Minkowski gives
     vol^(1/n) >= Σ_j |w_j| vol(Z_j)^(1/n) >= min_j vol(Z_j)^(1/n), as Σ_j |w_j| >= 1.

@@ -23,6 +23,8 @@ from sse_cosim.sets import (
     zonotope_facet_strips,
 )
 from sse_cosim.sets.exact import zonotope_polygon
+from sse_cosim.sets.fusion import EXACT_SIZE_GENERATORS
+from sse_cosim.sets.zonotope import generator_volume_reference
 
 METHODS = sorted(FUSION_METHODS)
 
@@ -129,3 +131,19 @@ def test_a_point_input_is_the_frobenius_fusion():
     fused = fuse([box, point], "frobenius")
     assert fused.n_generators == 0 and np.array_equal(fused.center, point.center)
     assert fuse([box, point], "volume").n_generators == 0
+
+
+def test_an_input_of_many_generators_is_sized_by_an_upper_bound_and_lost_to_a_smaller_one():
+    """4-D: a shared estimate aged 30 steps (8 + 60 generators) is sized by its reduction to
+    EXACT_SIZE_GENERATORS, whose volume is at least the exact one (an enclosure); the volume
+    fusion still picks the input of least volume, and one within the exact bound is sized
+    exactly."""
+    rng = np.random.default_rng(7)
+    aged = Zonotope(np.zeros(4), rng.normal(size=(4, 8 + 60)))
+    small = Zonotope(np.zeros(4), 0.1 * rng.normal(size=(4, 8)))
+    bound = aged.reduce(EXACT_SIZE_GENERATORS).volume()
+    assert bound >= generator_volume_reference(aged.generators) * (1 - 1e-12)
+    assert np.array_equal(fuse([aged, small], "volume").generators, small.generators)
+    few = Zonotope(np.zeros(4), rng.normal(size=(4, EXACT_SIZE_GENERATORS)))
+    assert np.array_equal(fuse([aged, few], "volume").generators,
+                          (aged if bound < few.volume() else few).generators)
