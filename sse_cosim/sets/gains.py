@@ -383,12 +383,15 @@ def enclose_correction_reference(zonotope: Zonotope, strips: Strips) -> Zonotope
 
 def volume_correction(zonotope: Zonotope, strips: Strips) -> Zonotope:
     """Z ∩ S (strips with unit normals) by Proposition 1 with the ``volume`` gain (also the
-    ``enclose`` correction's fallback): in 2-D one compiled call
-    (:func:`~sse_cosim.sets.kernels.volume_correction_2d`), in other dimensions
+    ``enclose`` correction's fallback) in one compiled call: in 2-D
+    :func:`~sse_cosim.sets.kernels.volume_correction_2d`, for n >= 3
+    :func:`~sse_cosim.sets.volume_gain_kernels.volume_correction_nd`; 1-D by
     :func:`volume_correction_reference`."""
-    if zonotope.dim != 2:
-        return volume_correction_reference(zonotope, strips)
-    return _kernel_result(kernels.volume_correction_2d, zonotope, strips)
+    if zonotope.dim == 2:
+        return _kernel_result(kernels.volume_correction_2d, zonotope, strips)
+    if zonotope.dim >= 3:
+        return _kernel_result(volume_gain_kernels.volume_correction_nd, zonotope, strips)
+    return volume_correction_reference(zonotope, strips)
 
 
 def volume_correction_reference(zonotope: Zonotope, strips: Strips) -> Zonotope:

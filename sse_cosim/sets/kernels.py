@@ -26,18 +26,32 @@ round otherwise on another CPU, so no test asks for more):
   to rounding;
 - :func:`volume_correction_2d` for Proposition 1 with the ``volume`` gain in 2-D (reference
   ``volume_correction_reference`` in :mod:`~sse_cosim.sets.gains`): the same candidates and
-  choice, the Frobenius one by QR, so equal up to rounding.
+  choice, the Frobenius one by QR, so equal up to rounding. Its two steps,
+  :func:`sequential_volume_gain` and :func:`smallest_volume_correction`, take the
+  dimension's rank test, one-strip gain and volume as arguments, so
+  ``volume_gain_kernels.volume_correction_nd`` runs them in n-D.
 
 numba caches the machine code in ``__pycache__`` next to this file (ignored by git).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
+
+RankTest = Callable[[FloatArray], bool]
+"""A compiled test whether G (n, e) has rank n."""
+
+StripGain = Callable[[FloatArray, FloatArray, float], FloatArray]
+"""A compiled one-strip gain λ (n,) for G (n, e), a unit normal h (n,) and a radius r."""
+
+Volume = Callable[[FloatArray], float]
+"""A compiled volume of ⟨·, G⟩ for G (n, e)."""
 
 _BLOCK = 128  # numpy's PW_BLOCKSIZE
 
@@ -450,46 +464,63 @@ def intersect_frobenius(center: FloatArray, generators: FloatArray, normals: Flo
 
 
 @njit(cache=True)
-def _sequential_volume_gain(generators: FloatArray, normals: FloatArray, values: FloatArray,
-                            radii: FloatArray, center: FloatArray) -> FloatArray:
-    """``gains._sequential(volume_gain_vertices)`` for a 2-D ⟨c, G⟩: the strips one after
-    another, λ_j = 0 where strip j covers the current set, the one-strip Frobenius gain where
-    the current set is not full rank, else :func:`volume_gain_2d`; the joint Λ (2, m)."""
-    m = normals.shape[0]
-    total = np.zeros((2, m))
-    c0, c1 = center[0], center[1]
+def _dot_column(normal: FloatArray, matrix: FloatArray, col: int) -> float:
+    """hᵀ matrix[:, col] for h (n,), summed in index order from the first product (in 2-D
+    h0·m0 + h1·m1, without a leading 0.0 that would turn a -0.0 into +0.0)."""
+    total = normal[0] * matrix[0, col]
+    for i in range(1, normal.shape[0]):
+        total += normal[i] * matrix[i, col]
+    return total
+
+
+@njit(cache=True, inline="always")
+def sequential_volume_gain(rank_test: RankTest, strip_gain: StripGain, generators: FloatArray,
+                           normals: FloatArray, values: FloatArray, radii: FloatArray,
+                           center: FloatArray) -> FloatArray:
+    """``gains._sequential(choose)`` for ⟨c, G⟩ (n, e) and m unit-normal strips: the strips one
+    after another, λ_j = 0 where strip j covers the current set, the one-strip Frobenius gain
+    λ = G (hG)ᵀ / (|hG|² + r²) where ``rank_test`` (compiled, G -> bool) finds the current set
+    rank-deficient, else ``strip_gain`` (compiled, (G, h, r) -> λ (n,)); the joint Λ (n, m).
+    2-D: :func:`full_rank_2d` and :func:`volume_gain_2d`; n-D: their versions in
+    :mod:`~sse_cosim.sets.volume_gain_kernels`. Inlined into its caller, as
+    :func:`smallest_volume_correction`."""
+    n, m = generators.shape[0], normals.shape[0]
+    total = np.zeros((n, m))
+    c = center.copy()
     g = generators.copy()
     for j in range(m):
-        h0, h1, value, radius = normals[j, 0], normals[j, 1], values[j], radii[j]
+        normal, value, radius = normals[j], values[j], radii[j]
         e = g.shape[1]
         hg = np.empty(e)
-        for i in range(e):
-            hg[i] = h0 * g[0, i] + h1 * g[1, i]
-        mid = h0 * c0 + h1 * c1
+        for col in range(e):
+            hg[col] = _dot_column(normal, g, col)
+        mid = normal[0] * c[0]
+        for i in range(1, n):
+            mid += normal[i] * c[i]
         half = pairwise_sum(np.abs(hg), 0, e)
         if mid - half >= value - radius and mid + half <= value + radius:
             continue
-        if not full_rank_2d(g):
+        if not rank_test(g):
             scale = pairwise_sum(hg * hg, 0, e) + radius * radius
-            lam0 = pairwise_sum(g[0] * hg, 0, e) / scale
-            lam1 = pairwise_sum(g[1] * hg, 0, e) / scale
+            lam = np.empty(n)
+            for i in range(n):
+                lam[i] = pairwise_sum(g[i] * hg, 0, e) / scale
         else:
-            lam = volume_gain_2d(g, normals[j], radius)
-            lam0, lam1 = lam[0], lam[1]
-        if lam0 == 0.0 and lam1 == 0.0:
+            lam = strip_gain(g, normal, radius)
+        if not lam.any():
             continue
         for k in range(j):
-            t = h0 * total[0, k] + h1 * total[1, k]
-            total[0, k] -= lam0 * t
-            total[1, k] -= lam1 * t
-        total[0, j], total[1, j] = lam0, lam1
-        c0 += lam0 * (value - mid)
-        c1 += lam1 * (value - mid)
-        grown = np.empty((2, e + 1))
-        for i in range(e):
-            grown[0, i] = g[0, i] - lam0 * hg[i]
-            grown[1, i] = g[1, i] - lam1 * hg[i]
-        grown[0, e], grown[1, e] = lam0 * radius, lam1 * radius
+            t = _dot_column(normal, total, k)
+            for i in range(n):
+                total[i, k] -= lam[i] * t
+        for i in range(n):
+            total[i, j] = lam[i]
+            c[i] += lam[i] * (value - mid)
+        grown = np.empty((n, e + 1))
+        for i in range(n):
+            for col in range(e):
+                grown[i, col] = g[i, col] - lam[i] * hg[col]
+            grown[i, e] = lam[i] * radius
         g = nonzero_columns(grown)
     return total
 
@@ -533,26 +564,45 @@ def _apply_gain(center: FloatArray, generators: FloatArray, hg: FloatArray, gain
     return new_center, nonzero_columns(full)
 
 
+@njit(cache=True, inline="always")
+def smallest_volume_correction(volume: Volume, sequential: FloatArray, center: FloatArray,
+                               generators: FloatArray, normals: FloatArray, values: FloatArray,
+                               radii: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Prop. 1 with the ``volume`` gain for ⟨c, G⟩ (n, e) and unit-normal strips (H (m, n), y
+    and r (m,)), given the sequential gain Λ (n, m) (:func:`sequential_volume_gain`): of that,
+    the Frobenius gain and Λ = 0, the gain whose G' has the least ``volume`` (compiled,
+    G -> float; the first of the least, a NaN before any number, as ``np.argmin``), applied by
+    eqs. C_lambda and G_lambda, zero columns dropped; -> c' (n,), G' (n, <= e + m).
+    ``gains._smallest_volume`` and ``gains.apply_gain`` (reference:
+    ``gains.volume_correction_reference``).
+
+    Like :func:`sequential_volume_gain` it is inlined into its caller (numba's
+    ``inline="always"``): there the kernels passed in are the caller's globals, so the
+    caller's machine code can be cached (a compiled function that receives a kernel as an
+    argument and calls it holds the kernel's address, which numba does not cache)."""
+    n, m = generators.shape[0], normals.shape[0]
+    hg = _project(normals, generators)
+    candidates = (sequential, _gain(generators, hg, radii), np.zeros((n, m)))
+    best, best_volume = 0, 0.0
+    for k in range(3):
+        size = volume(_updated(generators, hg, candidates[k], radii)) if k < 2 \
+            else volume(generators)
+        if k == 0 or size < best_volume or (np.isnan(size) and not np.isnan(best_volume)):
+            best, best_volume = k, size
+    return _apply_gain(center, generators, hg, candidates[best], normals, values, radii)
+
+
 @njit(cache=True)
 def volume_correction_2d(center: FloatArray, generators: FloatArray, normals: FloatArray,
                          values: FloatArray, radii: FloatArray
                          ) -> tuple[FloatArray, FloatArray]:
-    """Prop. 1 with the ``volume`` gain for a 2-D ⟨c, G⟩ and unit-normal strips (H (m, 2), y
-    and r (m,)): of the sequential vertex gain, the Frobenius gain and Λ = 0, the gain whose
-    G' has the least area (the first of the least), applied by eqs. C_lambda and G_lambda,
-    zero columns dropped; -> c' (2,), G' (2, <= e + m). ``gains._smallest_volume`` and
-    ``gains.apply_gain`` in one call (reference: ``gains.volume_correction_reference``)."""
-    m = normals.shape[0]
-    hg = _project(normals, generators)
-    candidates = (_sequential_volume_gain(generators, normals, values, radii, center),
-                  _gain(generators, hg, radii), np.zeros((2, m)))
-    best, best_area = 0, 0.0
-    for k in range(3):
-        area = area_2d(_updated(generators, hg, candidates[k], radii)) if k < 2 \
-            else area_2d(generators)
-        if k == 0 or area < best_area or (np.isnan(area) and not np.isnan(best_area)):
-            best, best_area = k, area
-    return _apply_gain(center, generators, hg, candidates[best], normals, values, radii)
+    """:func:`smallest_volume_correction` for a 2-D ⟨c, G⟩ (H (m, 2)): the sequential vertex
+    gain (:func:`full_rank_2d`, :func:`volume_gain_2d`), sizes by :func:`area_2d`;
+    -> c' (2,), G' (2, <= e + m)."""
+    sequential = sequential_volume_gain(full_rank_2d, volume_gain_2d, generators, normals,
+                                        values, radii, center)
+    return smallest_volume_correction(area_2d, sequential, center, generators, normals,
+                                      values, radii)
 
 
 @njit(cache=True)

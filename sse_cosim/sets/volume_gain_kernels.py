@@ -39,6 +39,14 @@ force over every vertex of the arrangement on small cases. :func:`cofactor_rows`
 ``zonotope.generator_volume`` for n >= 3 (reference ``generator_volume_reference``), each up
 to rounding (cofactor expansion and elimination instead of LAPACK's LU and QR; no BLAS or
 LAPACK, so the same bits on every CPU).
+
+:func:`volume_correction_nd` is Proposition 1 with the ``volume`` gain in n >= 3 dimensions
+in one call (``gains.volume_correction``; reference ``gains.volume_correction_reference``):
+the 2-D kernel's steps (``kernels.sequential_volume_gain``,
+``kernels.smallest_volume_correction``) with :func:`volume_gain_nd`,
+:func:`generator_volume_nd` and the rank test :func:`full_rank_nd` (``zonotope.full_rank``
+for n != 2: numpy's ``matrix_rank`` tolerance on singular values from one-sided Jacobi,
+:func:`singular_values`, instead of LAPACK's SVD).
 """
 
 from __future__ import annotations
@@ -47,7 +55,11 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from sse_cosim.sets.kernels import nonzero_columns
+from sse_cosim.sets.kernels import (
+    nonzero_columns,
+    sequential_volume_gain,
+    smallest_volume_correction,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -65,6 +77,10 @@ MULTIPLIER_RTOL = 1e-11
 PERTURBATION = 1e-7
 """ε of the perturbed problem's right-hand sides (:func:`_offsets`), far above the vertices'
 rounding (:data:`RESIDUAL_RTOL`) for vertices of norm up to about 1e3."""
+
+MAX_JACOBI_SWEEPS = 60
+"""Sweeps of :func:`singular_values` before it stops unconverged (it converges quadratically:
+a handful for the small matrices here)."""
 
 MAX_PIVOTS_PER_ROW = 10
 """Pivot budget per row of D and dimension. In exact arithmetic the method ends by itself (a
@@ -494,3 +510,76 @@ def volume_gain_nd(generators: FloatArray, normal: FloatArray, radius: float) ->
         cuts += weights[j] * abs(_dot(rows[j], mu))
     value = base * abs(1.0 - _dot(normal, mu)) + radius / scale * cuts
     return mu if value < base else zero  # False for NaN (h = 0)
+
+
+@njit(cache=True)
+def singular_values(generators: FloatArray) -> FloatArray:
+    """The singular values (n,) of G (n, e), e >= n, unsorted, by one-sided Jacobi (Hestenes)
+    on Gᵀ: plane rotations of pairs of G's rows until every pair is orthogonal to within eps
+    of their norms; the singular values are then the rows' norms. Plain arithmetic in a fixed
+    order (no LAPACK), so the same bits on every CPU; each value within a few eps·s_max of
+    LAPACK's, as its SVD's (both backward stable). G is scaled by max |g_ij| first (no
+    overflow in the squares; a square that underflows belongs to a row below 1e-154 of the
+    largest entry)."""
+    n, e = generators.shape
+    scale = _largest_abs(generators.ravel())
+    if not scale > 0.0:
+        return np.zeros(n)
+    a = generators / scale
+    eps = np.finfo(np.float64).eps
+    for _ in range(MAX_JACOBI_SWEEPS):
+        rotated = False
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                alpha = _dot(a[p], a[p])
+                beta = _dot(a[q], a[q])
+                gamma = _dot(a[p], a[q])
+                if abs(gamma) <= eps * np.sqrt(alpha) * np.sqrt(beta):
+                    continue
+                zeta = (beta - alpha) / (2.0 * gamma)
+                t = 1.0 / (abs(zeta) + np.sqrt(1.0 + zeta * zeta)) if abs(zeta) < 1e150 \
+                    else 0.5 / abs(zeta)
+                if zeta < 0.0:
+                    t = -t
+                cos = 1.0 / np.sqrt(1.0 + t * t)
+                sin = cos * t
+                for j in range(e):
+                    x, y = a[p, j], a[q, j]
+                    a[p, j] = cos * x - sin * y
+                    a[q, j] = sin * x + cos * y
+                rotated = True
+        if not rotated:
+            break
+    values = np.empty(n)
+    for i in range(n):
+        values[i] = scale * np.sqrt(_dot(a[i], a[i]))
+    return values
+
+
+@njit(cache=True)
+def full_rank_nd(generators: FloatArray) -> bool:
+    """``zonotope.full_rank`` for G (n, e), n != 2: e >= n and s_min > e·eps·s_max (numpy's
+    ``matrix_rank`` tolerance) from :func:`singular_values` instead of LAPACK's SVD. The two
+    may disagree only where s_min is within a few eps·s_max of the threshold, i.e. where
+    both are rounding; the decision there only picks between two sound gains of
+    Proposition 1 (the one-strip Frobenius gain or :func:`volume_gain_nd`)."""
+    n, e = generators.shape
+    if e < n:
+        return False
+    values = singular_values(generators)
+    return values.min() > e * np.finfo(np.float64).eps * values.max()
+
+
+@njit(cache=True)
+def volume_correction_nd(center: FloatArray, generators: FloatArray, normals: FloatArray,
+                         values: FloatArray, radii: FloatArray
+                         ) -> tuple[FloatArray, FloatArray]:
+    """Prop. 1 with the ``volume`` gain for ⟨c, G⟩, n >= 3, and unit-normal strips (H (m, n),
+    y and r (m,)): ``kernels.smallest_volume_correction`` with the sequential gain of
+    :func:`full_rank_nd` and :func:`volume_gain_nd`, sizes by :func:`generator_volume_nd`;
+    -> c' (n,), G' (n, <= e + m). Reference: ``gains.volume_correction_reference``, equal up
+    to rounding (and to the rank decisions within rounding of the threshold)."""
+    sequential = sequential_volume_gain(full_rank_nd, volume_gain_nd, generators, normals,
+                                        values, radii, center)
+    return smallest_volume_correction(generator_volume_nd, sequential, center, generators,
+                                      normals, values, radii)

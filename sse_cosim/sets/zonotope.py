@@ -27,7 +27,7 @@ from sse_cosim.sets.kernels import PARALLEL_RTOL, area_2d, contains_2d, full_ran
 from sse_cosim.sets.lp import linprog
 from sse_cosim.sets.portable import matmul
 from sse_cosim.sets.reduction import REDUCTION_METHODS
-from sse_cosim.sets.volume_gain_kernels import generator_volume_nd
+from sse_cosim.sets.volume_gain_kernels import full_rank_nd, generator_volume_nd
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -131,12 +131,14 @@ def facet_normals(generators: FloatArray) -> FloatArray:
 
 def full_rank(generators: FloatArray) -> bool:
     """Whether G (n, e) has rank n, with numpy's ``matrix_rank`` tolerance
-    (s_min > e·eps·s_max); 2-D in closed form (s_max² and s_min·s_max from 2×2 minors)."""
+    (s_min > e·eps·s_max); 2-D in closed form (s_max² and s_min·s_max from 2×2 minors),
+    otherwise by the compiled :func:`~sse_cosim.sets.volume_gain_kernels.full_rank_nd`
+    (one-sided Jacobi instead of LAPACK's SVD: the same decision on every CPU)."""
     n, e = generators.shape
     if e < n:
         return False
     if n != 2:
-        return bool(np.linalg.matrix_rank(generators) == n)
+        return bool(full_rank_nd(np.ascontiguousarray(generators, dtype=np.float64)))
     a, b = generators[0], generators[1]
     p, q, r = matmul(a, a), matmul(b, b), matmul(a, b)
     if p + q == 0.0:

@@ -72,7 +72,6 @@ _DISPATCHED = {"dot", "matmul", "inner", "vdot", "tensordot", "einsum", "sin", "
 _ALLOWED_MODULES = {"sets/gains.py", "estimation/kalman.py"}
 _ALLOWED_FUNCTIONS = {("sets/zonotope.py", "abs_determinants"),
                       ("sets/zonotope.py", "cofactor_vectors"),
-                      ("sets/zonotope.py", "full_rank"),
                       ("sets/reduction.py", "_pca_frame")}
 
 
