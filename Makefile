@@ -1,5 +1,6 @@
 # Two commands set everything up on a fresh machine (Python 3.11, pip, make):
-#   make run   -- all paper scenarios and a noise sweep, reports into results/ (report.html)
+#   make run   -- every scenario (with both state models) and a noise sweep, reports into
+#                 results/ (report.html)
 #   make test  -- ruff + pytest (installs Debian's chromium for the browser tests if missing)
 PYTHON ?= python3
 VENV   := .venv
@@ -28,6 +29,8 @@ $(DEVSTAMP): pyproject.toml $(LOCK) | $(BIN)/python
 run: $(STAMP)
 	$(BIN)/sse-cosim batch scenarios/ --out results/
 	$(BIN)/sse-cosim sweep --file sweeps/noise.toml --out results/sweep/ --summaries-only
+	$(BIN)/sse-cosim sweep --file sweeps/motion/every_scenario.toml \
+		--out results/motion/every_scenario/ --summaries-only
 	$(BIN)/sse-cosim report results/ --out results/
 
 $(BENCHSTAMP): pyproject.toml $(LOCK) | $(BIN)/python
