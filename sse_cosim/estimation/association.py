@@ -447,9 +447,7 @@ def _finish(scene: _Scene, track: LocalTrack, estimate: Zonotope, occupied: bool
     if scene.ground is not None and not scene.ground.intersects(
             _polygon(scene.model.position(estimate))):
         return None  # R6: off the walkable ground
-    if scene.model.state_bounds is not None:  # the speed bound, always true (A3)
-        estimate = intersect_strips(estimate, scene.model.state_bounds,
-                                    scene.settings.gain_method)
+    estimate = scene.model.bound_state(estimate)  # the speed bound, always true (A3)
     estimate = estimate.reduce(scene.settings.max_generators, scene.settings.reduction_method)
     return replace(track, estimate=estimate, occupied=occupied, joined=tuple(sorted(joined)))
 

@@ -124,10 +124,7 @@ class NodeObserver:
                          self._suspicion.get(person_id, Suspicion()))
         self._suspicion[person_id] = update.suspicion
         estimate = self._with_windows(step, person_id, update, strips)
-        if self.model.state_bounds is not None:
-            estimate = intersect_strips(
-                estimate, self.model.state_bounds, self.settings.gain_method
-            )
+        estimate = self.model.bound_state(estimate)
         estimate = estimate.reduce(self.settings.max_generators, self.settings.reduction_method)
         return Track(person_id, estimate, step, bool(strips), update.flagged, update.conflict)
 

@@ -14,6 +14,7 @@ from sse_cosim.sets.gains import (
     GAIN_METHODS,
     apply_gain,
     available_gain_methods,
+    intersect_block_strips,
     intersect_strips,
 )
 from sse_cosim.sets.overlap import (
@@ -40,6 +41,7 @@ __all__ = [
     "fuse",
     "fuse_with_weights",
     "have_common_point",
+    "intersect_block_strips",
     "intersect_strips",
     "projection_interval",
     "strip_covers",

@@ -580,8 +580,20 @@ def smallest_volume_correction(volume: Volume, sequential: FloatArray, center: F
     ``inline="always"``): there the kernels passed in are the caller's globals, so the
     caller's machine code can be cached (a compiled function that receives a kernel as an
     argument and calls it holds the kernel's address, which numba does not cache)."""
-    n, m = generators.shape[0], normals.shape[0]
     hg = _project(normals, generators)
+    return _apply_gain(center, generators, hg,
+                       smallest_volume_gain(volume, sequential, generators, hg, radii),
+                       normals, values, radii)
+
+
+@njit(cache=True, inline="always")
+def smallest_volume_gain(volume: Volume, sequential: FloatArray, generators: FloatArray,
+                         hg: FloatArray, radii: FloatArray) -> FloatArray:
+    """Of the sequential gain Λ (n, m), the Frobenius gain and Λ = 0, the one whose G' (from G
+    (n, e) and HG (m, e)) has the least ``volume`` (the first of the least, a NaN before any
+    number, as ``np.argmin``): the choice of :func:`smallest_volume_correction` (inlined, as
+    it is)."""
+    n, m = generators.shape[0], hg.shape[0]
     candidates = (sequential, _gain(generators, hg, radii), np.zeros((n, m)))
     best, best_volume = 0, 0.0
     for k in range(3):
@@ -589,7 +601,7 @@ def smallest_volume_correction(volume: Volume, sequential: FloatArray, center: F
             else volume(generators)
         if k == 0 or size < best_volume or (np.isnan(size) and not np.isnan(best_volume)):
             best, best_volume = k, size
-    return _apply_gain(center, generators, hg, candidates[best], normals, values, radii)
+    return candidates[best]
 
 
 @njit(cache=True)
@@ -603,6 +615,28 @@ def volume_correction_2d(center: FloatArray, generators: FloatArray, normals: Fl
                                         values, radii, center)
     return smallest_volume_correction(area_2d, sequential, center, generators, normals,
                                       values, radii)
+
+
+@njit(cache=True)
+def block_volume_correction(center: FloatArray, generators: FloatArray, normals: FloatArray,
+                            values: FloatArray, radii: FloatArray, first: int
+                            ) -> tuple[FloatArray, FloatArray]:
+    """Prop. 1 for ⟨c, G⟩ (n, e) and unit-normal strips (H (m, n), y and r (m,)) whose normals
+    are zero outside the 2-D block of coordinates ``first``, ``first + 1``, with a gain that
+    is zero outside the block: the block's ``volume`` gain (that of :func:`volume_correction_2d`
+    on ⟨c_b, G_b⟩ and the block's normals), lifted. Every other coordinate keeps its centre and
+    generators exactly (its entries of the new columns are zero); -> c' (n,), G' (n, <= e + m),
+    zero columns dropped."""
+    n, m = generators.shape[0], normals.shape[0]
+    block_center = center[first:first + 2].copy()
+    block = np.ascontiguousarray(generators[first:first + 2])
+    block_normals = np.ascontiguousarray(normals[:, first:first + 2])
+    sequential = sequential_volume_gain(full_rank_2d, volume_gain_2d, block, block_normals,
+                                        values, radii, block_center)
+    hg = _project(block_normals, block)
+    gain = np.zeros((n, m))
+    gain[first:first + 2] = smallest_volume_gain(area_2d, sequential, block, hg, radii)
+    return _apply_gain(center, generators, hg, gain, normals, values, radii)
 
 
 @njit(cache=True)

@@ -13,7 +13,7 @@ import shapely
 import shapely.ops
 
 from sse_cosim.control.picture import FAN, ConflictZone, Source, _arrivals
-from sse_cosim.estimation.motion import Separation, motion_model
+from sse_cosim.estimation.motion import Separation, bounded_acceleration, motion_model
 from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips, Zonotope
@@ -200,3 +200,17 @@ def test_the_reach_from_a_state_set_grows_from_its_speed():
     assert m.reach_m(5, state((0, 0), (1.5, 0))) == pytest.approx(
         u * ramp + 0.5 * A_MAX * ramp**2 + V_MAX * (0.5 - ramp))
     assert m.reach_m(5) == pytest.approx(V_MAX * 0.5)
+
+
+def test_an_unseen_track_grows_in_position_by_the_speed_bound_a_step() -> None:
+    """A 4-D track nobody sees, predicted, cut by the speed bound and reduced for 30 steps:
+    its position half-width grows by v_max dt a step (2 + 0.25 * 30 = 9.5 m) and its velocity
+    stays within the bound. A volume-minimising cut of the whole state gives 24.4 m: it
+    narrows the velocity by widening the position (why it never flagged the shrunk car)."""
+    model = bounded_acceleration.build(Estimator(state_model="bounded-acceleration"), 0.1, 0.0)
+    estimate = Zonotope(np.zeros(4), np.diag([2.0, 2.0, 2.5, 2.5]))
+    for _ in range(30):
+        estimate = model.bound_state(model.predict(estimate)).reduce(8, "girard")
+    half_widths = np.abs(estimate.generators).sum(axis=1)
+    assert half_widths[:2] == pytest.approx([9.5, 9.5], rel=1e-9)
+    assert half_widths[2:] == pytest.approx([2.5, 2.5], rel=1e-9)

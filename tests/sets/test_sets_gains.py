@@ -181,3 +181,38 @@ def test_dpp_problem_is_compiled_once_per_shape():
     assert sum(k[:1] == ("frobenius",) and k[1:] == key[1:] for k in gains.PROBLEM_CACHE) == 1
     assert first.is_dcp(dpp=True)
     assert all(entry.problem.is_dcp(dpp=True) for entry in gains.PROBLEM_CACHE.values())
+
+
+@pytest.mark.kernels
+@SETTINGS
+@given(zonotopes(4), st.integers(0, 2**32 - 1))
+def test_a_block_cut_is_sound_and_keeps_the_other_coordinates_exactly(z, seed):
+    """Strips on coordinates 2 and 3 alone (a velocity bound): the block cut holds Z ∩ S, keeps
+    the set of coordinates 0 and 1 as it was (centre, and support in every direction), and
+    its block is no larger in area than Z's (Λ = 0 is one of the candidates)."""
+    rng = np.random.default_rng(seed)
+    m = int(rng.integers(1, 5))
+    block = rng.normal(size=(m, 2)) * rng.uniform(0.5, 3.0, (m, 1))
+    normals = np.hstack([np.zeros((m, 2)), block])
+    width = np.abs(normals @ z.generators).sum(axis=1)
+    radii = width * rng.uniform(0.05, 0.8, m)
+    point = z.center + z.generators @ rng.uniform(-1, 1, z.n_generators)
+    strips = Strips(normals, normals @ point + rng.uniform(-1, 1, m) * radii, radii)
+    result = gains.intersect_block_strips(z, strips, 2)
+    points = strip_intersection_points(z, strips, rng)
+    assert zonotope_facet_strips(result).contains(points, tol=tolerance(z)).all()
+    directions = np.array([[np.cos(a), np.sin(a)] for a in np.linspace(0, np.pi, 16)])
+    before = np.abs(directions @ z.generators[:2]).sum(axis=1)
+    after = np.abs(directions @ result.generators[:2]).sum(axis=1)
+    assert np.allclose(after, before, rtol=1e-12, atol=0.0)
+    assert np.array_equal(result.center[:2], z.center[:2])
+    block_area = Zonotope(z.center[2:], z.generators[2:]).volume()
+    assert Zonotope(result.center[2:], result.generators[2:]).volume() <= block_area * (1 + 1e-9)
+
+
+def test_a_block_cut_refuses_strips_outside_its_block():
+    z = Zonotope(np.zeros(4), np.eye(4))
+    with pytest.raises(ValueError, match="zero outside the block"):
+        gains.intersect_block_strips(z, Strips([1.0, 0.0, 1.0, 0.0], 0.0, 1.0), 2)
+    with pytest.raises(ValueError, match="no 2-D block starts at coordinate 3"):
+        gains.intersect_block_strips(z, Strips([0.0, 0.0, 1.0, 0.0], 0.0, 1.0), 3)

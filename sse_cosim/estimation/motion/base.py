@@ -29,9 +29,10 @@ from typing import Protocol
 import numpy as np
 
 from sse_cosim.memo import IdentityMemo
-from sse_cosim.sets import Strips, Zonotope, intersect_strips, portable
+from sse_cosim.sets import Strips, Zonotope, intersect_block_strips, intersect_strips, portable
 
 POSITION_MEMO = 64  # position sets MotionModel.position keeps
+VELOCITY = 2  # a (position, velocity) state's velocity block starts at this entry
 
 
 def unit_fan(count: int) -> np.ndarray:
@@ -60,6 +61,10 @@ class MotionModel(Protocol):
     @property
     def state_bounds(self) -> Strips | None:
         """Strips about the state (m, n) that always hold (pseudo-measurements), if any."""
+
+    def bound_state(self, estimate: Zonotope) -> Zonotope:
+        """``estimate`` cut by :attr:`state_bounds` without widening its position set
+        (``estimate`` itself without bounds)."""
 
     @property
     def max_speed(self) -> float:
@@ -189,6 +194,17 @@ class LinearModel:
     def uses_state(self) -> bool:
         """False: its reach and arrivals are the speed bound's, whatever the state."""
         return False
+
+    def bound_state(self, estimate: Zonotope) -> Zonotope:
+        """``estimate`` cut by :attr:`state_bounds`, strips on the velocity (state entries 2
+        and 3), by Prop. 1 with a gain that is zero on the position
+        (:func:`~sse_cosim.sets.intersect_block_strips`): the position set stays as it is.
+        A volume-minimising gain on the whole state widens the position to narrow the
+        velocity, so an unseen track's position would grow about quadratically instead of by
+        v_max dt a step. ``estimate`` itself for a model without bounds."""
+        if self.state_bounds is None:
+            return estimate
+        return intersect_block_strips(estimate, self.state_bounds, VELOCITY)
 
     def velocity_strips(self, path: Strips, steps_ago: int) -> Strips:
         """Path strips |h.s_{k-N} - y| <= r of N = ``steps_ago`` steps ago (m, 2) as strips
