@@ -1,0 +1,389 @@
+"""Compiled kernels (numba, cached on disk) of the raster representation's per-cell work.
+
+A mask (rows, cols) of bool holds the cells of a window of the global grid: ``mask[r, k]`` is
+the closed square of column ``col0 + k`` and row ``row0 + r`` (:mod:`~sse_cosim.regions.raster`).
+Every grid line is :func:`grid_line`, ``float(index) * cell``, here and in
+:mod:`~sse_cosim.regions.raster`, so all of them agree on where a cell lies.
+
+Each kernel has a NumPy reference in :mod:`~sse_cosim.regions.raster` (``*_reference``), and
+``tests/regions/test_raster.py`` checks one against the other: the integer ones (dilation,
+erosion, overlays, covers, least gap, runs, boxes, point queries) exactly; the rasterisation,
+whose decisions depend on rounded products, between the reference with the slack lowered and
+raised by far more than that rounding.
+
+numba caches the machine code in ``__pycache__`` next to this file (ignored by git).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
+
+UNION, INTERSECTION, DIFFERENCE = 0, 1, 2
+"""The overlays of :func:`combine`."""
+
+
+@njit(cache=True)
+def grid_line(index: int, cell: float) -> float:
+    """Where grid line ``index`` lies (m): ``float(index) * cell``."""
+    return float(index) * cell
+
+
+@njit(cache=True)
+def _centre(index: int, cell: float) -> float:
+    """The centre of cell ``index`` along one axis (m)."""
+    return (float(index) + 0.5) * cell
+
+
+@njit(cache=True)
+def _mark_segment(touched: BoolArray, x0: float, y0: float, x1: float, y1: float, col0: int,
+                  row0: int, cell: float, slack: float) -> None:
+    """Set every cell of ``touched`` whose square grown by ``slack`` meets the segment
+    (x0, y0)-(x1, y1): row by row, the segment's part within the grown row's band, then the
+    columns whose grown squares meet that part's x range."""
+    rows, cols = touched.shape
+    y_low, y_high = min(y0, y1), max(y0, y1)
+    first = max(int(np.floor((y_low - slack) / cell)) - 1 - row0, 0)
+    last = min(int(np.floor((y_high + slack) / cell)) + 1 - row0, rows - 1)
+    for r in range(first, last + 1):
+        band0 = grid_line(row0 + r, cell) - slack
+        band1 = grid_line(row0 + r + 1, cell) + slack
+        if y_high < band0 or y_low > band1:
+            continue
+        if y0 == y1:
+            xa, xb = min(x0, x1), max(x0, x1)
+        else:
+            ta, tb = (band0 - y0) / (y1 - y0), (band1 - y0) / (y1 - y0)
+            ta, tb = max(min(ta, tb), 0.0), min(max(ta, tb), 1.0)
+            xa, xb = x0 + ta * (x1 - x0), x0 + tb * (x1 - x0)
+            xa, xb = min(xa, xb), max(xa, xb)
+        k_first = max(int(np.floor((xa - slack) / cell)) - 1 - col0, 0)
+        k_last = min(int(np.floor((xb + slack) / cell)) + 1 - col0, cols - 1)
+        for k in range(k_first, k_last + 1):
+            if (grid_line(col0 + k, cell) - slack <= xb
+                    and grid_line(col0 + k + 1, cell) + slack >= xa):
+                touched[r, k] = True
+
+
+@njit(cache=True)
+def _crossed_rows(y0: float, y1: float, row0: int, rows: int, cell: float) -> tuple[int, int]:
+    """A range of rows (first, stop) holding every row whose centre line the edge crosses
+    (the caller tests each row: a few more are harmless)."""
+    y_low, y_high = min(y0, y1), max(y0, y1)
+    first = max(int(np.floor(y_low / cell - 0.5)) - 1 - row0, 0)
+    stop = min(int(np.floor(y_high / cell - 0.5)) + 2 - row0, rows)
+    return first, stop
+
+
+@njit(cache=True)
+def _fill_part(filled: BoolArray, edges: FloatArray, first_edge: int, stop_edge: int,
+               col0: int, row0: int, cell: float) -> None:
+    """Set the cells of ``filled`` whose centre the polygon of edges ``first_edge`` ..
+    ``stop_edge`` (its rings) holds by the even-odd rule: on each row's centre line, the
+    crossings of the edges with one end at or below the line and the other above, sorted, and
+    the centres between pairs of them."""
+    rows, cols = filled.shape
+    counts = np.zeros(rows + 1, dtype=np.int64)
+    for e in range(first_edge, stop_edge):
+        y0, y1 = edges[e, 1], edges[e, 3]
+        first, stop = _crossed_rows(y0, y1, row0, rows, cell)
+        for r in range(first, stop):
+            yc = _centre(row0 + r, cell)
+            if (y0 <= yc) != (y1 <= yc):
+                counts[r + 1] += 1
+    for r in range(rows):
+        counts[r + 1] += counts[r]
+    crossings = np.empty(counts[rows])
+    fill = counts[:rows].copy()
+    for e in range(first_edge, stop_edge):
+        x0, y0, x1, y1 = edges[e, 0], edges[e, 1], edges[e, 2], edges[e, 3]
+        first, stop = _crossed_rows(y0, y1, row0, rows, cell)
+        for r in range(first, stop):
+            yc = _centre(row0 + r, cell)
+            if (y0 <= yc) != (y1 <= yc):
+                crossings[fill[r]] = x0 + (yc - y0) * (x1 - x0) / (y1 - y0)
+                fill[r] += 1
+    for r in range(rows):
+        line = np.sort(crossings[counts[r]:counts[r + 1]])
+        for m in range(0, line.shape[0] - 1, 2):
+            k_first = max(int(np.ceil(line[m] / cell - 0.5)) - col0, 0)
+            k_stop = min(int(np.ceil(line[m + 1] / cell - 0.5)) - col0, cols)
+            for k in range(k_first, k_stop):
+                filled[r, k] = True
+
+
+@njit(cache=True)
+def rasterize(edges: FloatArray, part_ptr: IntArray, strokes: FloatArray, col0: int, row0: int,
+              rows: int, cols: int, cell: float, slack: float, inner: bool) -> BoolArray:
+    """The cells (rows, cols) of the window at (col0, row0) that a shape covers.
+
+    ``edges`` (m, 4) are the ring edges (x0, y0, x1, y1) of its polygons, polygon p's
+    ``part_ptr[p]:part_ptr[p + 1]``; ``strokes`` (q, 4) its line segments and points (a point
+    is a segment of length 0), which have no inside. A cell is touched when its square grown
+    by ``slack`` meets an edge or a stroke, filled when a polygon holds its centre (even-odd
+    over that polygon's rings, any polygon). A cell neither touched nor filled misses the
+    shape, one filled and untouched lies inside it (its square meets no boundary). So the
+    outer raster is touched or filled, the inner one (``inner``) filled and untouched."""
+    touched = np.zeros((rows, cols), dtype=np.bool_)
+    for e in range(edges.shape[0]):
+        _mark_segment(touched, edges[e, 0], edges[e, 1], edges[e, 2], edges[e, 3], col0, row0,
+                      cell, slack)
+    for s in range(strokes.shape[0]):
+        _mark_segment(touched, strokes[s, 0], strokes[s, 1], strokes[s, 2], strokes[s, 3],
+                      col0, row0, cell, slack)
+    filled = np.zeros((rows, cols), dtype=np.bool_)
+    for p in range(part_ptr.shape[0] - 1):
+        _fill_part(filled, edges, part_ptr[p], part_ptr[p + 1], col0, row0, cell)
+    if inner:
+        return filled & ~touched
+    return filled | touched
+
+
+@njit(cache=True)
+def _nearest_set(row: BoolArray, pad: int, near: IntArray) -> None:
+    """``near[x]`` (cols + 2 pad,): how many columns output column x lies from the nearest set
+    cell of ``row`` (cols,), whose column k is output column k + pad; a large value if none."""
+    width = near.shape[0]
+    last = -2 * width
+    for x in range(width):
+        k = x - pad
+        if 0 <= k < row.shape[0] and row[k]:
+            last = x
+        near[x] = x - last
+    last = 3 * width
+    for x in range(width - 1, -1, -1):
+        k = x - pad
+        if 0 <= k < row.shape[0] and row[k]:
+            last = x
+        near[x] = min(near[x], last - x)
+
+
+@njit(cache=True)
+def dilate(mask: BoolArray, widths: IntArray) -> BoolArray:
+    """The cells within reach of a set cell of ``mask`` (rows, cols), over the window grown by
+    R = len(widths) - 1 rows and widths[0] columns on each side, shape (rows + 2R,
+    cols + 2 widths[0]): cell (r + dr, k + dk) is within reach of (r, k) when
+    |dr| <= R and |dk| <= widths[|dr|]."""
+    rows, cols = mask.shape
+    reach, wide = widths.shape[0] - 1, widths[0]
+    out = np.zeros((rows + 2 * reach, cols + 2 * wide), dtype=np.bool_)
+    near = np.empty(cols + 2 * wide, dtype=np.int64)
+    for r in range(rows):
+        if not mask[r].any():
+            continue
+        _nearest_set(mask[r], wide, near)
+        for dr in range(-reach, reach + 1):
+            width, target = widths[abs(dr)], out[r + reach + dr]
+            for x in range(near.shape[0]):
+                if near[x] <= width:
+                    target[x] = True
+    return out
+
+
+@njit(cache=True)
+def erode(mask: BoolArray, widths: IntArray) -> BoolArray:
+    """The cells of ``mask`` (rows, cols) all of whose cells within reach (as in
+    :func:`dilate`) are set, cells outside the mask counting as unset, shape (rows, cols)."""
+    rows, cols = mask.shape
+    reach = widths.shape[0] - 1
+    far = np.empty((rows, cols), dtype=np.int32)  # columns to the nearest unset cell in the row
+    for r in range(rows):
+        last = -1
+        for k in range(cols):
+            if not mask[r, k]:
+                last = k
+            far[r, k] = k - last
+        last = cols
+        for k in range(cols - 1, -1, -1):
+            if not mask[r, k]:
+                last = k
+            far[r, k] = min(far[r, k], last - k)
+    out = np.zeros((rows, cols), dtype=np.bool_)
+    for r in range(reach, rows - reach):
+        for k in range(cols):
+            keep = True
+            for dr in range(-reach, reach + 1):
+                if far[r + dr, k] <= widths[abs(dr)]:
+                    keep = False
+                    break
+            out[r, k] = keep
+    return out
+
+
+@njit(cache=True)
+def _cell(mask: BoolArray, col0: int, row0: int, col: int, row: int) -> bool:
+    """Whether global cell (col, row) is set in ``mask`` at (col0, row0) (unset outside)."""
+    r, k = row - row0, col - col0
+    return 0 <= r < mask.shape[0] and 0 <= k < mask.shape[1] and mask[r, k]
+
+
+@njit(cache=True)
+def combine(a: BoolArray, a_col: int, a_row: int, b: BoolArray, b_col: int, b_row: int,
+            operation: int, col0: int, row0: int, rows: int, cols: int) -> BoolArray:
+    """``a`` (at (a_col, a_row)) :data:`UNION`, :data:`INTERSECTION` or :data:`DIFFERENCE`
+    ``b`` cell by cell over the window (rows, cols) at (col0, row0)."""
+    out = np.empty((rows, cols), dtype=np.bool_)
+    for r in range(rows):
+        for k in range(cols):
+            in_a = _cell(a, a_col, a_row, col0 + k, row0 + r)
+            in_b = _cell(b, b_col, b_row, col0 + k, row0 + r)
+            if operation == UNION:
+                out[r, k] = in_a or in_b
+            elif operation == INTERSECTION:
+                out[r, k] = in_a and in_b
+            else:
+                out[r, k] = in_a and not in_b
+    return out
+
+
+@njit(cache=True)
+def paint(target: BoolArray, col0: int, row0: int, source: BoolArray, s_col: int,
+          s_row: int) -> None:
+    """Set in ``target`` (at (col0, row0)) every cell set in ``source`` (at (s_col, s_row)),
+    which must lie in target's window."""
+    for r in range(source.shape[0]):
+        for k in range(source.shape[1]):
+            if source[r, k]:
+                target[s_row - row0 + r, s_col - col0 + k] = True
+
+
+@njit(cache=True)
+def covers(a: BoolArray, a_col: int, a_row: int, b: BoolArray, b_col: int, b_row: int) -> bool:
+    """Whether every cell set in ``b`` is set in ``a``."""
+    for r in range(b.shape[0]):
+        for k in range(b.shape[1]):
+            if b[r, k] and not _cell(a, a_col, a_row, b_col + k, b_row + r):
+                return False
+    return True
+
+
+@njit(cache=True)
+def row_runs(mask: BoolArray) -> tuple[IntArray, IntArray, IntArray]:
+    """The runs of set cells of each row of ``mask`` (rows, cols): ``(ptr (rows + 1,),
+    starts (n,), stops (n,))``, row r's runs ``ptr[r]:ptr[r + 1]``, columns start..stop - 1,
+    left to right."""
+    rows, cols = mask.shape
+    ptr = np.zeros(rows + 1, dtype=np.int64)
+    for r in range(rows):
+        count = 0
+        for k in range(cols):
+            if mask[r, k] and (k == 0 or not mask[r, k - 1]):
+                count += 1
+        ptr[r + 1] = ptr[r] + count
+    starts = np.empty(ptr[rows], dtype=np.int64)
+    stops = np.empty(ptr[rows], dtype=np.int64)
+    for r in range(rows):
+        n = ptr[r]
+        for k in range(cols):
+            if mask[r, k] and (k == 0 or not mask[r, k - 1]):
+                starts[n] = k
+            if mask[r, k] and (k == cols - 1 or not mask[r, k + 1]):
+                stops[n] = k + 1
+                n += 1
+    return ptr, starts, stops
+
+
+@njit(cache=True)
+def run_boxes(mask: BoolArray) -> IntArray:
+    """The set cells of ``mask`` as disjoint boxes (n, 4) of (col_start, col_stop, row_start,
+    row_stop) (stops excluded): each row run, merged with the same run of the rows above."""
+    ptr, starts, stops = row_runs(mask)
+    boxes = np.empty((starts.shape[0], 4), dtype=np.int64)
+    box_of = np.empty(starts.shape[0], dtype=np.int64)
+    n = 0
+    for r in range(mask.shape[0]):
+        above = ptr[r - 1] if r > 0 else 0
+        for i in range(ptr[r], ptr[r + 1]):
+            while above < ptr[r] and starts[above] < starts[i]:
+                above += 1
+            if r > 0 and above < ptr[r] and starts[above] == starts[i] \
+                    and stops[above] == stops[i]:
+                box_of[i] = box_of[above]
+                boxes[box_of[i], 3] = r + 1
+            else:
+                boxes[n, 0], boxes[n, 1], boxes[n, 2], boxes[n, 3] = starts[i], stops[i], r, r + 1
+                box_of[i] = n
+                n += 1
+    return boxes[:n]
+
+
+@njit(cache=True)
+def _row_gap(col: int, first: int, stop: int, starts: IntArray, stops: IntArray) -> int:
+    """The least gap (whole cells between them) from column ``col`` to a run of
+    ``first:stop`` (sorted); -1 if there is none."""
+    if first == stop:
+        return -1
+    lo, hi = first, stop  # the first run starting after col
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if starts[mid] <= col:
+            lo = mid + 1
+        else:
+            hi = mid
+    best = -1
+    if lo < stop:
+        best = max(starts[lo] - col - 1, 0)
+    if lo > first:
+        gap = max(col - stops[lo - 1], 0)
+        best = gap if best < 0 else min(best, gap)
+    return best
+
+
+@njit(cache=True)
+def least_gap(a: BoolArray, a_col: int, a_row: int, ptr: IntArray, starts: IntArray,
+              stops: IntArray, b_col: int, b_row: int) -> float:
+    """The least distance (in cells) between the squares of a set cell of ``a`` and of one of
+    the runs (:func:`row_runs`) of a mask at (b_col, b_row): sqrt(gx² + gy²) over pairs, with
+    gx, gy the whole cells between their columns and rows; inf if either has none. Rows of b
+    are visited outward from each cell's row until the row gap alone exceeds the best."""
+    rows_b = ptr.shape[0] - 1
+    best = -1
+    for ra in range(a.shape[0]):
+        y = a_row + ra - b_row
+        middle = min(max(y, 0), rows_b - 1)
+        for ka in range(a.shape[1]):
+            if not a[ra, ka]:
+                continue
+            col = a_col + ka - b_col
+            for direction in (-1, 1):
+                rb = middle if direction < 0 else middle + 1
+                while 0 <= rb < rows_b:
+                    gy = max(abs(y - rb) - 1, 0)
+                    if best >= 0 and gy * gy >= best:
+                        break
+                    gx = _row_gap(col, ptr[rb], ptr[rb + 1], starts, stops)
+                    if gx >= 0 and (best < 0 or gx * gx + gy * gy < best):
+                        best = gx * gx + gy * gy
+                    rb += direction
+            if best == 0:
+                return 0.0
+    return np.inf if best < 0 else np.sqrt(float(best))
+
+
+@njit(cache=True)
+def contains_points(mask: BoolArray, col0: int, row0: int, cell: float, points: FloatArray
+                    ) -> BoolArray:
+    """Whether each point (n, 2) lies in a set cell's closed square (one on an edge or a
+    corner: in any of the cells it touches), shape (n,)."""
+    rows, cols = mask.shape
+    inside = np.zeros(points.shape[0], dtype=np.bool_)
+    x_low, x_high = grid_line(col0, cell), grid_line(col0 + cols, cell)
+    y_low, y_high = grid_line(row0, cell), grid_line(row0 + rows, cell)
+    for n in range(points.shape[0]):
+        x, y = points[n, 0], points[n, 1]
+        if not (x_low <= x <= x_high and y_low <= y <= y_high):
+            continue  # (NaN too)
+        col, row = int(np.floor(x / cell)), int(np.floor(y / cell))
+        for j in range(row - 1, row + 2):
+            if not grid_line(j, cell) <= y <= grid_line(j + 1, cell):
+                continue
+            for i in range(col - 1, col + 2):
+                if grid_line(i, cell) <= x <= grid_line(i + 1, cell) \
+                        and _cell(mask, col0, row0, i, j):
+                    inside[n] = True
+    return inside
