@@ -3,14 +3,16 @@
 A representation is one module here, registered by one entry in :data:`KINDS`:
 
 - ``polygon`` (:mod:`.polygon`): exact shapely polygons, the reference.
+- ``raster`` (:mod:`.raster`): cells of one global grid, sound in the direction asked.
 """
 
 from __future__ import annotations
 
 from sse_cosim.regions.base import Region, RegionKind
 from sse_cosim.regions.polygon import PolygonKind, PolygonRegion
+from sse_cosim.regions.raster import RasterKind
 
-KINDS: dict[str, RegionKind] = {kind.name: kind for kind in (PolygonKind(),)}
+KINDS: dict[str, RegionKind] = {kind.name: kind for kind in (PolygonKind(), RasterKind())}
 DEFAULT_KIND = "polygon"
 
 
