@@ -19,6 +19,11 @@ Soundness (:mod:`.base`), each approximation in the direction asked for:
 - union, intersection and difference are exact on the cells; covers, intersects,
   contains_points (closed: a point on a cell's edge is in the region when any cell it
   touches is set), distance (between set cells' squares) and area answer for the cells.
+  The intersection keeps the cells both regions hold, so where only their cells' edges meet
+  it drops those edges; no point is lost that way, since an outer raster holds *every* cell
+  whose square holds a point of what it stands for (outer and dilation make it so, union,
+  intersection and the difference by an inner raster keep it: no cell of an inner raster
+  holds a point outside its shape).
 
 Every decision that rounding could turn is taken :data:`SLACK_M` in the safe direction: a
 cell is touched by a shape when its square grown by the slack meets the shape's boundary, and
