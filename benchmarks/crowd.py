@@ -1,7 +1,8 @@
 """The any-scene issue's benchmark scene: ``scenarios/crowd.toml`` with its pedestrians repeated
 in later waves until the scene holds at least 50 (each wave 40 s after the previous, with
 start positions moved a little so that nobody stands on another), every per-step check on.
-Cost per step of the full loop against bare SUMO stepping the same scene, side by side."""
+Cost per step of the full loop (recording included) with labelled and with anonymous detections
+(``estimator.association``), and bare SUMO stepping the same scene, side by side."""
 
 from __future__ import annotations
 
@@ -21,8 +22,9 @@ WAVE_OFFSET_S = 40.0  # later waves step onto the zebra this much later (the bus
 SHIFT_M = 0.7  # and stand this much further along their sidewalk
 
 
-def crowd_scene(pedestrians: int = PEDESTRIANS) -> Scenario:
-    """crowd.toml with its pedestrians repeated in waves up to ``pedestrians`` of them."""
+def crowd_scene(pedestrians: int = PEDESTRIANS, association: str = "labelled") -> Scenario:
+    """crowd.toml with its pedestrians repeated in waves up to ``pedestrians`` of them, its
+    detections ``association`` (``estimator.association``)."""
     data: dict[str, Any] = load_scenario_data(SCENARIO)
     base = [(pid, p) for pid, p in data["pedestrians"].items() if p.get("present", True)]
     walkers = dict(data["pedestrians"])
@@ -37,6 +39,7 @@ def crowd_scene(pedestrians: int = PEDESTRIANS) -> Scenario:
             twin["start_pos_m"] = max(0.0, p["start_pos_m"] - wave * SHIFT_M)
             walkers[f"{pid}_w{wave}"] = twin
     data["pedestrians"] = walkers
+    data["estimator"] = {**data.get("estimator", {}), "association": association}
     data["simulation"] = {**data.get("simulation", {}),
                           "duration_s": max(data["simulation"]["duration_s"],
                                             wave * WAVE_OFFSET_S + 60.0)}
@@ -45,20 +48,39 @@ def crowd_scene(pedestrians: int = PEDESTRIANS) -> Scenario:
 
 def run(pedestrians: int = PEDESTRIANS, repeats: int = 2, duration_s: float | None = None
         ) -> dict:
-    scenario = crowd_scene(pedestrians)
-    if duration_s is not None:
-        scenario = scenario.model_copy(update={"simulation": scenario.simulation.model_copy(
-            update={"duration_s": duration_s})})
-    loop, bare, per_stage, steps = [], [], [], 0
+    scenes = {association: _cut(crowd_scene(pedestrians, association), duration_s)
+              for association in ("labelled", "anonymous")}
+    scenario = scenes["labelled"]
+    loop: dict[str, list[float]] = {name: [] for name in scenes}
+    per_stage: dict[str, list[dict[str, float]]] = {name: [] for name in scenes}
+    bare: list[float] = []
+    steps: dict[str, int] = {}
     with tempfile.TemporaryDirectory(prefix="sse-bench-crowd-") as tmp:
         for i in range(repeats):
-            per_step, stages, steps = cosim(scenario, Path(tmp) / f"cosim{i}")
-            loop.append(per_step)
-            per_stage.append(stages)
-            bare.append(bare_sumo(scenario, steps, Path(tmp) / f"bare{i}"))
-    cost, sumo = median(loop), median(bare)
+            for name, scene in scenes.items():
+                per_step, stages, steps[name] = cosim(scene, Path(tmp) / f"{name}{i}")
+                loop[name].append(per_step)
+                per_stage[name].append(stages)
+            bare.append(bare_sumo(scenario, steps["labelled"], Path(tmp) / f"bare{i}"))
+    cost, anonymous, sumo = median(loop["labelled"]), median(loop["anonymous"]), median(bare)
     return {"scenario": f"{SCENARIO}, pedestrians repeated in waves", "pedestrians":
-            len(scenario.pedestrians), "steps": steps, "repeats": repeats,
+            len(scenario.pedestrians), "steps": steps["labelled"], "repeats": repeats,
             "us_per_step": 1e6 * cost, "bare_us_per_step": 1e6 * sumo,
             "ratio_to_bare": cost / sumo,
-            "stages_us": {s: median([d[s] for d in per_stage]) for s in per_stage[0]}}
+            "stages_us": _median_stages(per_stage["labelled"]),
+            "anonymous": {"us_per_step": 1e6 * anonymous, "steps": steps["anonymous"],
+                          "ratio_to_labelled": anonymous / cost,
+                          "stages_us": _median_stages(per_stage["anonymous"])}}
+
+
+def _cut(scenario: Scenario, duration_s: float | None) -> Scenario:
+    """``scenario`` cut to ``duration_s`` (None: as it is)."""
+    if duration_s is None:
+        return scenario
+    return scenario.model_copy(update={"simulation": scenario.simulation.model_copy(
+        update={"duration_s": duration_s})})
+
+
+def _median_stages(runs: list[dict[str, float]]) -> dict[str, float]:
+    """Each stage's median µs per step over ``runs``."""
+    return {stage: median([d[stage] for d in runs]) for stage in runs[0]}

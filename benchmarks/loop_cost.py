@@ -1,4 +1,5 @@
-"""Item 1: cost per step of the co-simulation against bare SUMO, stage by stage.
+"""Item 1: cost per step of the co-simulation against libsumo alone and against bare SUMO through
+the project's world, stage by stage; anonymous detections against labelled ones.
 
 All configurations run in this process, one after another and interleaved over the repeats
 (libsumo allows one open simulation at a time; closing it allows the next), so each ratio
@@ -14,6 +15,7 @@ import sysconfig
 import tempfile
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 from benchmarks.common import median
@@ -22,24 +24,71 @@ from sse_cosim.runner.simulation import simulate
 from sse_cosim.runner.timing import STAGES, StageTimer
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.scenario.model import Estimator, Scenario
-from sse_cosim.world.sumo import SumoWorld
+from sse_cosim.world.sumo import CONFIG_FILE_NAME, SumoWorld
+from sse_cosim.world.sumo_setup import libsumo
 
 BUS = "bus"  # the automated vehicle's id (its node)
 
 SCENARIO = "scenarios/s3_pedestrian.toml"
 FUSION = Estimator().fusion_method  # the default fusion, the same in every configuration
+ACTOR_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED)
+"""What libsumo alone reads of every vehicle and person each step."""
+
+
+@dataclass(frozen=True)
+class Config:
+    """One configuration of the loop: the nodes' gain and how detections find their tracks
+    (``estimator.association``)."""
+
+    gain: str
+    association: str = "labelled"
+
+    def overrides(self) -> dict[str, str]:
+        return {"estimator.gain_method": self.gain, "estimator.association": self.association}
+
+
+DEFAULT = "default_enclose"  # the default methods, labelled detections
+ANONYMOUS = "anonymous"  # the same with anonymous detections
 CONFIGS = {
-    "a_frobenius": "frobenius",
-    "b_cvxpy_frobenius": "cvxpy-frobenius",
-    "b_cvxpy_volume": "cvxpy-volume",
-    "volume": "volume",
-    "default_enclose": "enclose",
+    "a_frobenius": Config("frobenius"),
+    "b_cvxpy_frobenius": Config("cvxpy-frobenius"),
+    "b_cvxpy_volume": Config("cvxpy-volume"),
+    "volume": Config("volume"),
+    DEFAULT: Config(Estimator().gain_method),
+    ANONYMOUS: Config(Estimator().gain_method, "anonymous"),
 }
 
 
+def libsumo_alone(config: Path, steps: int) -> tuple[float, int, int]:
+    """Seconds per step of libsumo by itself on a run's SUMO configuration ``config`` (its
+    ``sumo.sumocfg``), ``steps`` steps, each reading every vehicle's and person's position,
+    angle and speed: each actor subscribed once when it departs, every result of a domain in
+    one call. Also how many vehicles and persons were read."""
+    libsumo.start(["sumo", "-c", str(config)])
+    vehicles: set[str] = set()
+    persons: set[str] = set()
+    try:
+        start = time.perf_counter()
+        for _ in range(steps):
+            libsumo.simulationStep()
+            for vid in libsumo.simulation.getDepartedIDList():
+                libsumo.vehicle.subscribe(vid, ACTOR_VARS)
+                vehicles.add(vid)
+            for pid in libsumo.simulation.getDepartedPersonIDList():
+                libsumo.person.subscribe(pid, ACTOR_VARS)
+                persons.add(pid)
+            libsumo.vehicle.getAllSubscriptionResults()
+            libsumo.person.getAllSubscriptionResults()
+        elapsed = time.perf_counter() - start
+    finally:
+        libsumo.close()
+    return elapsed / steps, len(vehicles), len(persons)
+
+
 def bare_sumo(scenario: Scenario, steps: int, folder: Path) -> float:
-    """Seconds per step of SUMO alone: same network, routes and steps, the bus at its nominal
-    speed, the snapshot built every step, no sensor layer."""
+    """Seconds per step of SUMO through the project's world (``SumoWorld.step``): same network,
+    routes and steps, the bus at its nominal speed, the snapshot built every step, no sensor
+    layer."""
     with SumoWorld(scenario, folder, "bare") as world:
         elapsed, counted = 0.0, 0
         for _ in range(steps):
@@ -56,7 +105,8 @@ def bare_sumo(scenario: Scenario, steps: int, folder: Path) -> float:
 
 
 def cosim(scenario: Scenario, folder: Path) -> tuple[float, dict[str, float], int]:
-    """Seconds per step of the full loop (recorder included), µs per stage, steps."""
+    """Seconds per step of the full loop (recorder included), µs per stage, steps. SUMO's
+    configuration of the run is ``folder / CONFIG_FILE_NAME``."""
     timer = StageTimer()
     recorder = RunRecorder(scenario)
     simulate(scenario, folder, "bench", recorder, timer=timer, on_start=recorder.start)
@@ -88,44 +138,60 @@ def profile_call(call: Callable[[], object], order: str, top: int) -> str:
     return "\n".join(lines[start:])
 
 
-def run(repeats: int = 3, configs: dict[str, str] | None = None, duration_s: float | None = None,
-        profile: bool = True) -> dict:
+def run(repeats: int = 3, configs: dict[str, Config] | None = None,
+        duration_s: float | None = None, profile: bool = True) -> dict:
+    """Every configuration of ``configs`` (at least :data:`DEFAULT`), bare SUMO through the
+    world and libsumo alone on :data:`DEFAULT`'s SUMO configuration, ``repeats`` times
+    interleaved; medians."""
     configs = CONFIGS if configs is None else configs
-    overrides = {"estimator.fusion_method": FUSION}
+    overrides: dict[str, object] = {"estimator.fusion_method": FUSION}
     if duration_s is not None:
         overrides["simulation.duration_s"] = duration_s
     base = load_scenario(Path(SCENARIO), overrides)
-    samples: dict[str, list[float]] = {"bare": [], **{name: [] for name in configs}}
+    samples: dict[str, list[float]] = {"bare": [], "libsumo": [],
+                                       **{name: [] for name in configs}}
     stages: dict[str, list[dict[str, float]]] = {name: [] for name in configs}
-    steps = 0
+    steps: dict[str, int] = {}
+    vehicles = persons = 0
     with tempfile.TemporaryDirectory(prefix="sse-bench-loop-") as tmp:
         folder = Path(tmp)
         for _ in range(repeats):
-            for name, gain in configs.items():
-                scenario = load_scenario(Path(SCENARIO),
-                                         {**overrides, "estimator.gain_method": gain})
-                per_step, per_stage, steps = cosim(scenario, folder / name)
+            for name, config in configs.items():
+                scenario = load_scenario(Path(SCENARIO), {**overrides, **config.overrides()})
+                per_step, per_stage, steps[name] = cosim(scenario, folder / name)
                 samples[name].append(per_step)
                 stages[name].append(per_stage)
-            samples["bare"].append(bare_sumo(base, steps, folder / "bare"))
-        text = profile_run(base.model_copy(deep=True), folder / "profile") if profile else ""
+            samples["bare"].append(bare_sumo(base, steps[DEFAULT], folder / "bare"))
+            alone, vehicles, persons = libsumo_alone(folder / DEFAULT / CONFIG_FILE_NAME,
+                                                     steps[DEFAULT])
+            samples["libsumo"].append(alone)
+        profiles = {name: profile_run(load_scenario(Path(SCENARIO), {
+            **overrides, **configs[name].overrides()}), folder / f"profile_{name}")
+            for name in (DEFAULT, ANONYMOUS) if profile and name in configs}
     dt = base.simulation.step_length_s
-    bare = median(samples["bare"])
+    bare, alone = median(samples["bare"]), median(samples["libsumo"])
     result = {
         "scenario": SCENARIO,
         "fusion_method": FUSION,
-        "steps": steps,
+        "steps": steps[DEFAULT],
         "repeats": repeats,
+        "libsumo_us_per_step": 1e6 * alone,
+        "libsumo_actors_read": {"vehicles": vehicles, "persons": persons},
         "bare_us_per_step": 1e6 * bare,
+        "bare_ratio_to_libsumo": bare / alone,
         "bare_real_time_factor": dt / bare,
         "configs": {},
-        "profile_default_gain": text,
+        "profile_default_gain": profiles.get(DEFAULT, ""),
+        "profile_anonymous": profiles.get(ANONYMOUS, ""),
     }
-    for name, gain in configs.items():
+    for name, config in configs.items():
         per_step = median(samples[name])
         result["configs"][name] = {
-            "gain_method": gain,
+            "gain_method": config.gain,
+            "association": config.association,
+            "steps": steps[name],
             "us_per_step": 1e6 * per_step,
+            "ratio_to_libsumo": per_step / alone,
             "ratio_to_bare": per_step / bare,
             "real_time_factor": dt / per_step,
             "stages_us": {s: median([d.get(s, 0.0) for d in stages[name]]) for s in STAGES},
@@ -136,4 +202,8 @@ def run(repeats: int = 3, configs: dict[str, str] | None = None, duration_s: flo
         for name in configs:
             if name.startswith("b_"):
                 result["configs"][name]["ratio_to_a"] = result["configs"][name]["us_per_step"] / a
+    if ANONYMOUS in configs:
+        anonymous = result["configs"][ANONYMOUS]
+        anonymous["ratio_to_labelled"] = \
+            anonymous["us_per_step"] / result["configs"][DEFAULT]["us_per_step"]
     return result

@@ -30,9 +30,11 @@ from benchmarks.common import machine
 from sse_cosim.files import write_text_atomic
 
 TARGETS = {
-    "loop_a_ratio_to_bare": 20.0,
+    "loop_default_ratio_to_libsumo": 150.0,
     "loop_b_ratio_to_a": 20.0,
-    "loop_default_ratio_to_bare": 70.0,
+    "anonymous_ratio_to_labelled": 1.5,
+    "crowd_ms": 15.0,
+    "safety_minutes_2_cores": 60.0,
     "kernels_ratio_to_zonoopt": 2.0,
     "kernels_ratio_to_shapely": 1.5,
     "kernel_targets": ["intersection", "reduction", "area", "enclose intersection"],
@@ -73,7 +75,8 @@ def run_all(out: Path, quick: bool = False, log: Callable[[str], None] = print,
                                          repeats=2 if quick else 5))
     stage("loop_cost", lambda: loop_cost.run(
         repeats=1 if quick else 3,
-        configs={"a_frobenius": "frobenius", "b_cvxpy_frobenius": "cvxpy-frobenius"}
+        configs={name: loop_cost.CONFIGS[name] for name in (
+            "a_frobenius", "b_cvxpy_frobenius", loop_cost.DEFAULT, loop_cost.ANONYMOUS)}
         if quick else None,
         duration_s=1.5 if quick else None, profile=not quick))
     recordings, summaries = [], {}
