@@ -58,7 +58,7 @@ MAX_CELLS = 1 << 26
 NO_BOUNDS = (0.0, 0.0, -1.0, -1.0)
 
 POLYGON, LINES, POINT = 3, (1, 2), 0  # shapely type ids (LineString, LinearRing)
-COLLECTIONS = (4, 5, 6, 7)  # Multi*, GeometryCollection
+COLLECTIONS = (4, 5, 6, 7)  # Multi*, GeometryCollection: the type ids from 4 on
 
 Window = tuple[int, int, int, int]
 """(col0, row0, cols, rows): a window of the grid."""
@@ -296,20 +296,22 @@ def shape_edges(shape: shapely.Geometry) -> tuple[np.ndarray, np.ndarray, np.nda
     """``(edges (m, 4), part_ptr (p + 1,), strokes (q, 4))`` of a shape for
     :func:`~sse_cosim.regions.raster_kernels.rasterize`: its polygons' ring edges (x0, y0, x1,
     y1), polygon by polygon, and its lines' segments and points (as segments of length 0)."""
-    parts = np.atleast_1d(shapely.get_parts(shape))
-    while np.isin(shapely.get_type_id(parts), COLLECTIONS).any():
-        parts = shapely.get_parts(parts)
+    parts = shapely.get_parts(shape)
     kinds = shapely.get_type_id(parts)
-    coordinates = shapely.get_coordinates(parts)
-    if not np.isfinite(coordinates).all():
-        raise ValueError("a raster region needs finite coordinates; the shape has NaN or inf")
-    polygons = parts[kinds == POLYGON]
-    rings, ring_polygon = shapely.get_rings(polygons, return_index=True)
+    while (kinds >= COLLECTIONS[0]).any():
+        parts = shapely.get_parts(parts)
+        kinds = shapely.get_type_id(parts)
+    polygons = kinds == POLYGON
+    rings, ring_polygon = shapely.get_rings(parts[polygons], return_index=True)
     edges, edge_ring = _segments(rings)
-    part_ptr = np.searchsorted(ring_polygon[edge_ring], np.arange(len(polygons) + 1))
-    lines, _ = _segments(parts[np.isin(kinds, LINES)])
-    points = shapely.get_coordinates(parts[kinds == POINT])
-    strokes = np.vstack([lines, np.hstack([points, points])])
+    part_ptr = np.searchsorted(ring_polygon[edge_ring], np.arange(np.count_nonzero(polygons) + 1))
+    strokes = np.zeros((0, 4))
+    if not polygons.all():
+        lines, _ = _segments(parts[(kinds == LINES[0]) | (kinds == LINES[1])])
+        points = shapely.get_coordinates(parts[kinds == POINT])
+        strokes = np.vstack([lines, np.hstack([points, points])])
+    if not (np.isfinite(edges).all() and np.isfinite(strokes).all()):
+        raise ValueError("a raster region needs finite coordinates; the shape has NaN or inf")
     return edges, part_ptr.astype(np.int64), strokes
 
 

@@ -42,10 +42,10 @@ def _centre(index: int, cell: float) -> float:
 
 @njit(cache=True)
 def _mark_segment(touched: BoolArray, x0: float, y0: float, x1: float, y1: float, col0: int,
-                  row0: int, cell: float, slack: float) -> None:
-    """Set every cell of ``touched`` whose square grown by ``slack`` meets the segment
-    (x0, y0)-(x1, y1): row by row, the segment's part within the grown row's band, then the
-    columns whose grown squares meet that part's x range."""
+                  row0: int, cell: float, slack: float, value: bool) -> None:
+    """Set to ``value`` every cell of ``touched`` whose square grown by ``slack`` meets the
+    segment (x0, y0)-(x1, y1): row by row, the segment's part within the grown row's band,
+    then the columns whose grown squares meet that part's x range."""
     rows, cols = touched.shape
     y_low, y_high = min(y0, y1), max(y0, y1)
     first = max(int(np.floor((y_low - slack) / cell)) - 1 - row0, 0)
@@ -67,7 +67,7 @@ def _mark_segment(touched: BoolArray, x0: float, y0: float, x1: float, y1: float
         for k in range(k_first, k_last + 1):
             if (grid_line(col0 + k, cell) - slack <= xb
                     and grid_line(col0 + k + 1, cell) + slack >= xa):
-                touched[r, k] = True
+                touched[r, k] = value
 
 
 @njit(cache=True)
@@ -113,8 +113,7 @@ def _fill_part(filled: BoolArray, edges: FloatArray, first_edge: int, stop_edge:
         for m in range(0, line.shape[0] - 1, 2):
             k_first = max(int(np.ceil(line[m] / cell - 0.5)) - col0, 0)
             k_stop = min(int(np.ceil(line[m + 1] / cell - 0.5)) - col0, cols)
-            for k in range(k_first, k_stop):
-                filled[r, k] = True
+            filled[r, k_first:max(k_first, k_stop)] = True
 
 
 @njit(cache=True)
@@ -124,43 +123,22 @@ def rasterize(edges: FloatArray, part_ptr: IntArray, strokes: FloatArray, col0: 
 
     ``edges`` (m, 4) are the ring edges (x0, y0, x1, y1) of its polygons, polygon p's
     ``part_ptr[p]:part_ptr[p + 1]``; ``strokes`` (q, 4) its line segments and points (a point
-    is a segment of length 0), which have no inside. A cell is touched when its square grown
-    by ``slack`` meets an edge or a stroke, filled when a polygon holds its centre (even-odd
-    over that polygon's rings, any polygon). A cell neither touched nor filled misses the
-    shape, one filled and untouched lies inside it (its square meets no boundary). So the
-    outer raster is touched or filled, the inner one (``inner``) filled and untouched."""
-    touched = np.zeros((rows, cols), dtype=np.bool_)
-    for e in range(edges.shape[0]):
-        _mark_segment(touched, edges[e, 0], edges[e, 1], edges[e, 2], edges[e, 3], col0, row0,
-                      cell, slack)
-    for s in range(strokes.shape[0]):
-        _mark_segment(touched, strokes[s, 0], strokes[s, 1], strokes[s, 2], strokes[s, 3],
-                      col0, row0, cell, slack)
-    filled = np.zeros((rows, cols), dtype=np.bool_)
+    is a segment of length 0), which have no inside. A cell is filled when a polygon holds its
+    centre (even-odd over that polygon's rings, any polygon), touched when its square grown by
+    ``slack`` meets an edge or a stroke. A cell neither touched nor filled misses the shape,
+    one filled and untouched lies inside it (its square meets no boundary). So the outer
+    raster is the filled cells then every touched one set, the inner one (``inner``) the
+    filled cells then every touched one cleared."""
+    out = np.zeros((rows, cols), dtype=np.bool_)
     for p in range(part_ptr.shape[0] - 1):
-        _fill_part(filled, edges, part_ptr[p], part_ptr[p + 1], col0, row0, cell)
-    if inner:
-        return filled & ~touched
-    return filled | touched
-
-
-@njit(cache=True)
-def _nearest_set(row: BoolArray, pad: int, near: IntArray) -> None:
-    """``near[x]`` (cols + 2 pad,): how many columns output column x lies from the nearest set
-    cell of ``row`` (cols,), whose column k is output column k + pad; a large value if none."""
-    width = near.shape[0]
-    last = -2 * width
-    for x in range(width):
-        k = x - pad
-        if 0 <= k < row.shape[0] and row[k]:
-            last = x
-        near[x] = x - last
-    last = 3 * width
-    for x in range(width - 1, -1, -1):
-        k = x - pad
-        if 0 <= k < row.shape[0] and row[k]:
-            last = x
-        near[x] = min(near[x], last - x)
+        _fill_part(out, edges, part_ptr[p], part_ptr[p + 1], col0, row0, cell)
+    for e in range(edges.shape[0]):
+        _mark_segment(out, edges[e, 0], edges[e, 1], edges[e, 2], edges[e, 3], col0, row0,
+                      cell, slack, not inner)
+    for s in range(strokes.shape[0]):
+        _mark_segment(out, strokes[s, 0], strokes[s, 1], strokes[s, 2], strokes[s, 3],
+                      col0, row0, cell, slack, not inner)
+    return out
 
 
 @njit(cache=True)
@@ -168,50 +146,62 @@ def dilate(mask: BoolArray, widths: IntArray) -> BoolArray:
     """The cells within reach of a set cell of ``mask`` (rows, cols), over the window grown by
     R = len(widths) - 1 rows and widths[0] columns on each side, shape (rows + 2R,
     cols + 2 widths[0]): cell (r + dr, k + dk) is within reach of (r, k) when
-    |dr| <= R and |dk| <= widths[|dr|]."""
+    |dr| <= R and |dk| <= widths[|dr|]. Each row's run, widened, is set in each row within
+    reach."""
     rows, cols = mask.shape
     reach, wide = widths.shape[0] - 1, widths[0]
     out = np.zeros((rows + 2 * reach, cols + 2 * wide), dtype=np.bool_)
-    near = np.empty(cols + 2 * wide, dtype=np.int64)
     for r in range(rows):
-        if not mask[r].any():
-            continue
-        _nearest_set(mask[r], wide, near)
-        for dr in range(-reach, reach + 1):
-            width, target = widths[abs(dr)], out[r + reach + dr]
-            for x in range(near.shape[0]):
-                if near[x] <= width:
-                    target[x] = True
+        k = 0
+        while k < cols:
+            if not mask[r, k]:
+                k += 1
+                continue
+            start = k
+            while k < cols and mask[r, k]:
+                k += 1
+            for dr in range(-reach, reach + 1):
+                width = widths[abs(dr)]
+                out[r + reach + dr, start + wide - width:k + wide + width] = True
     return out
 
 
 @njit(cache=True)
 def erode(mask: BoolArray, widths: IntArray) -> BoolArray:
     """The cells of ``mask`` (rows, cols) all of whose cells within reach (as in
-    :func:`dilate`) are set, cells outside the mask counting as unset, shape (rows, cols)."""
+    :func:`dilate`) are set, cells outside the mask counting as unset, shape (rows, cols).
+
+    Row r keeps the columns that every row r + dr within reach holds with widths[|dr|] to
+    spare on both sides: the intersection of those rows' runs, each narrowed by its width."""
     rows, cols = mask.shape
     reach = widths.shape[0] - 1
-    far = np.empty((rows, cols), dtype=np.int32)  # columns to the nearest unset cell in the row
-    for r in range(rows):
-        last = -1
-        for k in range(cols):
-            if not mask[r, k]:
-                last = k
-            far[r, k] = k - last
-        last = cols
-        for k in range(cols - 1, -1, -1):
-            if not mask[r, k]:
-                last = k
-            far[r, k] = min(far[r, k], last - k)
+    ptr, starts, stops = row_runs(mask)
     out = np.zeros((rows, cols), dtype=np.bool_)
+    kept = np.empty((cols + 1, 2), dtype=np.int64)
+    meet = np.empty((cols + 1, 2), dtype=np.int64)
     for r in range(reach, rows - reach):
-        for k in range(cols):
-            keep = True
-            for dr in range(-reach, reach + 1):
-                if far[r + dr, k] <= widths[abs(dr)]:
-                    keep = False
-                    break
-            out[r, k] = keep
+        n = 0
+        width = widths[reach]
+        for i in range(ptr[r - reach], ptr[r - reach + 1]):
+            if starts[i] + width < stops[i] - width:
+                kept[n, 0], kept[n, 1] = starts[i] + width, stops[i] - width
+                n += 1
+        for dr in range(1 - reach, reach + 1):
+            width, row = widths[abs(dr)], r + dr
+            m, i, j = 0, 0, ptr[row]
+            while i < n and j < ptr[row + 1]:
+                low = max(kept[i, 0], starts[j] + width)
+                high = min(kept[i, 1], stops[j] - width)
+                if low < high:
+                    meet[m, 0], meet[m, 1] = low, high
+                    m += 1
+                if kept[i, 1] < stops[j] - width:
+                    i += 1
+                else:
+                    j += 1
+            kept, meet, n = meet, kept, m
+        for i in range(n):
+            out[r, kept[i, 0]:kept[i, 1]] = True
     return out
 
 
@@ -223,21 +213,35 @@ def _cell(mask: BoolArray, col0: int, row0: int, col: int, row: int) -> bool:
 
 
 @njit(cache=True)
+def _shared(col0: int, row0: int, rows: int, cols: int, mask: BoolArray, m_col: int,
+            m_row: int) -> tuple[int, int, int, int]:
+    """The rows and columns (r0, r1, k0, k1) of a window at (col0, row0) that ``mask`` at
+    (m_col, m_row) holds (none: r0 == r1, or k0 == k1)."""
+    r0, r1 = max(m_row - row0, 0), min(m_row + mask.shape[0] - row0, rows)
+    k0, k1 = max(m_col - col0, 0), min(m_col + mask.shape[1] - col0, cols)
+    return r0, max(r0, r1), k0, max(k0, k1)
+
+
+@njit(cache=True)
 def combine(a: BoolArray, a_col: int, a_row: int, b: BoolArray, b_col: int, b_row: int,
             operation: int, col0: int, row0: int, rows: int, cols: int) -> BoolArray:
     """``a`` (at (a_col, a_row)) :data:`UNION`, :data:`INTERSECTION` or :data:`DIFFERENCE`
-    ``b`` cell by cell over the window (rows, cols) at (col0, row0)."""
-    out = np.empty((rows, cols), dtype=np.bool_)
-    for r in range(rows):
-        for k in range(cols):
-            in_a = _cell(a, a_col, a_row, col0 + k, row0 + r)
-            in_b = _cell(b, b_col, b_row, col0 + k, row0 + r)
-            if operation == UNION:
-                out[r, k] = in_a or in_b
-            elif operation == INTERSECTION:
-                out[r, k] = in_a and in_b
-            else:
-                out[r, k] = in_a and not in_b
+    ``b`` cell by cell over the window (rows, cols) at (col0, row0): a's cells copied in, then
+    b's or-ed, and-ed or cleared where b's window meets it (and-ing clears the rest)."""
+    out = np.zeros((rows, cols), dtype=np.bool_)
+    r0, r1, k0, k1 = _shared(col0, row0, rows, cols, a, a_col, a_row)
+    for r in range(r0, r1):
+        out[r, k0:k1] = a[row0 + r - a_row, col0 + k0 - a_col:col0 + k1 - a_col]
+    r0, r1, k0, k1 = _shared(col0, row0, rows, cols, b, b_col, b_row)
+    if operation == INTERSECTION:
+        keep = np.zeros((rows, cols), dtype=np.bool_)
+        for r in range(r0, r1):
+            keep[r, k0:k1] = b[row0 + r - b_row, col0 + k0 - b_col:col0 + k1 - b_col]
+        return out & keep
+    for r in range(r0, r1):
+        for k in range(k0, k1):
+            if b[row0 + r - b_row, col0 + k - b_col]:
+                out[r, k] = operation == UNION
     return out
 
 
