@@ -259,7 +259,8 @@ class RasterKind:
 
     def convex_outer(self, points: np.ndarray) -> RasterRegion:
         xy = np.asarray(points, dtype=float).reshape(-1, 2)
-        return self.outer(shapely.MultiPoint(xy).convex_hull) if len(xy) else self.empty()
+        return self.outer(shapely.convex_hull(shapely.multipoints(xy))) if len(xy) \
+            else self.empty()
 
     def distances(self, sources: Sequence[RasterRegion],
                   targets: Sequence[RasterRegion]) -> np.ndarray:
@@ -296,6 +297,10 @@ def shape_edges(shape: shapely.Geometry) -> tuple[np.ndarray, np.ndarray, np.nda
     """``(edges (m, 4), part_ptr (p + 1,), strokes (q, 4))`` of a shape for
     :func:`~sse_cosim.regions.raster_kernels.rasterize`: its polygons' ring edges (x0, y0, x1,
     y1), polygon by polygon, and its lines' segments and points (as segments of length 0)."""
+    if shapely.get_type_id(shape) == POLYGON and shapely.get_num_interior_rings(shape) == 0:
+        xy = shapely.get_coordinates(shape)  # one ring (closed): the common case, made quickly
+        edges = np.hstack([xy[:-1], xy[1:]])
+        return _finite(edges), np.array([0, len(edges)], dtype=np.int64), np.zeros((0, 4))
     parts = shapely.get_parts(shape)
     kinds = shapely.get_type_id(parts)
     while (kinds >= COLLECTIONS[0]).any():
@@ -310,9 +315,13 @@ def shape_edges(shape: shapely.Geometry) -> tuple[np.ndarray, np.ndarray, np.nda
         lines, _ = _segments(parts[(kinds == LINES[0]) | (kinds == LINES[1])])
         points = shapely.get_coordinates(parts[kinds == POINT])
         strokes = np.vstack([lines, np.hstack([points, points])])
-    if not (np.isfinite(edges).all() and np.isfinite(strokes).all()):
+    return _finite(edges), part_ptr.astype(np.int64), _finite(strokes)
+
+
+def _finite(segments: np.ndarray) -> np.ndarray:
+    if not np.isfinite(segments).all():
         raise ValueError("a raster region needs finite coordinates; the shape has NaN or inf")
-    return edges, part_ptr.astype(np.int64), strokes
+    return segments
 
 
 def shape_window(shape: shapely.Geometry, cell: float) -> Window:
@@ -346,14 +355,12 @@ def _empty(cell: float) -> RasterRegion:
 def _cropped(cell: float, mask: np.ndarray, col0: int, row0: int) -> RasterRegion:
     """The region of ``mask`` at (col0, row0), cropped to its set cells (a copy when smaller:
     no view keeps a larger window alive)."""
-    rows = np.flatnonzero(mask.any(axis=1))
-    if not rows.size:
+    r0, r1, k0, k1 = kernels.set_bounds(mask)
+    if r0 == r1:
         return _empty(cell)
-    cols = np.flatnonzero(mask.any(axis=0))
-    r0, r1, k0, k1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
     if (r1 - r0, k1 - k0) != mask.shape:
         mask = mask[r0:r1, k0:k1].copy()
-    return RasterRegion(cell, _frozen(mask), (col0 + int(k0), row0 + int(r0)))
+    return RasterRegion(cell, _frozen(mask), (col0 + k0, row0 + r0))
 
 
 def _hull(a: Window, b: Window) -> Window:
@@ -454,6 +461,14 @@ def combine_reference(a: np.ndarray, a_offset: tuple[int, int], b: np.ndarray,
     if operation == kernels.INTERSECTION:
         return in_a & in_b
     return in_a & ~in_b
+
+
+def set_bounds_reference(mask: np.ndarray) -> tuple[int, int, int, int]:
+    """``raster_kernels.set_bounds`` from the rows and columns that hold any set cell."""
+    rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+    if not rows.size:
+        return 0, 0, 0, 0
+    return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
 
 
 def row_runs_reference(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

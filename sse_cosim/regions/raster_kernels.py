@@ -226,22 +226,32 @@ def _shared(col0: int, row0: int, rows: int, cols: int, mask: BoolArray, m_col: 
 def combine(a: BoolArray, a_col: int, a_row: int, b: BoolArray, b_col: int, b_row: int,
             operation: int, col0: int, row0: int, rows: int, cols: int) -> BoolArray:
     """``a`` (at (a_col, a_row)) :data:`UNION`, :data:`INTERSECTION` or :data:`DIFFERENCE`
-    ``b`` cell by cell over the window (rows, cols) at (col0, row0): a's cells copied in, then
-    b's or-ed, and-ed or cleared where b's window meets it (and-ing clears the rest)."""
+    ``b`` cell by cell over the window (rows, cols) at (col0, row0): the cells both windows
+    hold and-ed; otherwise a's cells copied in, then b's or-ed or cleared."""
     out = np.zeros((rows, cols), dtype=np.bool_)
     r0, r1, k0, k1 = _shared(col0, row0, rows, cols, a, a_col, a_row)
-    for r in range(r0, r1):
-        out[r, k0:k1] = a[row0 + r - a_row, col0 + k0 - a_col:col0 + k1 - a_col]
-    r0, r1, k0, k1 = _shared(col0, row0, rows, cols, b, b_col, b_row)
     if operation == INTERSECTION:
-        keep = np.zeros((rows, cols), dtype=np.bool_)
-        for r in range(r0, r1):
-            keep[r, k0:k1] = b[row0 + r - b_row, col0 + k0 - b_col:col0 + k1 - b_col]
-        return out & keep
+        s0, s1, j0, j1 = _shared(col0, row0, rows, cols, b, b_col, b_row)
+        r0, r1, k0, k1 = max(r0, s0), min(r1, s1), max(k0, j0), min(k1, j1)
     for r in range(r0, r1):
-        for k in range(k0, k1):
-            if b[row0 + r - b_row, col0 + k - b_col]:
-                out[r, k] = operation == UNION
+        target = out[r, k0:k1]
+        source = a[row0 + r - a_row, col0 + k0 - a_col:col0 + k1 - a_col]
+        if operation == INTERSECTION:
+            other = b[row0 + r - b_row, col0 + k0 - b_col:col0 + k1 - b_col]
+            for k in range(k1 - k0):
+                target[k] = source[k] & other[k]
+        else:
+            target[:] = source
+    if operation == INTERSECTION:
+        return out
+    r0, r1, k0, k1 = _shared(col0, row0, rows, cols, b, b_col, b_row)
+    for r in range(r0, r1):
+        target, source = out[r, k0:k1], b[row0 + r - b_row, col0 + k0 - b_col:col0 + k1 - b_col]
+        for k in range(k1 - k0):
+            if operation == UNION:
+                target[k] = target[k] | source[k]
+            else:
+                target[k] = target[k] & ~source[k]
     return out
 
 
@@ -251,9 +261,35 @@ def paint(target: BoolArray, col0: int, row0: int, source: BoolArray, s_col: int
     """Set in ``target`` (at (col0, row0)) every cell set in ``source`` (at (s_col, s_row)),
     which must lie in target's window."""
     for r in range(source.shape[0]):
+        row, first = target[s_row - row0 + r], s_col - col0
         for k in range(source.shape[1]):
-            if source[r, k]:
-                target[s_row - row0 + r, s_col - col0 + k] = True
+            row[first + k] = row[first + k] | source[r, k]
+
+
+@njit(cache=True)
+def set_bounds(mask: BoolArray) -> tuple[int, int, int, int]:
+    """The rows and columns (r0, r1, k0, k1) (stops excluded) that hold the set cells of
+    ``mask``; (0, 0, 0, 0) if none."""
+    rows, cols = mask.shape
+    r0 = 0
+    while r0 < rows and not mask[r0].any():
+        r0 += 1
+    if r0 == rows:
+        return 0, 0, 0, 0
+    r1 = rows
+    while not mask[r1 - 1].any():
+        r1 -= 1
+    k0, k1 = cols, 0
+    for r in range(r0, r1):
+        k = 0
+        while k < k0 and not mask[r, k]:
+            k += 1
+        k0 = k
+        k = cols
+        while k > k1 and not mask[r, k - 1]:
+            k -= 1
+        k1 = k
+    return r0, r1, k0, k1
 
 
 @njit(cache=True)

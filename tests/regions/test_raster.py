@@ -39,6 +39,7 @@ from sse_cosim.regions.raster import (
     rasterize_reference,
     reach_widths,
     row_runs_reference,
+    set_bounds_reference,
     shape_edges,
     shape_window,
 )
@@ -275,8 +276,9 @@ def test_overlays_and_covers_are_the_references(first, second, seed):
 @pytest.mark.kernels
 @SETTINGS
 @given(masks())
-def test_row_runs_and_boxes_are_the_references(placed):
+def test_bounds_row_runs_and_boxes_are_the_references(placed):
     mask, _ = placed
+    assert kernels.set_bounds(mask) == set_bounds_reference(mask)
     for got, expected in zip(kernels.row_runs(mask), row_runs_reference(mask), strict=True):
         assert np.array_equal(got, expected)
     painted = np.zeros(mask.shape, dtype=int)
