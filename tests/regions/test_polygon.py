@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from sse_cosim.regions import KINDS, PolygonKind
-from sse_cosim.regions.polygon import ARC_SAFETY
+from sse_cosim.regions import polygon as polygon_module
 
 SETTINGS = settings(
     derandomize=True,
@@ -31,8 +31,9 @@ FAMILIES = ("convex", "star", "holed", "multi", "sliver", "aligned", "point", "s
 SIZES = (0.03, 0.3, 2.0, 8.0)  # below, about and many times a raster cell
 ROUNDING_M = 1e-9  # far above the rounding of shapely's distances at these coordinates
 
-DISTANCES = st.one_of(st.sampled_from([0.0, 0.02, 0.1, 0.25, 1.3]),
-                      st.floats(0.0, 3.0, allow_nan=False))
+DISTANCES = st.one_of(st.sampled_from([0.0, 0.02, 0.1, 0.25, 1.3]), st.floats(1e-9, 3.0))
+"""Distances: 0, sub-cell and larger (those far below a coordinate's rounding have their own
+test)."""
 
 
 def star(rng: np.random.Generator, centre: np.ndarray, low: float, high: float
@@ -127,7 +128,7 @@ def points_near(shape: shapely.Geometry, distance: float, rng: np.random.Generat
                 ) -> np.ndarray:
     """Points (n, 2) within ``distance`` of a shape: its own points, its outline's pushed out
     by up to (and mostly exactly) ``distance`` in random directions, and points drawn around
-    it, each checked by shapely's distance."""
+    it, each found within ``distance`` less the rounding by shapely's distance."""
     base = outline_points(shape, rng)
     angles = rng.uniform(0, 2 * np.pi, len(base))
     reach = distance * np.where(rng.random(len(base)) < 0.7, 1.0, rng.random(len(base)))
@@ -136,7 +137,7 @@ def points_near(shape: shapely.Geometry, distance: float, rng: np.random.Generat
     around = rng.uniform([x0 - distance, y0 - distance], [x1 + distance, y1 + distance],
                          (200, 2))
     candidates = np.vstack([pushed, around])
-    near = shapely.distance(shape, shapely.points(candidates)) <= distance
+    near = shapely.distance(shape, shapely.points(candidates)) <= distance - ROUNDING_M
     return np.vstack([points_in(shape, rng), candidates[near]])
 
 
@@ -163,6 +164,7 @@ def assert_far_inside(points: np.ndarray, shape: shapely.Geometry, distance: flo
 KIND_NAMES = pytest.mark.parametrize("name", sorted(KINDS))
 
 SHORT_ARCS = pytest.mark.xfail(
+    hasattr(polygon_module, "ARC_SAFETY"),  # the buffer with arcs, not the mitred one
     strict=True,
     reason="polygon.ARC_SAFETY = 1/cos(π/8) assumes arcs of 45° chords, but GEOS rounds a turn "
     "to a whole number of chords (up to 67.5° each at 2 per quarter circle): the buffer's "
@@ -202,8 +204,17 @@ def test_a_dilation_contains_every_point_within_the_distance(name, shape, distan
     rng = np.random.default_rng(seed)
     dilated = KINDS[name].outer(shape).dilate(distance)
     assert dilated.contains_points(points_near(shape, distance, rng)).all()
-    if distance > 0:  # a polygon inscribed in the exact dilation
+    if distance >= 1000 * ROUNDING_M:  # a polygon inscribed in the exact dilation, 0.1% in
         assert_contains(dilated, shape.buffer(0.999 * distance, quad_segs=16), rng)
+
+
+@kinds_but(pytest.mark.xfail(strict=True, reason="GEOS buffers a shape by less than about "
+                             "1e-16 m to an empty polygon"), "polygon")
+@SETTINGS
+@given(shapes(), st.sampled_from([1e-200, 1e-17]))
+def test_a_dilation_by_a_distance_below_the_rounding_still_holds_the_shape(name, shape,
+                                                                          distance):
+    assert covered(KINDS[name].outer(shape).dilate(distance).geometry(), shape)
 
 
 @kinds_but(SHORT_ARCS, "polygon")
@@ -300,12 +311,8 @@ def test_every_region_covers_the_empty_one(name):
 
 
 @SETTINGS
-@given(shapes(), DISTANCES)
-def test_polygon_regions_keep_their_shape_and_widen_by_the_arc_safety(shape, distance):
+@given(shapes())
+def test_polygon_regions_keep_their_shape(shape):
     kind = PolygonKind()
     assert kind.outer(shape).geometry().equals(shape)
     assert kind.inner(shape).geometry().equals(shape)
-    if distance > 0:  # the dilation's arcs circumscribe the disc, and reach no farther
-        dilated = kind.outer(shape).dilate(distance).geometry()
-        far = shapely.distance(shape, shapely.points(shapely.get_coordinates(dilated)))
-        assert (far <= ARC_SAFETY * distance * (1 + 1e-9) + ROUNDING_M).all()
