@@ -169,6 +169,15 @@ class RasterRegion:
             return math.inf
         return self.cell * self._least_gap(other)
 
+    def support(self, directions: np.ndarray) -> np.ndarray:
+        """max over the cells of n.x for each direction n (K, 2), (K,): reached at a corner of
+        some row's first or last cell (:meth:`hull_points`); -inf if empty."""
+        n = np.asarray(directions, dtype=float).reshape(-1, 2)
+        if self.is_empty:
+            return np.full(len(n), -math.inf)
+        xy = self.hull_points()
+        return (xy[:, :1] * n[:, 0] + xy[:, 1:] * n[:, 1]).max(axis=0)
+
     def hull_points(self) -> np.ndarray:
         """The outer corners of each row's first and last set cells, (4 rows, 2)."""
         if self.is_empty:

@@ -200,6 +200,19 @@ def test_a_raster_is_coarsened_to_itself(shape, tolerance):
     assert region.coarsen(tolerance) is region
 
 
+@SETTINGS
+@given(shapes(), CELLS, SEEDS)
+def test_the_support_is_the_cells_farthest_corner(shape, cell, seed):
+    rng = np.random.default_rng(seed)
+    region = RasterKind(cell).outer(shape)
+    directions = np.vstack([rng.normal(size=(6, 2)), np.eye(2), -np.eye(2)])
+    corners = shapely.get_coordinates(region.geometry())
+    farthest = (corners[:, :1] * directions[:, 0] + corners[:, 1:] * directions[:, 1]).max(axis=0)
+    assert np.array_equal(region.support(directions), farthest)
+    assert np.isneginf(RasterKind(cell).empty().support(directions)).all()
+    assert region.support(np.zeros((0, 2))).shape == (0,)
+
+
 # The kernels against their NumPy references.
 
 
