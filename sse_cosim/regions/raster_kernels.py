@@ -81,6 +81,17 @@ def _crossed_rows(y0: float, y1: float, row0: int, rows: int, cell: float) -> tu
 
 
 @njit(cache=True)
+def _sort_in_place(values: FloatArray) -> None:
+    """Sort ``values`` (n,) ascending in place, by insertion (a row's few crossings)."""
+    for i in range(1, values.shape[0]):
+        value, j = values[i], i - 1
+        while j >= 0 and values[j] > value:
+            values[j + 1] = values[j]
+            j -= 1
+        values[j + 1] = value
+
+
+@njit(cache=True)
 def _fill_part(filled: BoolArray, edges: FloatArray, first_edge: int, stop_edge: int,
                col0: int, row0: int, cell: float) -> None:
     """Set the cells of ``filled`` whose centre the polygon of edges ``first_edge`` ..
@@ -109,7 +120,8 @@ def _fill_part(filled: BoolArray, edges: FloatArray, first_edge: int, stop_edge:
                 crossings[fill[r]] = x0 + (yc - y0) * (x1 - x0) / (y1 - y0)
                 fill[r] += 1
     for r in range(rows):
-        line = np.sort(crossings[counts[r]:counts[r + 1]])
+        line = crossings[counts[r]:counts[r + 1]]
+        _sort_in_place(line)
         for m in range(0, line.shape[0] - 1, 2):
             k_first = max(int(np.ceil(line[m] / cell - 0.5)) - col0, 0)
             k_stop = min(int(np.ceil(line[m + 1] / cell - 0.5)) - col0, cols)
@@ -260,10 +272,11 @@ def paint(target: BoolArray, col0: int, row0: int, source: BoolArray, s_col: int
           s_row: int) -> None:
     """Set in ``target`` (at (col0, row0)) every cell set in ``source`` (at (s_col, s_row)),
     which must lie in target's window."""
+    first = s_col - col0
     for r in range(source.shape[0]):
-        row, first = target[s_row - row0 + r], s_col - col0
-        for k in range(source.shape[1]):
-            row[first + k] = row[first + k] | source[r, k]
+        row = target[s_row - row0 + r, first:first + source.shape[1]]
+        for k in range(source.shape[1]):  # (k >= 0: numba drops the wraparound, vectorises)
+            row[k] = row[k] | source[r, k]
 
 
 @njit(cache=True)
@@ -279,16 +292,16 @@ def set_bounds(mask: BoolArray) -> tuple[int, int, int, int]:
     r1 = rows
     while not mask[r1 - 1].any():
         r1 -= 1
-    k0, k1 = cols, 0
+    held = np.zeros(cols, dtype=np.bool_)  # the columns any row holds (or-ed: vectorised)
     for r in range(r0, r1):
-        k = 0
-        while k < k0 and not mask[r, k]:
-            k += 1
-        k0 = k
-        k = cols
-        while k > k1 and not mask[r, k - 1]:
-            k -= 1
-        k1 = k
+        row = mask[r]
+        for k in range(cols):
+            held[k] = held[k] | row[k]
+    k0, k1 = 0, cols
+    while not held[k0]:
+        k0 += 1
+    while not held[k1 - 1]:
+        k1 -= 1
     return r0, r1, k0, k1
 
 
