@@ -217,11 +217,8 @@ class RasterRegion:
         return _cropped(self.cell, mask, col0, row0)
 
     def _least_gap(self, other: RasterRegion) -> float:
-        """The least gap (cells) between set cells of self and other (both non-empty):
-        the smaller one's cells against the other's runs."""
-        small, large = sorted((self, other), key=lambda r: r.mask.size)
-        ptr, starts, stops = kernels.row_runs(large.mask)
-        return kernels.least_gap(small.mask, *small.offset, ptr, starts, stops, *large.offset)
+        """The least gap (cells) between set cells of self and other."""
+        return kernels.least_gap(self.mask, *self.offset, other.mask, *other.offset)
 
 
 @dataclass(frozen=True)

@@ -388,19 +388,30 @@ def _row_gap(col: int, first: int, stop: int, starts: IntArray, stops: IntArray)
 
 
 @njit(cache=True)
-def least_gap(a: BoolArray, a_col: int, a_row: int, ptr: IntArray, starts: IntArray,
-              stops: IntArray, b_col: int, b_row: int) -> float:
-    """The least distance (in cells) between the squares of a set cell of ``a`` and of one of
-    the runs (:func:`row_runs`) of a mask at (b_col, b_row): sqrt(gx² + gy²) over pairs, with
-    gx, gy the whole cells between their columns and rows; inf if either has none. Rows of b
-    are visited outward from each cell's row until the row gap alone exceeds the best."""
+def _on_edge(mask: BoolArray, r: int, k: int) -> bool:
+    """Whether cell (r, k) has an unset cell among its 8 neighbours (cells outside the mask
+    are unset)."""
+    rows, cols = mask.shape
+    for rr in range(r - 1, r + 2):
+        for kk in range(k - 1, k + 2):
+            if rr < 0 or rr >= rows or kk < 0 or kk >= cols or not mask[rr, kk]:
+                return True
+    return False
+
+
+@njit(cache=True)
+def _edge_gap(a: BoolArray, a_col: int, a_row: int, ptr: IntArray, starts: IntArray,
+              stops: IntArray, b_col: int, b_row: int, best: int) -> int:
+    """The least squared gap gx² + gy² (whole cells between columns and rows) from a set cell
+    on a's edge to a run (:func:`row_runs`) of a mask at (b_col, b_row), or ``best`` if that
+    is less (-1: none yet). Rows of b are visited outward from each cell's row until the row
+    gap alone reaches the best."""
     rows_b = ptr.shape[0] - 1
-    best = -1
     for ra in range(a.shape[0]):
         y = a_row + ra - b_row
         middle = min(max(y, 0), rows_b - 1)
         for ka in range(a.shape[1]):
-            if not a[ra, ka]:
+            if not a[ra, ka] or not _on_edge(a, ra, ka):
                 continue
             col = a_col + ka - b_col
             for direction in (-1, 1):
@@ -414,7 +425,28 @@ def least_gap(a: BoolArray, a_col: int, a_row: int, ptr: IntArray, starts: IntAr
                         best = gx * gx + gy * gy
                     rb += direction
             if best == 0:
-                return 0.0
+                return 0
+    return best
+
+
+@njit(cache=True)
+def least_gap(a: BoolArray, a_col: int, a_row: int, b: BoolArray, b_col: int, b_row: int
+              ) -> float:
+    """The least distance (in cells) between the squares of a set cell of ``a`` and one of
+    ``b``: min sqrt(gx² + gy²) over pairs, gx and gy the whole cells between their columns
+    and rows; inf if either has none.
+
+    Only cells on an edge (:func:`_on_edge`) need be tried, a's against b's runs and b's
+    against a's: two regions apart have their closest points on their edges, and the
+    cells holding them are edge cells (a cell whose 8 neighbours are set holds only inner
+    points); two that share cells have, in a row of shared cells, a last one whose right
+    neighbour misses one of them, an edge cell of that one in the other; two that only touch
+    meet at a point whose cells of each have a neighbour of the other."""
+    b_ptr, b_starts, b_stops = row_runs(b)
+    best = _edge_gap(a, a_col, a_row, b_ptr, b_starts, b_stops, b_col, b_row, -1)
+    if best != 0:
+        a_ptr, a_starts, a_stops = row_runs(a)
+        best = _edge_gap(b, b_col, b_row, a_ptr, a_starts, a_stops, a_col, a_row, best)
     return np.inf if best < 0 else np.sqrt(float(best))
 
 

@@ -305,9 +305,9 @@ def test_bounds_row_runs_and_boxes_are_the_references(placed):
 @given(masks(), masks())
 def test_least_gap_is_the_reference(first, second):
     # squares of integers summed and rooted once on both sides: the same float
+    # (and only edge cells tried against every pair: the same least gap)
     (a, a_offset), (b, b_offset) = first, second
-    ptr, starts, stops = kernels.row_runs(b)
-    got = kernels.least_gap(a, *a_offset, ptr, starts, stops, *b_offset)
+    got = kernels.least_gap(a, *a_offset, b, *b_offset)
     assert got == least_gap_reference(a, a_offset, b, b_offset)
 
 
@@ -326,3 +326,16 @@ def test_contains_points_is_the_reference(placed, cell, seed):
     points = np.vstack([anywhere, on_lines, [[math.nan, 0.0]]])
     got = kernels.contains_points(mask, *offset, cell, points)
     assert np.array_equal(got, contains_points_reference(mask, offset, cell, points))
+
+
+@pytest.mark.kernels
+def test_least_gap_of_nested_touching_and_distant_regions():
+    full = np.ones((20, 20), dtype=bool)
+    speck = np.ones((2, 2), dtype=bool)
+    for a, a_offset, b, b_offset, gap in (
+            (full, (0, 0), speck, (9, 9), 0.0),  # inside the other, far from its edge
+            (speck, (9, 9), full, (0, 0), 0.0),
+            (full, (0, 0), speck, (20, 20), 0.0),  # corner to corner
+            (full, (0, 0), speck, (23, 24), 5.0)):  # 3 and 4 whole cells between them
+        assert kernels.least_gap(a, *a_offset, b, *b_offset) == gap
+        assert least_gap_reference(a, a_offset, b, b_offset) == gap
