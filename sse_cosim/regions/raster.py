@@ -149,6 +149,8 @@ class RasterRegion:
         other = self._aligned(other)
         if other.is_empty:
             return True
+        if _overlap(self.window, other.window) != other.window:
+            return False  # (other's window is cropped: it has a cell outside self's)
         return kernels.covers(self.mask, *self.offset, other.mask, *other.offset)
 
     def intersects(self, other: RasterRegion) -> bool:

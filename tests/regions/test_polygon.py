@@ -16,7 +16,7 @@ import shapely
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from sse_cosim.regions import KINDS, PolygonKind
+from sse_cosim.regions import KINDS, PolygonKind, Region
 from sse_cosim.regions import polygon as polygon_module
 
 SETTINGS = settings(
@@ -285,6 +285,15 @@ def test_a_convex_outer_region_contains_the_hull_of_its_points(name, seed, count
     points = np.roll(ring[:-1] if hull.geom_type == "Polygon" else ring, int(rng.integers(9)),
                      axis=0)
     assert_contains(KINDS[name].convex_outer(points), hull, rng)
+
+
+@KIND_NAMES
+def test_every_kind_makes_regions_of_the_protocol(name):
+    kind = KINDS[name]
+    assert kind.name == name
+    for region in (kind.empty(), kind.outer(shapely.box(0, 0, 1, 1)), kind.inner(
+            shapely.Point(0, 0).buffer(1.0)), kind.convex_outer(np.array([[0.0, 0.0]]))):
+        assert isinstance(region, Region)
 
 
 @KIND_NAMES
