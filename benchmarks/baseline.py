@@ -12,12 +12,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import shapely
-
 from benchmarks.common import PlainObserver, Recording, contains_lp_batch, fuse_inputs
 from benchmarks.tightness import DT, record
 from sse_cosim.estimation.kalman import KalmanTracker
 from sse_cosim.estimation.motion import motion_model
+from sse_cosim.regions import kind as regions_kind
 from sse_cosim.scenario.model import Estimator
 
 BUS = "bus"  # the automated vehicle's id (its node)
@@ -28,7 +27,7 @@ PEDESTRIAN_SCENARIOS = [f"scenarios/s{i}_pedestrian.toml" for i in (1, 2, 3)]
 def open_loop(recording: Recording) -> dict:
     config = Estimator(position_jitter_m=recording.jitter_m)
     model = motion_model(config, DT)
-    kalman = KalmanTracker(model)
+    kalman, kind = KalmanTracker(model), regions_kind()
     plain = {n: PlainObserver(model, config.gain_method) for n in recording.nodes}
     steps = kf_misses = 0
     checks = []
@@ -38,13 +37,13 @@ def open_loop(recording: Recording) -> dict:
             for pid, strips in by_pid.items():
                 merged.setdefault(pid, []).extend(strips)
         kalman.step(rec.step, merged)
-        regions = kalman.regions()
+        regions = kalman.regions(kind)
         local = {n: plain[n].step(rec.step, rec.strips.get(n, {})) for n in recording.nodes}
         for pid, truth in rec.truth.items():
             if pid not in regions:
                 continue
             steps += 1
-            kf_misses += not regions[pid].covers(shapely.Point(truth))
+            kf_misses += not regions[pid].contains_points(truth)[0]
             inputs = [local[BUS][pid]] if pid in local[BUS] else []
             inputs += [model.predict(plain[s].estimate_at(pid, sent), rec.step - sent)
                        for s, sent in sorted(rec.received.get(pid, {}).items())

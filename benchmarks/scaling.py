@@ -15,13 +15,15 @@ import math
 import time
 
 import numpy as np
-import shapely
 
 from benchmarks.common import PlainObserver, fuse_inputs, median
 from benchmarks.loop_cost import profile_call
 from sse_cosim.control.picture import SceneContext, Source, assess
 from sse_cosim.estimation.motion import motion_model
 from sse_cosim.estimation.occupancy import ClearRegion, OccupancyTracker, UnobservedArea
+from sse_cosim.pipeline.stages import views_by_node
+from sse_cosim.regions import Region
+from sse_cosim.regions import kind as regions_kind
 from sse_cosim.scenario.model import AutomatedVehicle, Controller, Estimator
 from sse_cosim.sensors import Camera, SensorSpec, observe
 from sse_cosim.world.network import build_network
@@ -69,18 +71,20 @@ def measure(pedestrians: int, sensors: int, steps: int, warmup: int, roadmap) ->
     specs = _specs(sensors)
     nodes = sorted({s.node for s in specs.values()})
     observers = {n: PlainObserver(model, config.gain_method) for n in nodes}
+    kind = regions_kind()
     context = SceneContext.build(roadmap, ["WC", "CE"], AutomatedVehicle(), Controller(), model,
-                                 0.3, DT)
-    occupancy = OccupancyTracker(model, context.walkable, context.window)  # as in the loop
-    unobserved = UnobservedArea(context.walkable, model, 1, window=context.window)
+                                 0.3, DT, kind)
+    occupancy = OccupancyTracker(model, kind, context.walkable, context.window)  # as in the loop
+    unobserved = UnobservedArea(context.walkable, model, 1, kind, window=context.window)
     people, velocity = _pedestrians(pedestrians, rng)
-    inbox: dict[str, tuple[int, dict, shapely.Geometry]] = {}
+    inbox: dict[str, tuple[int, dict, Region]] = {}
     samples = []
     for step in range(warmup + steps):
         start = time.perf_counter()
         bus_x = 120.0 + 10.0 * DT * step
         snapshot = _snapshot(step, bus_x, people)
-        observations = observe(snapshot, specs, rng, want_regions=True)
+        observations = observe(snapshot, specs, rng, regions=kind)
+        views = views_by_node(observations, kind)
         by_node: dict[str, dict[str, list]] = {n: {} for n in nodes}
         for obs in observations.values():
             for pid, det in obs.detections.items():
@@ -98,16 +102,10 @@ def measure(pedestrians: int, sensors: int, steps: int, warmup: int, roadmap) ->
                  + [ClearRegion(region, step - sent) for _, sent, est, region in delivered
                     if pid not in est] for pid in fused}
         possible = occupancy.update(step, fused, clear)
-        own_view = shapely.union_all([o.visible for o in bus_views])
-        unknown = unobserved.update(step, own_view, [r for _, _, _, r in delivered])
-        assess(context, np.array([bus_x, -1.6]), 10.0,
-               shapely.union_all([o.occluded for o in bus_views]), unknown,
+        unknown = unobserved.update(step, views["bus"].visible, [r for _, _, _, r in delivered])
+        assess(context, np.array([bus_x, -1.6]), 10.0, views["bus"].occluded, unknown,
                [Source(region, fused.get(pid)) for pid, region in possible.items()])
-        inbox = {
-            n: (step, estimates[n], shapely.union_all(
-                [o.visible for o in observations.values() if o.node == n]))
-            for n in nodes if n != "bus"
-        }
+        inbox = {n: (step, estimates[n], views[n].visible) for n in nodes if n != "bus"}
         people = people + velocity * DT
         if step >= warmup:
             samples.append(time.perf_counter() - start)

@@ -68,13 +68,13 @@ def assert_in_the_way(context: SceneContext, spot: shapely.Point, radius: float,
     old = context.route_line.buffer(0.5 * context.bus.width_m + radius, cap_style="flat")
     assert not old.intersects(spot)
     assert touching_m
-    zones = [z for z in context.zones if z.polygon.intersects(spot)]
+    zones = [z for z in context.zones if z.polygon.shape.intersects(spot)]
     assert zones
     for station in touching_m:
         assert any(z.start_m <= station <= z.end_m + context.bus.length_m for z in zones), station
     front = shapely.get_coordinates(context.route_line.interpolate(front_m))[0]
-    seen = assess(context, front, 6.0, shapely.Polygon(), shapely.Polygon(),
-                  [Source(spot.buffer(0.05))], [Source(spot.buffer(0.05))])
+    nothing, here = context.kind.empty(), context.kind.outer(spot.buffer(0.05))
+    seen = assess(context, front, 6.0, nothing, nothing, [Source(here)], [Source(here)])
     outlooks = [o for o in seen.zones if any(context.zones[o.index] is z for z in zones)]
     assert outlooks
     assert all(o.arrival_s == 0.0 and o.in_view_arrival_s == 0.0 for o in outlooks)

@@ -39,14 +39,19 @@ Hidden ground is tracked in a *window*: within ``interest_radius_m`` of every cr
 route and of every conflict zone; walkable ground outside it always counts as occupied. The
 paper policy looks at one crossing at a time: the nearest on the route that the bus has not
 cleared (:meth:`SceneContext.crossing_at`).
+
+Regions are of one :class:`~sse_cosim.regions.RegionKind`. The route's own geometry (its
+centre line, the corridor and the zones cut from it) is drawn once, with shapely, when the
+context is built: the corridor's bends are mitred (a mitre holds the round join it replaces),
+and the zones are made ``outer`` regions of those shapes.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from dataclasses import dataclass, field
+from functools import cached_property
 from itertools import pairwise
 
 import numpy as np
@@ -56,8 +61,9 @@ import shapely.ops
 from sse_cosim.control.kinematics import BusDynamics
 from sse_cosim.control.swept import RoutePath, SweepPiece, body_sweep, swept_region, touch_extent
 from sse_cosim.estimation.motion import MotionModel, Separation, unit_fan
+from sse_cosim.regions import Region, RegionKind
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
-from sse_cosim.sets import Zonotope, portable
+from sse_cosim.sets import Zonotope
 from sse_cosim.world.roadmap import RoadMap
 
 ZONE_PIECE_M = 4.0  # conflict zones are cut into pieces about this long along the route (m)
@@ -72,7 +78,7 @@ class Source:
     """Where a pedestrian may be (``region``) and, for a known one, its fused state set
     (``state``; None: unknown, the model's worst case)."""
 
-    region: shapely.Geometry
+    region: Region
     state: Zonotope | None = None
 
 
@@ -83,16 +89,16 @@ class ConflictZone:
     the bus's length. ``beyond_arrival_s``: the earliest arrival of a pedestrian from the
     walkable ground outside the tracked window (always possibly occupied)."""
 
-    polygon: shapely.Geometry
+    polygon: Region
     start_m: float
     end_m: float
     beyond_arrival_s: float
 
     @cached_property
     def least_along(self) -> np.ndarray:
-        """min over the zone's vertices q of n.q for each direction n of :data:`FAN`, shape
-        (K,) (computed once)."""
-        return portable.matmul(shapely.get_coordinates(self.polygon), FAN.T).min(axis=0)
+        """min over the zone of n.q for each direction n of :data:`FAN`, shape (K,) (computed
+        once)."""
+        return -self.polygon.support(-FAN)
 
 
 @dataclass(frozen=True)
@@ -100,7 +106,7 @@ class RouteCrossing:
     """A crossing the bus's body sweeps: its ``area`` and its extent along the route (m), from
     the nearest to the farthest vertex of its convex hull."""
 
-    area: shapely.Polygon
+    area: Region
     start_m: float
     end_m: float
 
@@ -110,39 +116,44 @@ class SceneContext:
     """What does not change during a run: the route, walkable ground, the conflict zones."""
 
     route_line: shapely.LineString
-    walkable: shapely.Geometry  # the road map's walkable ground (measured patches included)
+    walkable: Region  # the road map's walkable ground (measured patches included)
     crossings: tuple[RouteCrossing, ...]  # the crossings on the route, nearest first
     bus: AutomatedVehicle
     config: Controller
     pedestrians: MotionModel  # the estimator's: how far and how soon a pedestrian gets
     dynamics: BusDynamics
-    window: shapely.Geometry  # where hidden ground is tracked; outside, it counts as occupied
+    window: Region  # where hidden ground is tracked; outside, it counts as occupied
     zones: tuple[ConflictZone, ...]
+    kind: RegionKind
+    _relevant: dict[tuple[int, float], Region] = field(default_factory=dict, repr=False)
 
     @classmethod
     def build(
         cls, roadmap: RoadMap, route_edges: Sequence[str], bus: AutomatedVehicle,
         config: Controller, pedestrians: MotionModel, pedestrian_radius: float,
-        step_length: float,
+        step_length: float, kind: RegionKind,
     ) -> SceneContext:
-        """Prepare the static geometry for a bus driving ``route_edges``."""
+        """Prepare the static geometry for a bus driving ``route_edges`` (regions of
+        ``kind``)."""
         route_line = roadmap.route_line(route_edges)
         walkable = roadmap.walkable
-        corridor = route_line.buffer(0.5 * bus.width_m + pedestrian_radius, cap_style="flat")
+        corridor = _widened(route_line, 0.5 * bus.width_m + pedestrian_radius)
         sweep = body_sweep(RoutePath.of_lanes(route_lanes(roadmap, route_edges)), bus.length_m,
                            bus.width_m + 2.0 * pedestrian_radius)
         corridor = _with_sweep(corridor, _from_start(swept_region(sweep), route_line), walkable)
-        crossings = _route_crossings(route_line, corridor, [c.area for c in roadmap.crossings])
-        swept = [(piece, *_touched(sweep, piece, start, end, bus.length_m))
+        crossings = _route_crossings(route_line, corridor, [c.area for c in roadmap.crossings],
+                                     kind)
+        swept = [(kind.outer(piece), *_touched(sweep, piece, start, end, bus.length_m))
                  for piece, start, end in _swept_walkable(route_line, corridor, walkable)]
         swept.sort(key=lambda piece: piece[1])
-        window = _window(crossings, swept, config.interest_radius_m)
-        beyond = shapely.difference(walkable, window)
+        ground = kind.outer(walkable)
+        window = _window(crossings, swept, config.interest_radius_m, kind)
+        beyond = Source(ground.difference(window))
         zones = tuple(
-            ConflictZone(polygon, start, end, _arrival(Source(beyond), polygon, pedestrians))
+            ConflictZone(polygon, start, end, _arrival(beyond, polygon, pedestrians, kind))
             for polygon, start, end in swept)
-        return cls(route_line, walkable, crossings, bus, config, pedestrians,
-                   BusDynamics.of(bus, config, step_length), window, zones)
+        return cls(route_line, ground, crossings, bus, config, pedestrians,
+                   BusDynamics.of(bus, config, step_length), window, zones, kind)
 
     def crossing_at(self, front_s: float) -> RouteCrossing | None:
         """The nearest crossing on the route that the bus (front at ``front_s``) has not
@@ -166,14 +177,22 @@ class SceneContext:
         radius = self.pedestrians.reach_during_m(to_clear, self.bus.nominal_speed_mps)
         return min(radius, self.config.interest_radius_m)
 
-    def path_ahead(self, front_s: float, length: float, margin: float) -> shapely.Geometry:
+    def path_ahead(self, front_s: float, length: float, margin: float) -> Region:
         """The corridor the bus sweeps over the next ``length`` metres, widened by ``margin``."""
         start = min(max(front_s, 0.0), self.route_line.length)
         end = min(front_s + max(length, 0.0), self.route_line.length)
         if end <= start:
-            return shapely.Polygon()
+            return self.kind.empty()
         centre = route_piece(self.route_line, self.route_stations, start, end)
-        return centre.buffer(0.5 * self.bus.width_m + margin, cap_style="flat")
+        return self.kind.outer(_widened(centre, 0.5 * self.bus.width_m + margin))
+
+    def relevant(self, crossing: RouteCrossing, radius: float) -> Region:
+        """``crossing``'s area widened by ``radius``; kept, since the reach radius stays at its
+        cap while the bus is far from the crossing, and at one value while the bus stands."""
+        key = (self.crossings.index(crossing), radius)
+        if key not in self._relevant:
+            self._relevant[key] = crossing.area.dilate(radius)
+        return self._relevant[key]
 
     @cached_property
     def route_stations(self) -> np.ndarray:
@@ -236,8 +255,8 @@ def assess(
     context: SceneContext,
     front_xy: np.ndarray,
     speed: float,
-    own_occluded: shapely.Geometry,
-    unobserved: shapely.Geometry,
+    own_occluded: Region,
+    unobserved: Region,
     pedestrian_regions: Iterable[Source],
     in_view: Iterable[Source] = (),
     in_view_beyond: bool = False,
@@ -259,18 +278,18 @@ def assess(
     to_crossing = None if crossing is None else crossing.start_m - front_s
     crossing_ahead = (crossing is not None and crossing.end_m > front_s
                       and crossing.start_m - front_s <= cfg.crossing_horizon_m)
-    own_hidden = shapely.intersection(own_occluded, unobserved)
+    own_hidden = own_occluded.intersection(unobserved)
     reach = context.reach_radius(front_s)
-    relevant = _around(crossing.area, reach) if crossing is not None and reach > 0 \
-        else shapely.Polygon()
-    hidden_in_reach = shapely.intersection(own_hidden, relevant)
+    relevant = context.relevant(crossing, reach) if crossing is not None and reach > 0 \
+        else context.kind.empty()
+    hidden_in_reach = own_hidden.intersection(relevant)
     known = [s for s in pedestrian_regions if not s.region.is_empty]
     sets = [s.region for s in known]
     # the corridors ahead only matter to a known pedestrian's region: none, none built
     near_path = context.path_ahead(front_s, cfg.crossing_horizon_m, cfg.path_margin_m) \
-        if sets else shapely.Polygon()
+        if sets else context.kind.empty()
     stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0) \
-        if sets else shapely.Polygon()
+        if sets else context.kind.empty()
     zones = _outlook(context, front_s, [Source(unobserved), *known],
                      [s for s in in_view if not s.region.is_empty], in_view_beyond, floors or {})
     return Picture(
@@ -289,20 +308,14 @@ def assess(
     )
 
 
-@lru_cache(maxsize=32)
-def _around(area: shapely.Geometry, radius: float) -> shapely.Geometry:
-    """``area`` widened by ``radius``; kept, since the reach radius stays at its cap while the
-    bus is far from the crossing, and at one value while the bus stands."""
-    return area.buffer(radius)
-
-
 def arrival_floors(previous: Picture, elapsed_s: float) -> dict[int, float]:
     """Per zone index, the earliest arrival that ``previous`` (``elapsed_s`` ago) still
     proves: a pedestrian moves no faster than the bound (A1, docs/controller.md), so nobody
     can be in a zone sooner than its earliest arrival then, less the time since.
 
-    The sets alone can bring an arrival nearer by more than that: their polygons circumscribe
-    the discs they grow by, so a region's edge moves up to 8 % faster than the bound. A plan
+    The sets alone can bring an arrival nearer by more than that: a dilation holds the exact
+    one (:mod:`sse_cosim.regions`), so a region's corner moves up to sqrt(2) times as far as
+    the bound (a polygon's cut mitre) in a step. A plan
     proven at one step then fails at the next against the new sets, though not against the
     truth, and the bus brakes in emergency. The floor keeps the picture's arrivals as the
     proof has them."""
@@ -343,8 +356,8 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
              for index, zone in enumerate(context.zones)]
     ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead if to_clear > 0.0]
     zones = [zone for _, zone, _ in ahead]
-    arrivals = _arrivals(sources, zones, context.pedestrians)
-    in_view_arrivals = _arrivals(in_view, zones, context.pedestrians)
+    arrivals = _arrivals(sources, zones, context.pedestrians, context.kind)
+    in_view_arrivals = _arrivals(in_view, zones, context.pedestrians, context.kind)
     return tuple(
         ZoneOutlook(index, zone.start_m - front_s, to_clear,
                     max(min(zone.beyond_arrival_s, float(arrival)), floors.get(index, 0.0)),
@@ -355,16 +368,14 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
 
 
 def _arrivals(sources: Iterable[Source], zones: Sequence[ConflictZone],
-              pedestrians: MotionModel) -> np.ndarray:
+              pedestrians: MotionModel, kind: RegionKind) -> np.ndarray:
     """Earliest time (s) a pedestrian somewhere in ``sources`` can be in each of ``zones``,
     shape (z,) (inf without a source): the soonest of the model's arrivals from each source
     (those without a state, or all if the model uses none, from their nearest, as one)."""
     parts = [s for s in sources if not s.region.is_empty]
     if not parts or not zones:
         return np.full(len(zones), math.inf)
-    polygons = np.array([zone.polygon for zone in zones], dtype=object)[None, :]
-    distances = shapely.distance(np.array([s.region for s in parts], dtype=object)[:, None],
-                                 polygons)  # (s, z)
+    distances = kind.distances([s.region for s in parts], [zone.polygon for zone in zones])
     with_state = [s.state is not None and pedestrians.uses_state for s in parts]
     known = [i for i, used in enumerate(with_state) if used]
     stateless = [i for i, used in enumerate(with_state) if not used]
@@ -376,16 +387,18 @@ def _arrivals(sources: Iterable[Source], zones: Sequence[ConflictZone],
     least = np.array([zone.least_along for zone in zones])  # (z, K)
     for i in known:
         source = parts[i]
-        largest = portable.matmul(shapely.get_coordinates(source.region), FAN.T).max(axis=0)
+        largest = source.region.support(FAN)
         separation = Separation(FAN, least - largest[None, :])
         arrival = np.minimum(arrival, pedestrians.earliest_arrival_s(
             distances[i], source.state, separation))
     return arrival
 
 
-def _arrival(source: Source, zone: shapely.Geometry, pedestrians: MotionModel) -> float:
+def _arrival(source: Source, zone: Region, pedestrians: MotionModel,
+             kind: RegionKind) -> float:
     """Earliest time (s) a pedestrian somewhere in ``source`` can be in ``zone``."""
-    return float(_arrivals([source], [ConflictZone(zone, 0.0, 0.0, math.inf)], pedestrians)[0])
+    return float(_arrivals([source], [ConflictZone(zone, 0.0, 0.0, math.inf)], pedestrians,
+                           kind)[0])
 
 
 def route_stations(line: shapely.LineString) -> np.ndarray:
@@ -410,7 +423,8 @@ def route_piece(line: shapely.LineString, stations: np.ndarray, start: float,
 
 
 def _route_crossings(route_line: shapely.LineString, corridor: shapely.Geometry,
-                     areas: Sequence[shapely.Polygon]) -> tuple[RouteCrossing, ...]:
+                     areas: Sequence[shapely.Polygon],
+                     kind: RegionKind) -> tuple[RouteCrossing, ...]:
     """The crossings among ``areas`` that the ``corridor`` around the route overlaps (touching
     is not enough), with their extent along the route, nearest first."""
     crossings = []
@@ -418,18 +432,17 @@ def _route_crossings(route_line: shapely.LineString, corridor: shapely.Geometry,
         if shapely.intersection(corridor, area).area <= 0.0:
             continue
         along = [route_line.project(shapely.Point(p)) for p in _boundary_points(area)]
-        crossings.append(RouteCrossing(area, min(along), max(along)))
+        crossings.append(RouteCrossing(kind.outer(area), min(along), max(along)))
     return tuple(sorted(crossings, key=lambda c: c.start_m))
 
 
-def _window(crossings: Sequence[RouteCrossing],
-            swept: Sequence[tuple[shapely.Geometry, float, float]],
-            radius: float) -> shapely.Geometry:
+def _window(crossings: Sequence[RouteCrossing], swept: Sequence[tuple[Region, float, float]],
+            radius: float, kind: RegionKind) -> Region:
     """Where hidden ground is tracked: within ``radius`` of every crossing on the route and of
     every swept piece of walkable ground that no crossing covers."""
-    covered = shapely.union_all([c.area for c in crossings])
-    others = [piece for piece, _, _ in swept if not piece.within(covered)]
-    return shapely.union_all([*(c.area for c in crossings), *others]).buffer(radius)
+    covered = kind.union_all([c.area for c in crossings])
+    others = [piece for piece, _, _ in swept if not covered.covers(piece)]
+    return kind.union_all([*(c.area for c in crossings), *others]).dilate(radius)
 
 
 def _swept_walkable(route_line: shapely.LineString, corridor: shapely.Geometry,
@@ -525,6 +538,12 @@ def _touched(sweep: Sequence[SweepPiece], piece: shapely.Geometry, start: float,
         return start, end
     first, last = touched
     return (start if first >= start - 1e-9 else first), (end if last <= end + 1e-9 else last)
+
+
+def _widened(line: shapely.LineString, half_width: float) -> shapely.Geometry:
+    """``line`` swept by a disc of radius ``half_width``, with flat ends: its bends mitred, so
+    that the polygon holds every round join it stands for."""
+    return line.buffer(half_width, cap_style="flat", join_style="mitre")
 
 
 def _boundary_points(polygon: shapely.Geometry) -> np.ndarray:

@@ -39,8 +39,6 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-import shapely
-
 from sse_cosim.estimation.association import (
     MEET_TOL,
     NodeTracks,
@@ -53,6 +51,7 @@ from sse_cosim.estimation.fusion_centre import BaseFusionCentre, BusEstimate
 from sse_cosim.estimation.observer import Track
 from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.v2x import SharedPicture
+from sse_cosim.regions import Region
 from sse_cosim.sets import Zonotope, zonotopes_disjoint
 
 
@@ -63,7 +62,7 @@ class _Node:
 
     node: str
     tracks: dict[str, Zonotope]
-    view: shapely.Geometry
+    view: Region
     age: int
     detected: frozenset[str]
 
@@ -72,7 +71,7 @@ class AnonymousFusionCentre(BaseFusionCentre):
     """Automated vehicle ``node``'s fusion of anonymous tracks, with their clear regions."""
 
     def step(self, tracks: Mapping[str, Mapping[str, Track]], shared: SharedPicture,
-             own_view: shapely.Geometry, detected: frozenset[str],
+             own_view: Region, detected: frozenset[str],
              ) -> tuple[BusEstimate, dict[str, list[ClearRegion]]]:
         """The fused tracks of this step and, per fused track, the regions seen without its
         pedestrians (module docstring).
@@ -87,7 +86,7 @@ class AnonymousFusionCentre(BaseFusionCentre):
         seen = frozenset(key for key, t in mine.items() if t.detected)
         nodes = [_Node(self.node, own, own_view, 0, seen), *_senders(shared)]
         fused = associate_nodes([self._node_tracks(n) for n in nodes], self.model,
-                                self._fuse)
+                                self._fuse, self.kind)
         ranked = {n.node: sorted(n.tracks) for n in nodes}
         every = {key: z for n in nodes for key, z in n.tracks.items()}  # keys: network-wide
         estimates: dict[str, Zonotope] = {}
@@ -106,10 +105,8 @@ class AnonymousFusionCentre(BaseFusionCentre):
         return BusEstimate(screen, estimates, flags, inputs, frozenset(in_view)), clear
 
     def _node_tracks(self, node: _Node) -> NodeTracks:
-        """``node``'s tracks for :func:`associate_nodes` (ids: the keys' ranks), its view
-        (prepared: every other node's tracks are tested against it), and how far a pedestrian
-        may have walked since the view was taken."""
-        shapely.prepare(node.view)
+        """``node``'s tracks for :func:`associate_nodes` (ids: the keys' ranks), its view,
+        and how far a pedestrian may have walked since the view was taken."""
         return NodeTracks(node.node, dict(enumerate(node.tracks[k] for k in sorted(node.tracks))),
                           node.view, self.model.reach_m(node.age))
 

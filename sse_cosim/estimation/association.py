@@ -87,8 +87,8 @@ sound in place of both; tracks linked by such certain pairs form one group and a
 everything else is kept apart. All tracks are brought to the fusing step first; a region
 seen earlier is trusted only for A grown by how far a pedestrian may have walked since.
 
-Cost: bounding boxes prefilter every track-detection and track-track pair, and the regions
-are tested with shapely's vectorized predicates, so a step is about linear in the number of
+Cost: bounding boxes prefilter every track-detection and track-track pair, and each region
+test is one prepared predicate, so a step is about linear in the number of
 (track, sensor that sees it) pairs; a hull is enclosed along the edges of its options only
 (the enclosure's cost grows with the cube of its directions). 50 random walkers under 16
 disc sensors (about 100 detections a step): about 0.6 s a step on one core (``enclose``
@@ -97,19 +97,15 @@ gain), 1 s with ``frobenius``.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
-from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
-import shapely
-from shapely.geometry import MultiPoint, Polygon
-from shapely.geometry.base import BaseGeometry
 
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.vote import interval_hull
+from sse_cosim.regions import Region, RegionKind
 from sse_cosim.sets import (
     Strips,
     Zonotope,
@@ -130,9 +126,6 @@ MEET_TOL = 1e-6
 
 VISIBLE_MARGIN = 1e-6
 """m: visible regions are shrunk by this (besides the jitter) before any test (R2, R3)."""
-
-QUAD_SEGMENTS = 16
-"""Segments per quarter circle of the buffers (:func:`_buffer`)."""
 
 MERGE_GROWTH = 0.05
 """R7: two tracks merge when their hull's position area exceeds the smaller one's by at most
@@ -195,16 +188,13 @@ class _Scene:
     model: MotionModel
     settings: EstimatorSettings
     detections: _Detections
-    eroded: Mapping[str, BaseGeometry]  # sensor -> visible region shrunk by jitter + margin
-    ground: BaseGeometry | None
+    eroded: Mapping[str, Region]  # sensor -> visible region shrunk by jitter + margin
+    ground: Region | None
+    kind: RegionKind
 
-    @cached_property
-    def regions(self) -> tuple[tuple[str, ...], np.ndarray]:
-        """The sensors' names and their eroded regions (an array of prepared geometries, for
-        shapely's vectorized predicates)."""
-        regions = np.array(list(self.eroded.values()), dtype=object)
-        shapely.prepare(regions)
-        return tuple(self.eroded), regions
+    def region(self, zonotope: Zonotope) -> Region:
+        """A 2-D zonotope as a region."""
+        return self.kind.convex_outer(zonotope.vertices())
 
 
 def associate(
@@ -212,24 +202,25 @@ def associate(
     settings: EstimatorSettings,
     tracks: Sequence[LocalTrack],
     detections: Sequence[AnonymousDetection],
-    visible: Mapping[str, BaseGeometry],
+    visible: Mapping[str, Region],
     step: int,
     next_id: int,
-    ground: BaseGeometry | None = None,
+    kind: RegionKind,
+    ground: Region | None = None,
 ) -> Association:
     """One step of a node's first fusion level from anonymous detections (rules R1-R7).
 
     ``tracks``: the node's tracks at earlier steps (each is predicted to ``step`` here);
     ``detections``: every detection of the node's sensors at ``step``, in a fixed order;
-    ``visible``: sensor name -> its visible region at ``step`` (a shapely geometry in the
-    position plane; a sensor missing here sees nothing); ``ground``: the walkable area, if
+    ``visible``: sensor name -> its visible region at ``step`` (in the position plane, of
+    ``kind``; a sensor missing here sees nothing); ``ground``: the walkable area, if
     known. New tracks take ids from ``next_id`` on. Cost: boxes prefilter every track-detection
     and track-region pair, so the exact tests run only on pairs that may meet.
     """
     found = _Detections.of(detections, model)
     shrink = model.jitter * np.sqrt(2.0) + VISIBLE_MARGIN  # box(jitter) lies in this disc
-    eroded = {name: _buffer(region, -shrink) for name, region in sorted(visible.items())}
-    scene = _Scene(model, settings, found, eroded, ground)
+    eroded = {name: region.erode(shrink) for name, region in sorted(visible.items())}
+    scene = _Scene(model, settings, found, eroded, ground, kind)
     predicted = [replace(t, estimate=model.predict(t.estimate, step - t.step), step=step)
                  for t in tracks]
     views = [_candidates(scene, t.estimate) for t in predicted]
@@ -361,12 +352,16 @@ def _candidates(scene: _Scene, estimate: Zonotope, skip: str | None = None) -> _
             candidates.setdefault(sensor, []).append(int(d))
             if _inside(found.parallelograms[d], path):
                 inside.append(int(d))
-    polygon = _polygon(path)  # the regions are eroded by the jitter: s in them, p visible
-    names, regions = scene.regions
-    covers = shapely.covers(regions, polygon)
-    meets = shapely.intersects(regions, polygon) & ~covers
-    wholly = {n for n, c in zip(names, covers, strict=True) if c and n != skip}
-    partly = {n for n, m in zip(names, meets, strict=True) if m and n != skip}
+    polygon = scene.region(path)  # the regions are eroded by the jitter: s in them, p visible
+    wholly: set[str] = set()
+    partly: set[str] = set()
+    for name, region in scene.eroded.items():
+        if name == skip:
+            continue
+        if region.covers(polygon):
+            wholly.add(name)
+        elif region.intersects(polygon):
+            partly.add(name)
     return _View({s: tuple(c) for s, c in candidates.items()}, tuple(inside),
                  frozenset(wholly), frozenset(partly))
 
@@ -445,7 +440,7 @@ def _finish(scene: _Scene, track: LocalTrack, estimate: Zonotope, occupied: bool
     """The corrected track: None off the walkable ground (R6), else cut to the state bounds
     and reduced."""
     if scene.ground is not None and not scene.ground.intersects(
-            _polygon(scene.model.position(estimate))):
+            scene.region(scene.model.position(estimate))):
         return None  # R6: off the walkable ground
     estimate = scene.model.bound_state(estimate)  # the speed bound, always true (A3)
     estimate = estimate.reduce(scene.settings.max_generators, scene.settings.reduction_method)
@@ -477,8 +472,7 @@ def _hidden(scene: _Scene, estimate: Zonotope, predicted: Zonotope, sensor: str)
     prediction's path set minus the sensor's eroded region (a pedestrian whose position
     p = s + e, |e| <= jitter, is outside the region has its s there)."""
     path = scene.model.path_set(predicted)
-    hidden = _polygon(path).difference(scene.eroded[sensor])
-    corners = shapely.get_coordinates(hidden.convex_hull)
+    corners = scene.region(path).difference(scene.eroded[sensor]).hull_points()
     enclosure = _enclose(corners, path.generators)
     if enclosure is None:
         return estimate
@@ -563,14 +557,6 @@ def _boxes_meet(first: tuple[FloatArray, FloatArray], second: tuple[FloatArray, 
     return bool((first[0] <= second[1] + tol).all() and (second[0] <= first[1] + tol).all())
 
 
-def _buffer(geometry: BaseGeometry, distance: float) -> BaseGeometry:
-    """``geometry`` grown (or, for a negative ``distance``, shrunk) by at least |distance|:
-    shapely's arcs are polygons inscribed in the circle, so the radius is raised until the
-    polygon's edges lie |distance| away."""
-    return geometry.buffer(distance / math.cos(math.pi / (4 * QUAD_SEGMENTS)),
-                           quad_segs=QUAD_SEGMENTS)
-
-
 def _parallelogram(path: Strips) -> Zonotope:
     """The set of a detection's two path strips: <H^-1 y, H^-1 diag(r)> (H (2, 2))."""
     inverse = portable.inverse_2x2(path.normals[:2])
@@ -595,12 +581,6 @@ def _inside(inner: Zonotope, path: Zonotope) -> bool:
     return bool(np.all(path.contains(inner.vertices(), tol=-MEET_TOL)))
 
 
-def _polygon(zonotope: Zonotope) -> BaseGeometry:
-    """A 2-D zonotope as a shapely geometry (a Polygon, or a segment / point if degenerate)."""
-    vertices = zonotope.vertices()
-    return Polygon(vertices) if len(vertices) >= 3 else MultiPoint(vertices).convex_hull
-
-
 @dataclass(frozen=True)
 class NodeTracks:
     """One node's tracks at the fusing step, for :func:`associate_nodes`.
@@ -612,7 +592,7 @@ class NodeTracks:
 
     node: str
     tracks: Mapping[int, Zonotope]
-    visible: BaseGeometry
+    visible: Region
     reach: float = 0.0
 
 
@@ -631,8 +611,8 @@ Fusion = Callable[[Sequence[Zonotope]], Zonotope]
 ``lambda sets: bus_fusion.fuse_sets(sets, method, settings, model)``."""
 
 
-def associate_nodes(nodes: Sequence[NodeTracks], model: MotionModel, fusion: Fusion
-                    ) -> list[FusedTrack]:
+def associate_nodes(nodes: Sequence[NodeTracks], model: MotionModel, fusion: Fusion,
+                    kind: RegionKind) -> list[FusedTrack]:
     """The second fusion level over anonymous tracks: every track of every node lands in
     exactly one result; tracks linked by certain pairs (module docstring) are fused by
     ``fusion`` (called only on groups of two or more), the rest come back alone. Cost: one
@@ -647,7 +627,7 @@ def associate_nodes(nodes: Sequence[NodeTracks], model: MotionModel, fusion: Fus
             key = group[key]
         return key
 
-    polygons = {key: _polygon(model.position(sets[key])) for key in keys}
+    polygons = {key: kind.convex_outer(model.position(sets[key]).vertices()) for key in keys}
     sole = {(key, other.node): _sole_meeting(sets[key], polygons[key], other, model)
             for key in keys for other in nodes if other.node != key[0]}
     for (key, node), partner in sole.items():
@@ -660,17 +640,17 @@ def associate_nodes(nodes: Sequence[NodeTracks], model: MotionModel, fusion: Fus
             for m in members.values()]
 
 
-def _sole_meeting(estimate: Zonotope, position: BaseGeometry, other: NodeTracks,
+def _sole_meeting(estimate: Zonotope, position: Region, other: NodeTracks,
                   model: MotionModel) -> int | None:
     """The id of ``other``'s only track meeting ``estimate`` when ``estimate``'s position set
     (``position``, as a polygon), grown by ``other.reach``, lies wholly in ``other``'s region;
     else None. The region's bounding box is tested first."""
     grow = other.reach + VISIBLE_MARGIN
     x0, y0, x1, y1 = position.bounds
-    vx0, vy0, vx1, vy1 = other.visible.bounds if not other.visible.is_empty else (0, 0, -1, -1)
+    vx0, vy0, vx1, vy1 = other.visible.bounds
     if x0 - grow < vx0 or y0 - grow < vy0 or x1 + grow > vx1 or y1 + grow > vy1:
         return None  # the grown set pokes out of the region's box
-    if not other.visible.covers(_buffer(position, grow)):
+    if not other.visible.covers(position.dilate(grow)):
         return None
     path = model.path_set(estimate)
     box = path.interval_hull()

@@ -12,14 +12,11 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
-import shapely
-
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.occupancy import ARC_SAFETY, QUAD_SEGMENTS, ClearRegion
+from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.vote import CONSISTENCY_TOL, Probation, interval_hull, vote
-from sse_cosim.memo import IdentityMemo
+from sse_cosim.regions import RegionKind
 from sse_cosim.sets import Zonotope
-from sse_cosim.sets.exact import zonotope_polygon
 
 HULL_SOURCE = "conflict hull"  # the bus's single fusion input when its sources cannot agree
 EXCLUDED = "excluded"
@@ -27,7 +24,7 @@ CONFLICT = "conflict"
 
 
 def contradicted(
-    position: Zonotope, clear: Sequence[ClearRegion], model: MotionModel,
+    position: Zonotope, clear: Sequence[ClearRegion], model: MotionModel, kind: RegionKind,
     tol: float = CONSISTENCY_TOL,
 ) -> bool:
     """Whether a path set (2-D, about s_k) lies wholly where a node looked and saw nobody.
@@ -36,33 +33,23 @@ def contradicted(
     and p_{k-age} is within jitter + reach(age) of s_k (``model``'s jitter and reach). If the
     whole set lies in R shrunk by that slack, no point of it can be s_k: the source that
     reported the set is wrong (or the viewer missed a pedestrian it could see, which the
-    sensor model rules out). The erosion uses polygons inscribed in the true one (radius
-    scaled by ARC_SAFETY).
+    sensor model rules out). The erosion lies inside the exact one (the Region contract);
+    each region keeps its erosions, since every source of every pedestrian is tested against
+    the same views at the same slack.
     """
     lo, hi = position.interval_hull()
     shape = None
     for item in clear:
         slack = model.jitter + model.reach_m(item.age) + tol
-        x0, y0, x1, y1 = item.region.bounds if not item.region.is_empty else (0, 0, -1, -1)
+        x0, y0, x1, y1 = item.region.bounds
         if not (x0 + slack <= lo[0] and y0 + slack <= lo[1] and hi[0] <= x1 - slack
                 and hi[1] <= y1 - slack):
             continue  # the set pokes out of the region's box: it cannot lie in the region
-        shape = zonotope_polygon(position) if shape is None else shape
-        inner = _eroded(item.region, ARC_SAFETY * slack)
+        shape = kind.convex_outer(position.vertices()) if shape is None else shape
+        inner = item.region.erode(slack)
         if not inner.is_empty and inner.covers(shape):
             return True
     return False
-
-
-_ERODED: IdentityMemo[shapely.Geometry] = IdentityMemo(64)
-
-
-def _eroded(region: shapely.Geometry, distance: float) -> shapely.Geometry:
-    """``region`` shrunk by ``distance`` (inscribed arcs). Every source of every pedestrian
-    is tested against the same views at the same slack: the newest erosions are kept, by the
-    region's identity (geometries are immutable) and the distance."""
-    return _ERODED.get((id(region), distance), (region,),
-                       lambda: region.buffer(-distance, quad_segs=QUAD_SEGMENTS))
 
 
 @dataclass(frozen=True)
@@ -102,8 +89,10 @@ class BusScreener:
     """An automated vehicle's screen of its fusion inputs (``node`` its id), with each
     pedestrian's sources on probation."""
 
-    def __init__(self, model: MotionModel, node: str, tol: float = CONSISTENCY_TOL) -> None:
+    def __init__(self, model: MotionModel, kind: RegionKind, node: str,
+                 tol: float = CONSISTENCY_TOL) -> None:
         self.model = model
+        self.kind = kind
         self.node = node
         self.tol = tol
         self._probation: dict[str, Probation] = {}
@@ -160,7 +149,8 @@ class BusScreener:
                          self.node)
 
     def _contradicted(self, estimate: Zonotope, clear: Sequence[ClearRegion]) -> bool:
-        return contradicted(self.model.path_set(estimate), clear, self.model, self.tol)
+        return contradicted(self.model.path_set(estimate), clear, self.model, self.kind,
+                            self.tol)
 
     def _vote(self, person_id: str, sets: Sequence[Zonotope],
               names: Sequence[str]) -> tuple[list[str], frozenset[str]]:

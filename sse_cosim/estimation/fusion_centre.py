@@ -22,6 +22,7 @@ from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import EstimatorSettings, Track
 from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.v2x import SharedPicture
+from sse_cosim.regions import RegionKind
 from sse_cosim.sets import Zonotope
 
 
@@ -48,9 +49,10 @@ class BaseFusionCentre:
     motion model, the estimator's settings, the fusion method and the sensors."""
 
     def __init__(self, model: MotionModel, settings: EstimatorSettings, fusion_method: str,
-                 sensors: Iterable[str], node: str) -> None:
+                 sensors: Iterable[str], node: str, kind: RegionKind) -> None:
         self.node = node
         self.model = model
+        self.kind = kind
         self.settings = settings
         self.fusion_method = fusion_method
         self.sensors = list(sensors)
@@ -61,9 +63,9 @@ class FusionCentre(BaseFusionCentre):
     probation kept across steps."""
 
     def __init__(self, model: MotionModel, settings: EstimatorSettings, fusion_method: str,
-                 sensors: Iterable[str], node: str) -> None:
-        super().__init__(model, settings, fusion_method, sensors, node)
-        self._screener = BusScreener(model, node)
+                 sensors: Iterable[str], node: str, kind: RegionKind) -> None:
+        super().__init__(model, settings, fusion_method, sensors, node, kind)
+        self._screener = BusScreener(model, kind, node)
 
     def step(
         self,

@@ -16,9 +16,9 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import shapely
 
 from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.regions import Region, RegionKind
 from sse_cosim.sets import Strips
 
 SIGMAS = 3.0  # a bound is 3 standard deviations
@@ -42,14 +42,15 @@ class Gaussian:
         """Whether ``point`` lies in the ``sigmas``-sigma ellipse."""
         return self.mahalanobis2(point) <= sigmas * sigmas
 
-    def ellipse(self, sigmas: float = SIGMAS, extra: float = 0.0) -> shapely.Polygon:
-        """A polygon circumscribing the ``sigmas``-sigma ellipse grown by ``extra`` metres."""
+    def ellipse(self, sigmas: float = SIGMAS, extra: float = 0.0) -> np.ndarray:
+        """The corners (k, 2) of a polygon circumscribing the ``sigmas``-sigma ellipse grown
+        by ``extra`` metres."""
         values, vectors = np.linalg.eigh(0.5 * (self.cov + self.cov.T))
         axes = sigmas * np.sqrt(np.maximum(values, 0.0)) + extra
         angles = np.linspace(0.0, 2.0 * np.pi, ELLIPSE_POINTS, endpoint=False)
         circumscribe = 1.0 / np.cos(np.pi / ELLIPSE_POINTS)
         unit = np.stack([np.cos(angles), np.sin(angles)], axis=1) * circumscribe
-        return shapely.Polygon(self.mean + (unit * axes) @ vectors.T)
+        return self.mean + (unit * axes) @ vectors.T
 
 
 def update(state: Gaussian, strips: Strips) -> Gaussian:
@@ -112,9 +113,10 @@ class KalmanTracker:
             self.tracks[person_id] = initial(path, step) if state is None else update(state, path)
         return dict(self.tracks)
 
-    def regions(self) -> dict[str, shapely.Geometry]:
+    def regions(self, kind: RegionKind) -> dict[str, Region]:
         """Each pedestrian's 3-sigma ellipse of the path, grown by the jitter (its position)."""
-        return {pid: g.ellipse(extra=self.model.jitter) for pid, g in self.tracks.items()}
+        return {pid: kind.convex_outer(g.ellipse(extra=self.model.jitter))
+                for pid, g in self.tracks.items()}
 
 
 def all_detections(observations: Iterable) -> dict[str, list[Strips]]:

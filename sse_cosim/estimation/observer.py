@@ -19,7 +19,6 @@ from functools import cached_property
 from typing import Generic, Protocol, TypeVar
 
 import numpy as np
-from shapely.geometry.base import BaseGeometry
 
 from sse_cosim.estimation import track_kernels
 from sse_cosim.estimation.association import AnonymousDetection, Association, associate
@@ -27,6 +26,7 @@ from sse_cosim.estimation.correction import Suspicion, TrackCorrection, correct
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import EndedTrack
 from sse_cosim.estimation.vote import CONSISTENCY_TOL
+from sse_cosim.regions import Region, RegionKind
 from sse_cosim.sets import Strips, Zonotope, intersect_strips, portable
 
 END_AFTER_STEPS = 10
@@ -238,11 +238,11 @@ def _unsuspected(suspicion: Suspicion | None) -> bool:
 @dataclass(frozen=True)
 class NodeScan:
     """What a node's sensors report at one step without ids: every detection (in a fixed
-    order) and each sensor's visible region (sensor name -> shapely geometry; a pedestrian
+    order) and each sensor's visible region (sensor name -> region; a pedestrian
     inside it is detected by that sensor; a sensor left out sees nothing)."""
 
     detections: tuple[AnonymousDetection, ...] = ()
-    visible: Mapping[str, BaseGeometry] = field(default_factory=dict)
+    visible: Mapping[str, Region] = field(default_factory=dict)
 
 
 class AnonymousNodeObserver:
@@ -266,10 +266,11 @@ class AnonymousNodeObserver:
     """
 
     def __init__(self, node: str, model: MotionModel, settings: EstimatorSettings,
-                 ground: BaseGeometry | None = None) -> None:
+                 kind: RegionKind, ground: Region | None = None) -> None:
         self.node = node
         self.model = model
         self.settings = settings
+        self.kind = kind
         self.ground = ground
         self.association = Association((), 0)
         self._joined_at: dict[int, int] = {}  # track id -> the last step it joined a detection
@@ -279,7 +280,7 @@ class AnonymousNodeObserver:
         """Tracks at ``step`` from the node's ``scan`` at ``step``, and those it ended lately."""
         association = associate(
             self.model, self.settings, self.association.tracks, scan.detections, scan.visible,
-            step, self.association.next_id, self.ground)
+            step, self.association.next_id, self.kind, self.ground)
         joined_at = {t.track_id: step if t.joined
                      else self._joined_at.get(t.track_id, step - END_AFTER_STEPS)
                      for t in association.tracks}
@@ -329,11 +330,11 @@ class LocalObservers(Generic[NodeInput]):
         return LocalObservers(nodes, lambda node: NodeObserver(node, model, settings), {})
 
     @classmethod
-    def anonymous(cls, nodes: Iterable[str], model: MotionModel, settings: EstimatorSettings
-                  ) -> LocalObservers[NodeScan]:
-        """Observers of anonymous detections (node-local track ids)."""
+    def anonymous(cls, nodes: Iterable[str], model: MotionModel, settings: EstimatorSettings,
+                  kind: RegionKind) -> LocalObservers[NodeScan]:
+        """Observers of anonymous detections (node-local track ids; regions of ``kind``)."""
         return LocalObservers(
-            nodes, lambda node: AnonymousNodeObserver(node, model, settings), NodeScan())
+            nodes, lambda node: AnonymousNodeObserver(node, model, settings, kind), NodeScan())
 
     def step(self, step: int, found: Mapping[str, NodeInput]) -> dict[str, LocalTracks]:
         """Node -> its tracks at ``step`` (track key -> track, and those it ended lately), from

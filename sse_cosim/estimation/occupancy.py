@@ -1,8 +1,9 @@
-"""Where pedestrians can be, refined with negative information (polygons, not zonotopes).
+"""Where pedestrians can be, refined with negative information (regions, not zonotopes).
 
 A sensor that sees a region V and does not detect a pedestrian proves the pedestrian is not
 in V (every pedestrian inside a visible region is detected). That knowledge is not convex,
-so the zonotopes (sound on their own) ignore it, and the bus keeps polygons instead:
+so the zonotopes (sound on their own) ignore it, and the bus keeps regions instead
+(:mod:`sse_cosim.regions`):
 
 - :class:`OccupancyTracker`, per *known* pedestrian, a region R_k for its path s;
 - :class:`UnobservedArea`, where a pedestrian *nobody has detected* may be.
@@ -15,8 +16,8 @@ A, then s is in A (+) disc(eps). So
 
 and the pedestrian itself is in (U_k (+) disc(eps)) ∩ walkable, minus what the bus sees now.
 Shared views arrive ``latency`` steps late: U is kept exactly up to step k - latency (when
-those views were taken) and carried to step k with the bus's own views. Every buffer uses
-polygons that circumscribe their discs, so each step over-approximates.
+those views were taken) and carried to step k with the bus's own views. Every dilation holds
+the exact one (the Region contract), so each step over-approximates.
 
 The picture asks about U only near the crossings on the route (the window: any shape, in
 several pieces with several crossings), so U is tracked in a bounded area B around that
@@ -60,45 +61,14 @@ arrives (:class:`~sse_cosim.estimation.v2x.V2XLink`).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-import shapely
-
 from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.regions import Region, RegionKind
 from sse_cosim.sets import Zonotope
-from sse_cosim.sets.exact import zonotope_polygon
 
-EMPTY = shapely.Polygon()
-QUAD_SEGMENTS = 2  # polygon arcs: 2 segments per quarter circle
-ARC_SAFETY = 1.0 / math.cos(math.pi / (4 * QUAD_SEGMENTS))  # makes those arcs circumscribe the disc
-
-
-COARSEN_M = 0.01  # regions are kept as polygons at most this much larger, with few vertices
-COARSEN_ABOVE = 64  # vertices above which a region is coarsened
-
-
-def coarsen(region: shapely.Geometry, tolerance: float = COARSEN_M) -> shapely.Geometry:
-    """A polygon containing ``region`` and within ``2 * tolerance`` of it, with few vertices.
-
-    Repeated dilations and cuts leave regions with thousands of centimetre-long edges. The
-    region is grown by ``tolerance`` (mitred corners: no arcs) and simplified with the same
-    tolerance, which moves no boundary point by more than that, so the result still covers
-    the region; the cover is checked, and the region returned unchanged if it fails.
-    """
-    if region.is_empty or shapely.get_num_coordinates(region) <= COARSEN_ABOVE:
-        return region
-    grown = region.buffer(tolerance, quad_segs=1, join_style="mitre")
-    simple = shapely.simplify(grown, tolerance, preserve_topology=True)
-    return simple if simple.covers(region) else region
-
-
-def dilate(region: shapely.Geometry, distance: float) -> shapely.Geometry:
-    """A polygon containing region (+) disc(distance)."""
-    if distance <= 0 or region.is_empty:
-        return region
-    return region.buffer(ARC_SAFETY * distance, quad_segs=QUAD_SEGMENTS)
+COARSEN_M = 0.01  # regions are kept at most this much larger, in few pieces
 
 
 @dataclass(frozen=True)
@@ -114,12 +84,12 @@ class EndedTrack:
 class ClearRegion:
     """A region some node saw, ``age`` steps ago, without the pedestrian in question."""
 
-    region: shapely.Geometry
+    region: Region
     age: int
 
 
 class OccupancyTracker:
-    """The bus's refined region of every known pedestrian (one polygon each).
+    """The bus's refined region of every known pedestrian (one region each).
 
     With ``walkable`` ground given, each path region is also kept within walkable (+)
     disc(eps): pedestrians stay on walkable ground (an assumption, docs/controller.md), so a
@@ -132,24 +102,23 @@ class OccupancyTracker:
     region (it was there a step before, or it came in from outside through the inflow).
     """
 
-    def __init__(self, model: MotionModel, walkable: shapely.Geometry | None = None,
-                 window: shapely.Geometry | None = None) -> None:
+    def __init__(self, model: MotionModel, kind: RegionKind, walkable: Region | None = None,
+                 window: Region | None = None) -> None:
         if window is not None and walkable is None:
             raise ValueError("a tracked window needs the walkable ground")
         self.model = model
+        self.kind = kind
         self._walkable = walkable
-        self._ground = None if walkable is None else dilate(walkable, model.jitter)
-        if self._ground is not None:
-            shapely.prepare(self._ground)
-        self._window = None if window is None else TrackedWindow(window, walkable, model)
-        self._paths: dict[str, shapely.Geometry] = {}
+        self._ground = None if walkable is None else walkable.dilate(model.jitter)
+        self._window = None if window is None else TrackedWindow(window, walkable, model, kind)
+        self._paths: dict[str, Region] = {}
         self._step: int | None = None
         self.beyond: frozenset[str] = frozenset()  # pedestrians who may be outside B now
 
-    def _on_foot(self, area: shapely.Geometry) -> shapely.Geometry:
+    def _on_foot(self, area: Region) -> Region:
         """The walkable part of ``area`` (all of it without walkable ground given): where the
         pedestrian itself can have been (A1)."""
-        return area if self._walkable is None else shapely.intersection(area, self._walkable)
+        return area if self._walkable is None else area.intersection(self._walkable)
 
     def forget(self) -> None:
         """Drop every pedestrian's history: the next update starts from its sets alone."""
@@ -162,26 +131,27 @@ class OccupancyTracker:
         step: int,
         fused: Mapping[str, Zonotope],
         clear: Mapping[str, Sequence[ClearRegion]],
-    ) -> dict[str, shapely.Geometry]:
+    ) -> dict[str, Region]:
         """Where each pedestrian of ``fused`` can be at ``step`` (its position, with jitter)."""
         elapsed = 0 if self._step is None else step - self._step
         eps = self.model.jitter
-        paths: dict[str, shapely.Geometry] = {}
-        regions: dict[str, shapely.Geometry] = {}
+        paths: dict[str, Region] = {}
+        regions: dict[str, Region] = {}
         beyond: set[str] = set()
         for person_id, estimate in fused.items():
-            path = zonotope_polygon(self.model.path_set(estimate))
+            path = self.kind.convex_outer(self.model.path_set(estimate).vertices())
             # it may still be outside B unless its whole set is inside (the set holds it)
-            outside = person_id in self.beyond and not self._window.bounds.contains(path)
+            outside = person_id in self.beyond and not self._window.tracked.covers(path)
             previous = self._paths.get(person_id)
             if previous is not None:
-                moved = dilate(previous, self.model.reach_m(elapsed))
+                moved = previous.dilate(self.model.reach_m(elapsed))
                 if outside:
-                    moved = shapely.union(moved, self._window.inflow(elapsed))
-                path = shapely.intersection(moved, path)
-            if self._ground is not None and not self._ground.contains(path):
-                path = shapely.intersection(path, self._ground)
-            if self._window is not None and (outside or not self._window.bounds.contains(path)):
+                    moved = moved.union(self._window.inflow(elapsed))
+                path = moved.intersection(path)
+            if self._ground is not None and not self._ground.covers(path):
+                path = path.intersection(self._ground)
+            if self._window is not None and (outside or path.is_empty
+                                             or not self._window.tracked.covers(path)):
                 beyond.add(person_id)
                 path = self._window.clip(path)
             now_clear = [c.region for c in clear.get(person_id, ()) if c.age == 0]
@@ -190,18 +160,18 @@ class OccupancyTracker:
                 # eps + reach(age) of s now (so ground nobody saw off the walkable, such as a
                 # vehicle's shadow on the road, keeps no path alive)
                 slack = eps + self.model.reach_m(item.age)
-                if _apart(path, item.region, 2.0 * ARC_SAFETY * slack):
+                if _apart(path, item.region, 2.0 * self.kind.reach_of(slack)):
                     continue  # the region cannot touch dilate(path): the cut keeps path whole
-                outside = shapely.difference(self._on_foot(dilate(path, slack)), item.region)
-                path = shapely.intersection(path, dilate(outside, slack))
+                outside = self._on_foot(path.dilate(slack)).difference(item.region)
+                path = path.intersection(outside.dilate(slack))
             cut_path = path  # with eps = 0, cut with every region clear now (slack 0)
-            paths[person_id] = path = coarsen(path)
-            region = dilate(path, eps)
+            paths[person_id] = path = path.coarsen(COARSEN_M)
+            region = path.dilate(eps)
             if now_clear and region is not cut_path:
                 # (the same cut again would be the identity, and GEOS's floating overlay can
                 # return it empty when the region's edges lie on the view's, which this cut
                 # gave them: locationtech/jts#1000, tests/estimation/test_association.py)
-                region = shapely.difference(region, shapely.union_all(now_clear))
+                region = region.difference(self.kind.union_all(now_clear))
             regions[person_id] = region
         self._paths = paths
         self._step = step
@@ -214,52 +184,53 @@ class TrackedWindow:
     inflow: where a path outside B at one step can be inside B some steps later (O's rim moved,
     O = (walkable (+) disc(eps)) minus B)."""
 
-    def __init__(self, window: shapely.Geometry, walkable: shapely.Geometry,
-                 model: MotionModel) -> None:
+    def __init__(self, window: Region, walkable: Region, model: MotionModel,
+                 kind: RegionKind) -> None:
         self.model = model
+        self.kind = kind
         self.jitter = model.jitter
         self.walkable = walkable
-        self.bounds = dilate(window, self.jitter)  # B
-        shapely.prepare(self.bounds)
-        self._inflows: dict[int, shapely.Geometry] = {}
+        self.tracked = window.dilate(self.jitter)  # B
+        self._inflows: dict[int, Region] = {}
 
-    def inflow(self, steps: int = 1) -> shapely.Geometry:
+    def inflow(self, steps: int = 1) -> Region:
         """Where a path outside B now can be inside B or near it ``steps`` steps later
         (computed once per number of steps)."""
         if steps not in self._inflows:
             reach, eps = self.model.reach_m(steps), self.jitter
-            near = shapely.intersection(self.walkable, dilate(self.bounds, reach + eps))
-            rim = shapely.difference(dilate(near, eps), self.bounds)
-            self._inflows[steps] = dilate(rim, reach) if reach > 0 else EMPTY
+            near = self.walkable.intersection(self.tracked.dilate(reach + eps))
+            rim = near.dilate(eps).difference(self.tracked)
+            self._inflows[steps] = rim.dilate(reach) if reach > 0 else self.kind.empty()
         return self._inflows[steps]
 
-    def clip(self, region: shapely.Geometry) -> shapely.Geometry:
+    def clip(self, region: Region) -> Region:
         """``region`` ∩ B."""
-        return shapely.intersection(region, self.bounds)
+        return region.intersection(self.tracked)
 
 
 class UnobservedArea:
     """Walkable area where an undetected pedestrian may be, as the bus knows it: all of it, or
     (with a ``window``) at least every such place inside the window."""
 
-    def __init__(self, walkable: shapely.Geometry, model: MotionModel, latency_steps: int,
-                 window: shapely.Geometry | None = None) -> None:
+    def __init__(self, walkable: Region, model: MotionModel, latency_steps: int,
+                 kind: RegionKind, window: Region | None = None) -> None:
         self.model = model
+        self.kind = kind
         self.latency = latency_steps
-        self._window = None if window is None else TrackedWindow(window, walkable, model)
+        self._window = None if window is None else TrackedWindow(window, walkable, model, kind)
         if self._window is not None:
-            walkable = shapely.intersection(walkable, dilate(self._window.bounds, model.jitter))
+            walkable = walkable.intersection(self._window.tracked.dilate(model.jitter))
         self.walkable = walkable  # the walkable ground whose views matter
-        self._base = self._clip(dilate(walkable, model.jitter))  # path region at self._base_step
+        self._base = self._clip(walkable.dilate(model.jitter))  # path region at self._base_step
         self._base_step: int | None = None
-        self._own: dict[int, shapely.Geometry] = {}  # the bus's views not yet in the base
-        self._ended: dict[int, list[shapely.Geometry]] = {}  # step -> path sets handed over
-        self._base_moved: tuple[shapely.Geometry, shapely.Geometry] | None = None  # (base, moved)
+        self._own: dict[int, Region] = {}  # the bus's views not yet in the base
+        self._ended: dict[int, list[Region]] = {}  # step -> path sets handed over
+        self._base_moved: tuple[Region, Region] | None = None  # (base, moved)
 
     def update(
-        self, step: int, own_view: shapely.Geometry, shared_views: Sequence[shapely.Geometry],
+        self, step: int, own_view: Region, shared_views: Sequence[Region],
         ended: Sequence[EndedTrack] = (),
-    ) -> shapely.Geometry:
+    ) -> Region:
         """Where an undetected pedestrian may be at ``step``.
 
         ``own_view`` is what the bus sees now; ``shared_views`` what other nodes saw at
@@ -273,19 +244,18 @@ class UnobservedArea:
             self._base_step = target - 1
         for track in ended:
             self._hand_over(track, max(track.step, target))
+        nothing = self.kind.empty()
         while self._base_step < target:
             self._base_step += 1
-            views = [self._own.pop(self._base_step, EMPTY)]
+            views = [self._own.pop(self._base_step, nothing)]
             if self._base_step == target:
                 views += list(shared_views)
             self._base = self._advance(self._base, views, self._ended.pop(self._base_step, []))
         current = self._base
         for later in range(target + 1, step + 1):
-            current = self._advance(current, [self._own.get(later, EMPTY)],
+            current = self._advance(current, [self._own.get(later, nothing)],
                                     self._ended.get(later, []))
-        return shapely.difference(
-            shapely.intersection(dilate(current, self.model.jitter), self.walkable), own_view
-        )
+        return current.dilate(self.model.jitter).intersection(self.walkable).difference(own_view)
 
     def _hand_over(self, track: EndedTrack, step: int) -> None:
         """Add ``track``'s path set, moved to ``step`` (>= its own), to that step's path region
@@ -293,25 +263,22 @@ class UnobservedArea:
         if self._base_step is not None and step <= self._base_step:
             raise ValueError(f"a track ended at step {track.step} handed over at step {step}, "
                              f"which the unobserved area has passed ({self._base_step})")
-        path = zonotope_polygon(self.model.path_set(track.estimate))
-        moved = dilate(path, self.model.reach_m(step - track.step))
+        path = self.kind.convex_outer(self.model.path_set(track.estimate).vertices())
+        moved = path.dilate(self.model.reach_m(step - track.step))
         self._ended.setdefault(step, []).append(moved)
 
-    def _advance(
-        self, path: shapely.Geometry, views: Sequence[shapely.Geometry],
-        ended: Sequence[shapely.Geometry] = (),
-    ) -> shapely.Geometry:
+    def _advance(self, path: Region, views: Sequence[Region],
+                 ended: Sequence[Region] = ()) -> Region:
         """One step of the path region: move, add the path sets handed over at this step, then
         keep what is near unseen walkable ground."""
         seen = [v for v in views if not v.is_empty]
-        unseen = shapely.difference(self.walkable, shapely.union_all(seen)) if seen \
-            else self.walkable
+        unseen = self.walkable.difference(self.kind.union_all(seen)) if seen else self.walkable
         moved = self._moved(path)
         if ended:
-            moved = shapely.union_all([moved, *ended])
-        return coarsen(self._clip(shapely.intersection(moved, dilate(unseen, self.model.jitter))))
+            moved = self.kind.union_all([moved, *ended])
+        return self._clip(moved.intersection(unseen.dilate(self.model.jitter))).coarsen(COARSEN_M)
 
-    def _moved(self, path: shapely.Geometry) -> shapely.Geometry:
+    def _moved(self, path: Region) -> Region:
         """The path region one step later before any view: moved by the model's one-step reach,
         plus the inflow.
 
@@ -320,19 +287,19 @@ class UnobservedArea:
         """
         if self._base_moved is not None and self._base_moved[0] is path:
             return self._base_moved[1]
-        moved = dilate(path, self.model.reach_m())
+        moved = path.dilate(self.model.reach_m())
         if self._window is not None:  # O's rim moved one step: paths entering B from outside
-            moved = shapely.union(moved, self._window.inflow())
+            moved = moved.union(self._window.inflow())
         if path is self._base:
             self._base_moved = (path, moved)
         return moved
 
-    def _clip(self, region: shapely.Geometry) -> shapely.Geometry:
+    def _clip(self, region: Region) -> Region:
         return region if self._window is None else self._window.clip(region)
 
 
-def _apart(first: shapely.Geometry, second: shapely.Geometry, margin: float) -> bool:
-    """Whether the bounding boxes of two geometries are more than ``margin`` apart (or one is
+def _apart(first: Region, second: Region, margin: float) -> bool:
+    """Whether the bounding boxes of two regions are more than ``margin`` apart (or one is
     empty): then ``second`` misses ``first`` dilated by anything up to ``margin``."""
     if first.is_empty or second.is_empty:
         return True

@@ -27,10 +27,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import shapely
 
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import ClearRegion, EndedTrack
+from sse_cosim.regions import Region
 from sse_cosim.scenario.model import V2X
 from sse_cosim.sets import Zonotope
 
@@ -50,7 +50,7 @@ class Message:
     sender: str
     sent_step: int
     estimates: dict[str, Zonotope]
-    visible_region: shapely.Geometry
+    visible_region: Region
     detected: frozenset[str] = frozenset()
     inconsistent: bool = False
     ended: tuple[EndedTrack, ...] = ()
@@ -62,7 +62,7 @@ class SharedPicture:
     """Received information brought to the current step."""
 
     estimates: dict[str, dict[str, Zonotope]]  # pedestrian id -> sender -> state set
-    regions: dict[str, shapely.Geometry]  # sender -> visible region when sent
+    regions: dict[str, Region]  # sender -> visible region when sent
     ages: dict[str, int]  # sender -> steps since it sent
     detected: dict[str, frozenset[str]]  # sender -> pedestrians it saw
     inconsistent: frozenset[str] = frozenset()  # senders whose own sources disagreed

@@ -16,7 +16,6 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-import shapely
 
 from sse_cosim.control.picture import ArrivalMemory, Picture, SceneContext, Source, assess
 from sse_cosim.control.speed import Decision, fallback_floor, make_policy
@@ -26,14 +25,15 @@ from sse_cosim.estimation.observer import EstimatorSettings
 from sse_cosim.estimation.occupancy import UnobservedArea
 from sse_cosim.estimation.v2x import SharedPicture, V2XLink
 from sse_cosim.pipeline.stages import (
+    NodeView,
     Observations,
     Sharing,
     Tracks,
     known_regions,
     second_level,
-    union_or_empty,
     views_of,
 )
+from sse_cosim.regions import Region, RegionKind
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.sensors import SensorSpec
 from sse_cosim.world.roadmap import RoadMap
@@ -59,9 +59,9 @@ class EgoStep:
     vehicle: str
     shared: SharedPicture
     estimate: BusEstimate
-    possible: dict[str, shapely.Geometry]
-    unobserved: shapely.Geometry
-    window: shapely.Geometry
+    possible: dict[str, Region]
+    unobserved: Region
+    window: Region
     picture: Picture
     decision: Decision
 
@@ -71,49 +71,51 @@ class Ego:
 
     def __init__(self, vehicle_id: str, scenario: Scenario, roadmap: RoadMap, model: MotionModel,
                  settings: EstimatorSettings, specs: Mapping[str, SensorSpec],
-                 link_rng: np.random.Generator) -> None:
+                 link_rng: np.random.Generator, kind: RegionKind) -> None:
         config, dt = scenario.estimator, scenario.simulation.step_length_s
         vehicle = scenario.automated[vehicle_id]
         self.id = vehicle_id
         self.controller = scenario.controller
         self.sharing = Sharing(V2XLink(scenario.v2x, link_rng), model, vehicle_id)
         self.fusion = second_level(config.association, model, settings, config.fusion_method,
-                                   specs, vehicle_id)
+                                   specs, vehicle_id, kind)
         self.context = SceneContext.build(
             roadmap, vehicle.route_edges, vehicle, scenario.controller, model,
-            scenario.pedestrian_radius_m(), dt,
+            scenario.pedestrian_radius_m(), dt, kind,
         )
         self.policy = make_policy(self.context)
         self.arrivals = ArrivalMemory(dt)  # the last consistent picture, for the floors
-        self.known = known_regions(config.filter, model, self.context.walkable,
+        self.known = known_regions(config.filter, model, kind, self.context.walkable,
                                    self.context.window, history=config.association == "labelled")
         # hidden ground is tracked near the crossings on its route; outside it counts as occupied
         self.unobserved = UnobservedArea(
-            self.context.walkable, model, scenario.v2x.latency_steps,
+            self.context.walkable, model, scenario.v2x.latency_steps, kind,
             window=self.context.window,
         )
+        self.kind = kind
 
-    def step(self, step: int, snapshot: Snapshot, observations: Observations, tracks: Tracks,
-             timer: Laps) -> EgoStep:
+    def step(self, step: int, snapshot: Snapshot, observations: Observations,
+             node_views: Mapping[str, NodeView], tracks: Tracks, timer: Laps) -> EgoStep:
         """Receive, screen and fuse, refine, picture and decide (the vehicle is in
         ``snapshot``; every node's messages of ``step`` are already sent to it)."""
         me = snapshot.vehicles[self.id]
         received = self.sharing.receive(step)
         shared = received.picture
         views = views_of(self.id, observations)
-        estimate, clear = self.fusion.step(tracks, shared, views)
+        mine = node_views.get(self.id, NodeView(self.kind.empty(), self.kind.empty()))
+        estimate, clear = self.fusion.step(tracks, shared, views, mine.visible)
         timer.lap("sharing_fusion")
         possible = self.known.update(step, observations, estimate, clear)
         own = tracks.get(self.id)
         unknown = self.unobserved.update(
-            step, union_or_empty(o.visible for o in views), received.fresh_views,
+            step, mine.visible, received.fresh_views,
             [*received.ended, *(own.ended_at(step) if own is not None else ())])
         timer.lap("occupancy")
         sources = {key: Source(region, estimate.fused.get(key) if self.known.with_states
                                else None) for key, region in possible.items()}
         picture = assess(
             self.context, me.footprint.front.position, me.speed,
-            union_or_empty(o.occluded for o in views), unknown, list(sources.values()),
+            mine.occluded, unknown, list(sources.values()),
             [source for key, source in sources.items() if key in estimate.in_view],
             in_view_beyond=not self.known.beyond.isdisjoint(estimate.in_view),
             floors=self.arrivals.floors(step, estimate.flags.inconsistent),

@@ -1,8 +1,8 @@
 """The stages of a simulation step between the world's snapshot and the controller's picture.
 
 Each stage takes what the previous ones produced and returns its own output; none reaches back
-into another's state. Sets are zonotopes (:mod:`sse_cosim.sets`), regions shapely geometries
-in network coordinates (m).
+into another's state. Sets are zonotopes (:mod:`sse_cosim.sets`), regions of one
+:class:`~sse_cosim.regions.RegionKind` in network coordinates (m).
 """
 
 from __future__ import annotations
@@ -12,7 +12,6 @@ from dataclasses import dataclass
 from typing import Generic, Protocol
 
 import numpy as np
-import shapely
 
 from sse_cosim.estimation.anonymous_fusion import AnonymousFusionCentre
 from sse_cosim.estimation.association import AnonymousDetection
@@ -30,7 +29,7 @@ from sse_cosim.estimation.observer import (
 )
 from sse_cosim.estimation.occupancy import ClearRegion, EndedTrack, OccupancyTracker
 from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
-from sse_cosim.memo import IdentityMemo
+from sse_cosim.regions import Region, RegionKind
 from sse_cosim.sensors import SensorObservation, SensorSpec, observe
 from sse_cosim.sensors.faults import FaultInjector
 from sse_cosim.sets import Strips, portable
@@ -41,11 +40,34 @@ Tracks = Mapping[str, LocalTracks]  # node -> pedestrian id (or track key) -> tr
 
 
 def sense(snapshot: Snapshot, specs: Mapping[str, SensorSpec], faults: FaultInjector,
-          rng: np.random.Generator) -> Observations:
-    """Every sensor's observation (visibility, detections, strips |H x - y| <= r, paper eqs.
-    senmodel and strip), as the scenario's injected faults distort it."""
+          rng: np.random.Generator, kind: RegionKind) -> Observations:
+    """Every sensor's observation (visibility as regions of ``kind``, detections, strips
+    |H x - y| <= r, paper eqs. senmodel and strip), as the scenario's injected faults distort
+    it."""
     faults.begin_step(snapshot.time)
-    return faults.corrupt_observations(snapshot, observe(snapshot, specs, rng, want_regions=True))
+    return faults.corrupt_observations(snapshot, observe(snapshot, specs, rng, regions=kind),
+                                       kind)
+
+
+@dataclass(frozen=True)
+class NodeView:
+    """What one node's sensors see now, together: the union of their visible regions and of
+    their occluded ones."""
+
+    visible: Region
+    occluded: Region
+
+
+def views_by_node(observations: Observations, kind: RegionKind) -> dict[str, NodeView]:
+    """Node -> the union of its present sensors' views, for every node with a sensor in the
+    scene (each union made once a step: the node's message and its own picture use it)."""
+    present: dict[str, list[SensorObservation]] = {}
+    for obs in observations.values():
+        if obs.pose is not None:
+            present.setdefault(obs.node, []).append(obs)
+    return {node: NodeView(kind.union_all(o.visible for o in found),
+                           kind.union_all(o.occluded for o in found))
+            for node, found in present.items()}
 
 
 def detections_by_node(observations: Observations) -> dict[str, dict[str, dict[str, Strips]]]:
@@ -66,7 +88,7 @@ def scans_by_node(observations: Observations) -> dict[str, NodeScan]:
     order of persons) and their visible regions; every node with a sensor in the scene is a
     key. The person ids of the observations stay here: they never reach the estimation."""
     detections: dict[str, list[AnonymousDetection]] = {}
-    visible: dict[str, dict[str, shapely.Geometry]] = {}
+    visible: dict[str, dict[str, Region]] = {}
     for obs in observations.values():
         if obs.pose is not None:
             visible.setdefault(obs.node, {})[obs.sensor] = obs.visible
@@ -90,34 +112,17 @@ class FirstLevel(Generic[NodeInput]):
 
 
 def first_level(association: str, nodes: Iterable[str], model: MotionModel,
-                settings: EstimatorSettings) -> FirstLevel:
+                settings: EstimatorSettings, kind: RegionKind) -> FirstLevel:
     """The first fusion level of ``estimator.association``: ``labelled`` (tracks by person
     id) or ``anonymous`` (node-local tracks from anonymous detections)."""
     if association == "anonymous":
-        return FirstLevel(LocalObservers.anonymous(nodes, model, settings), scans_by_node)
+        return FirstLevel(LocalObservers.anonymous(nodes, model, settings, kind), scans_by_node)
     return FirstLevel(LocalObservers.labelled(nodes, model, settings), detections_by_node)
 
 
 def views_of(node: str, observations: Observations) -> list[SensorObservation]:
     """The observations of ``node``'s sensors."""
     return [o for o in observations.values() if o.node == node]
-
-
-def union_or_empty(geometries: Iterable[shapely.Geometry | None]) -> shapely.Geometry:
-    """The union of the geometries given, None and empty ones left out (an empty polygon if
-    nothing is left).
-
-    A step asks for the union of the same views more than once (a node's message, the
-    vehicle's own unobserved area): the newest unions are kept, by the parts' identities
-    (geometries are immutable).
-    """
-    parts = tuple(g for g in geometries if g is not None and not g.is_empty)
-    if not parts:
-        return shapely.Polygon()
-    return _UNIONS.get(tuple(map(id, parts)), parts, lambda: shapely.union_all(parts))
-
-
-_UNIONS: IdentityMemo[shapely.Geometry] = IdentityMemo(16)
 
 
 @dataclass(frozen=True)
@@ -132,7 +137,7 @@ class Received:
     """
 
     picture: SharedPicture
-    fresh_views: list[shapely.Geometry]
+    fresh_views: list[Region]
     ended: list[EndedTrack]
 
 
@@ -146,8 +151,9 @@ class Outgoing:
     extra_latency_steps: int
 
 
-def outgoing(step: int, snapshot: Snapshot, observations: Observations, tracks: Tracks,
-             faults: FaultInjector, model: MotionModel) -> list[Outgoing]:
+def outgoing(step: int, snapshot: Snapshot, observations: Observations,
+             views: Mapping[str, NodeView], tracks: Tracks, faults: FaultInjector,
+             model: MotionModel) -> list[Outgoing]:
     """Every node's message of ``step``, built once for all receivers: each node in the scene
     whose message no loss burst takes sends its estimates (as its injected faults distort
     them), visible region, the keys of the tracks its sensors detect now (by id, those
@@ -160,7 +166,7 @@ def outgoing(step: int, snapshot: Snapshot, observations: Observations, tracks: 
         estimates = faults.corrupt_estimates(
             node, {pid: t.estimate for pid, t in node_tracks.items()}, snapshot, model)
         message = Message(
-            node, step, estimates, union_or_empty(o.visible for o in node_obs),
+            node, step, estimates, views[node].visible,
             frozenset(key for key, t in node_tracks.items() if t.detected),
             disagrees(node_tracks.values()), node_tracks.ended, node_tracks.ended_since,
         )
@@ -221,8 +227,11 @@ class SecondLevel(Protocol):
     """An automated vehicle's fusion of its own and the received tracks, and the regions seen
     without the pedestrians of each fused set (negative information)."""
 
-    def step(self, tracks: Tracks, shared: SharedPicture,
-             views: Sequence[SensorObservation]) -> tuple[BusEstimate, Clear]: ...
+    def step(self, tracks: Tracks, shared: SharedPicture, views: Sequence[SensorObservation],
+             seen: Region) -> tuple[BusEstimate, Clear]:
+        """``views``: the vehicle's sensors' observations now; ``seen``: their visible
+        regions' union."""
+        ...
 
 
 class LabelledFusion:
@@ -231,8 +240,8 @@ class LabelledFusion:
     def __init__(self, centre: FusionCentre) -> None:
         self.centre = centre
 
-    def step(self, tracks: Tracks, shared: SharedPicture,
-             views: Sequence[SensorObservation]) -> tuple[BusEstimate, Clear]:
+    def step(self, tracks: Tracks, shared: SharedPicture, views: Sequence[SensorObservation],
+             seen: Region) -> tuple[BusEstimate, Clear]:
         own = tracks[self.centre.node]
         clear = clear_regions(views, own, shared)
         return self.centre.step(tracks, shared, clear, detected_now(own, shared)), clear
@@ -244,20 +253,20 @@ class AnonymousFusion:
     def __init__(self, centre: AnonymousFusionCentre) -> None:
         self.centre = centre
 
-    def step(self, tracks: Tracks, shared: SharedPicture,
-             views: Sequence[SensorObservation]) -> tuple[BusEstimate, Clear]:
+    def step(self, tracks: Tracks, shared: SharedPicture, views: Sequence[SensorObservation],
+             seen: Region) -> tuple[BusEstimate, Clear]:
         own = tracks.get(self.centre.node, {})
-        return self.centre.step(tracks, shared, union_or_empty(o.visible for o in views),
-                                detected_now(own, shared))
+        return self.centre.step(tracks, shared, seen, detected_now(own, shared))
 
 
 def second_level(association: str, model: MotionModel, settings: EstimatorSettings,
-                 fusion_method: str, sensors: Iterable[str], node: str) -> SecondLevel:
+                 fusion_method: str, sensors: Iterable[str], node: str,
+                 kind: RegionKind) -> SecondLevel:
     """Automated vehicle ``node``'s second fusion level of ``estimator.association``."""
     if association == "anonymous":
         return AnonymousFusion(AnonymousFusionCentre(model, settings, fusion_method, sensors,
-                                                     node))
-    return LabelledFusion(FusionCentre(model, settings, fusion_method, sensors, node))
+                                                     node, kind))
+    return LabelledFusion(FusionCentre(model, settings, fusion_method, sensors, node, kind))
 
 
 class KnownRegions(Protocol):
@@ -268,7 +277,7 @@ class KnownRegions(Protocol):
     with_states: bool  # whether each region is about the fused state set of the same key
 
     def update(self, step: int, observations: Observations, estimate: BusEstimate,
-               clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, shapely.Geometry]: ...
+               clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, Region]: ...
 
 
 class RefinedRegions:
@@ -287,7 +296,7 @@ class RefinedRegions:
         self._was_inconsistent = False
 
     def update(self, step: int, observations: Observations, estimate: BusEstimate,
-               clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, shapely.Geometry]:
+               clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, Region]:
         inconsistent = estimate.flags.inconsistent
         if not self.history or (inconsistent and not self._was_inconsistent):
             self.tracker.forget()
@@ -306,20 +315,21 @@ class KalmanRegions:
     beyond: frozenset[str] = frozenset()  # its ellipses are not kept in a window
     with_states = False  # its ellipses are not the fused sets' (baseline, not guaranteed)
 
-    def __init__(self, tracker: KalmanTracker) -> None:
+    def __init__(self, tracker: KalmanTracker, kind: RegionKind) -> None:
         self.tracker = tracker
+        self.kind = kind
 
     def update(self, step: int, observations: Observations, estimate: BusEstimate,
-               clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, shapely.Geometry]:
+               clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, Region]:
         self.tracker.step(step, all_detections(observations.values()))
-        return self.tracker.regions()
+        return self.tracker.regions(self.kind)
 
 
-def known_regions(filter_name: str, model: MotionModel, walkable: shapely.Geometry,
-                  window: shapely.Geometry, history: bool = True) -> KnownRegions:
+def known_regions(filter_name: str, model: MotionModel, kind: RegionKind, walkable: Region,
+                  window: Region, history: bool = True) -> KnownRegions:
     """The region stage of ``estimator.filter``: ``zonotope`` or ``kalman``; refined regions
     are kept in the tracked ``window``; ``history``: whether they carry a fused set's key from
     one step to the next (false for anonymous tracks, :class:`RefinedRegions`)."""
     if filter_name == "kalman":
-        return KalmanRegions(KalmanTracker(model))
-    return RefinedRegions(OccupancyTracker(model, walkable, window), history)
+        return KalmanRegions(KalmanTracker(model), kind)
+    return RefinedRegions(OccupancyTracker(model, kind, walkable, window), history)

@@ -61,6 +61,11 @@ class Region(Protocol):
         """A region inside {p : disc(p, distance) ⊆ self} (self for distance <= 0)."""
         ...
 
+    def coarsen(self, tolerance: float) -> Region:
+        """A region containing self, within ``2 * tolerance`` of it, simpler to compute with
+        (fewer vertices or cells; may be self)."""
+        ...
+
     def covers(self, other: Region) -> bool:
         """Whether every point of ``other`` is in self (closed)."""
         ...
@@ -76,6 +81,15 @@ class Region(Protocol):
     def distance(self, other: Region) -> float:
         """The least distance between a point of self and one of ``other`` (m; 0 if they meet;
         inf if either is empty)."""
+        ...
+
+    def support(self, directions: np.ndarray) -> np.ndarray:
+        """max over the region of n.x for each direction n of ``directions`` (K, 2), shape
+        (K,); -inf for an empty region."""
+        ...
+
+    def hull_points(self) -> np.ndarray:
+        """Points (k, 2) whose convex hull contains the region ((0, 2) if empty)."""
         ...
 
     def geometry(self) -> shapely.Geometry:
@@ -98,6 +112,11 @@ class RegionKind(Protocol):
         ...
 
     def empty(self) -> Region: ...
+
+    def reach_of(self, distance: float) -> float:
+        """How far from a region a point of its :meth:`Region.dilate` by ``distance`` may lie
+        (>= distance): bounding boxes grown by it hold the dilation."""
+        ...
 
     def union_all(self, regions: Iterable[Region]) -> Region:
         """The union of ``regions`` (empty if none)."""

@@ -1,10 +1,15 @@
 """Regions as exact shapely polygons: the reference representation.
 
-Shapes are kept as they are (``outer`` and ``inner`` both keep the shape). A disc is drawn
-with :data:`QUAD_SEGMENTS` segments per quarter circle; GEOS draws those arcs inscribed in the
-true circle, so :meth:`PolygonRegion.dilate` and :meth:`PolygonRegion.erode` raise the radius
-by :data:`ARC_SAFETY` until every arc's segments lie ``distance`` away: the dilation then
-contains the exact one and the erosion lies inside the exact one.
+Shapes are kept as they are (``outer`` and ``inner`` both keep the shape). Dilation and
+erosion offset every edge by the distance exactly and draw no arcs: a corner is mitred, and a
+mitre longer than the distance is cut square to the corner's bisector at the distance
+(GEOS's mitre limit of :data:`MITRE_LIMIT`); points and line ends get square caps. Each such
+corner holds the disc's arc it stands for (the cut is tangent to it, the mitre lies beyond
+it), so the dilation contains the exact one, and an erosion (the dilation of the complement)
+lies inside the exact one. A point of the dilation lies at most sqrt(1 + limit²) times the
+distance from the shape (a cut corner's end on a needle). Arcs would not do: GEOS splits an
+arc into a rounded number of chords, up to 1.5 times the nominal angle each, which dip inside
+the disc.
 """
 
 from __future__ import annotations
@@ -16,9 +21,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
-QUAD_SEGMENTS = 2  # polygon arcs: 2 segments per quarter circle
-ARC_SAFETY = 1.0 / math.cos(math.pi / (4 * QUAD_SEGMENTS))  # makes those arcs circumscribe the disc
+from sse_cosim.sets import portable
+
+MITRE_LIMIT = 1.0  # a corner's mitre is cut at the distance from the corner
+REACH_FACTOR = math.sqrt(1.0 + MITRE_LIMIT**2)  # how far a dilation reaches, per metre
+LEAST_DILATION_M = 1e-9  # GEOS buffers by less than about 1e-16 m to nothing: dilate by this
 NO_BOUNDS = (0.0, 0.0, -1.0, -1.0)
+COARSEN_ABOVE = 64  # vertices above which a region is coarsened
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,18 +62,32 @@ class PolygonRegion:
     def dilate(self, distance: float) -> PolygonRegion:
         if distance <= 0 or self.shape.is_empty:
             return self
-        return PolygonRegion(self.shape.buffer(ARC_SAFETY * distance, quad_segs=QUAD_SEGMENTS))
+        return PolygonRegion(self.shape.buffer(max(distance, LEAST_DILATION_M),
+                                               cap_style="square", join_style="mitre",
+                                               mitre_limit=MITRE_LIMIT))
 
     def erode(self, distance: float) -> PolygonRegion:
         if distance <= 0 or self.shape.is_empty:
             return self
         if distance not in self._eroded:
-            self._eroded[distance] = PolygonRegion(
-                self.shape.buffer(-ARC_SAFETY * distance, quad_segs=QUAD_SEGMENTS))
+            self._eroded[distance] = PolygonRegion(self.shape.buffer(
+                -distance, cap_style="square", join_style="mitre", mitre_limit=MITRE_LIMIT))
         return self._eroded[distance]
 
+    def coarsen(self, tolerance: float) -> PolygonRegion:
+        """Repeated dilations and cuts leave regions with thousands of centimetre-long edges.
+        Above :data:`COARSEN_ABOVE` vertices the shape is grown by ``tolerance`` (mitred
+        corners: no arcs) and simplified with the same tolerance, which moves no boundary
+        point by more than that, so the result still covers the shape; the cover is checked,
+        and self returned if it fails."""
+        if self.shape.is_empty or shapely.get_num_coordinates(self.shape) <= COARSEN_ABOVE:
+            return self
+        grown = self.shape.buffer(tolerance, quad_segs=1, join_style="mitre")
+        simple = shapely.simplify(grown, tolerance, preserve_topology=True)
+        return PolygonRegion(simple) if simple.covers(self.shape) else self
+
     def covers(self, other: PolygonRegion) -> bool:
-        return bool(self.prepared.covers(other.shape))
+        return other.shape.is_empty or bool(self.prepared.covers(other.shape))
 
     def intersects(self, other: PolygonRegion) -> bool:
         return bool(self.prepared.intersects(other.shape))
@@ -77,6 +100,14 @@ class PolygonRegion:
         if self.shape.is_empty or other.shape.is_empty:
             return math.inf
         return float(shapely.distance(self.shape, other.shape))
+
+    def support(self, directions: np.ndarray) -> np.ndarray:
+        if self.shape.is_empty:
+            return np.full(len(directions), -math.inf)
+        return portable.matmul(shapely.get_coordinates(self.shape), directions.T).max(axis=0)
+
+    def hull_points(self) -> np.ndarray:
+        return shapely.get_coordinates(self.shape.convex_hull)
 
     def geometry(self) -> shapely.Geometry:
         return self.shape
@@ -103,6 +134,9 @@ class PolygonKind:
 
     def empty(self) -> PolygonRegion:
         return PolygonRegion(shapely.Polygon())
+
+    def reach_of(self, distance: float) -> float:
+        return REACH_FACTOR * max(distance, LEAST_DILATION_M)
 
     def union_all(self, regions: Iterable[PolygonRegion]) -> PolygonRegion:
         shapes = [r.shape for r in regions if not r.shape.is_empty]

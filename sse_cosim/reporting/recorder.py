@@ -20,7 +20,8 @@ Checks stay independent of what they check: the recorder recomputes from what it
 set's position set (:class:`PositionSet`) is computed here from its state estimate's own
 arrays and the scenario's estimator settings, never taken from the estimator's memo
 (``MotionModel.position``), and the containment test reads the very arrays that go into
-``sets.jsonl`` (:func:`zonotope_2d_contains`, written here, not the sets library's).
+``sets.jsonl`` (:func:`zonotope_2d_contains`, written here with its compiled kernels in
+:mod:`~sse_cosim.reporting.recorder_kernels`, not the sets library's).
 
 The recorder only reads :class:`~sse_cosim.pipeline.result.StepResult`; writing files is
 :mod:`sse_cosim.reporting.outputs`'s job.
@@ -30,7 +31,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import pairwise
@@ -41,10 +42,12 @@ import shapely
 
 from sse_cosim.control.speed import SpeedLevel
 from sse_cosim.estimation.motion import MODELS
+from sse_cosim.reporting.recorder_kernels import FLAT_SINE, contains_2d, position_2d
 from sse_cosim.reporting.replay import ReplayLog
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors.faults import FaultLog
 from sse_cosim.sets import Zonotope
+from sse_cosim.sets.zonotope import generator_volume
 
 if TYPE_CHECKING:  # only the type: a report that reads folders loads no estimation
     from sse_cosim.pipeline.ego import EgoStep
@@ -56,7 +59,6 @@ UNOBSERVED = "unobserved"  # walkable ground where an undetected pedestrian may 
 STOPPED_SPEED_MPS = 0.1  # the bus counts as stopped below this actual speed
 UNACCOUNTED = "unaccounted"  # a pedestrian in no refined region and not in the unobserved area
 CONTAINMENT_TOL_M = 1e-7  # slack of a set's containment check (m)
-FLAT_SINE = 0.5  # a set whose generators are all within 30° of each other counts as flat
 
 
 HalfSpace = tuple[float, float, float]  # (d_x, d_y, b): the points x with |d·(x − c)| <= b
@@ -65,11 +67,13 @@ HalfSpace = tuple[float, float, float]  # (d_x, d_y, b): the points x with |d·(
 @dataclass(frozen=True, eq=False)
 class PositionSet:
     """A pedestrian's position set as the recorder writes it (a line of ``sets.jsonl``) and
-    checks it: ⟨center, generators⟩, ``center`` (2,), ``generators`` (2, e), read-only. The
-    line and the containment check read these same arrays."""
+    checks it: ⟨center, generators⟩, ``center`` (2,), ``generators`` (2, e), read-only, and
+    its ``area`` (m², :meth:`Zonotope.volume` of the same arrays). The line, the area and the
+    containment check read these same arrays."""
 
     center: np.ndarray
     generators: np.ndarray
+    area: float
 
     @classmethod
     def of(cls, estimate: Zonotope, jitter: float) -> PositionSet:
@@ -77,29 +81,18 @@ class PositionSet:
         center, generators = position_arrays(estimate.center, estimate.generators, jitter)
         center.setflags(write=False)
         generators.setflags(write=False)
-        return cls(center, generators)
-
-    @cached_property
-    def halfspaces(self) -> list[HalfSpace]:
-        """The set's half-spaces about its center, widened by :data:`CONTAINMENT_TOL_M`."""
-        return zonotope_2d_halfspaces(self.generators, CONTAINMENT_TOL_M)
+        return cls(center, generators, generator_volume(generators))
 
     def contains(self, point: np.ndarray) -> bool:
-        """Whether ``point`` (2,) lies in the set, to :data:`CONTAINMENT_TOL_M`."""
-        return _within(self.center, self.halfspaces, point)
-
-    def line(self) -> dict[str, list[Any]]:
-        """``{"center": 2 floats, "generators": 2 rows of e floats}`` (``sets.jsonl``)."""
-        return {"center": self.center.tolist(), "generators": self.generators.tolist()}
+        """Whether ``point`` (2,) lies in the set, to :data:`CONTAINMENT_TOL_M`
+        (:func:`zonotope_2d_contains`)."""
+        return bool(contains_2d(self.center, self.generators, _float_point(point),
+                                CONTAINMENT_TOL_M))
 
     @cached_property
     def zonotope(self) -> Zonotope:
-        """The same arrays as a :class:`Zonotope` (its area, plots, the replay)."""
+        """The same arrays as a :class:`Zonotope` (plots, the replay)."""
         return Zonotope.unchecked(self.center, self.generators)
-
-    def area(self) -> float:
-        """The set's area (m²)."""
-        return self.zonotope.volume()
 
 
 def position_arrays(center: np.ndarray, generators: np.ndarray,
@@ -113,24 +106,21 @@ def position_arrays(center: np.ndarray, generators: np.ndarray,
     (2,), (2, e), without jitter. A zero is written as 0.0 whatever its sign (``+ 0.0``): the
     sign of a zero is no part of the set, and a product may give either.
     """
-    position_center = center[:2] + 0.0
-    if jitter == 0.0:
-        return position_center, generators[:2] + 0.0
-    box = np.eye(2) * jitter
-    return position_center, np.concatenate([generators[:2], box], axis=1) + 0.0
+    return position_2d(center, generators, jitter)
 
 
-def zonotope_2d_halfspaces(generators: np.ndarray, tol: float) -> list[HalfSpace]:
+def zonotope_2d_halfspaces_reference(generators: np.ndarray, tol: float) -> list[HalfSpace]:
     """Half-spaces whose intersection is the 2-D zonotope ⟨c, G⟩, G (2, e), widened by ``tol``
-    (m): (d, Σ_i |d·g_i| + tol) for unit directions d.
+    (m): (d, Σ_i |d·g_i| + tol) for unit directions d; the reference of the compiled
+    :func:`~sse_cosim.reporting.recorder_kernels.halfspaces_2d` (the same bits).
 
     The directions: the normal of every nonzero generator (a 2-D zonotope's facet normals:
     exact for a set whose generators span the plane). A flat set (the sine between every two
     generator directions below :data:`FLAT_SINE`), whose facets alone bound its length only to
     tol over the sine of half its spread, is also bounded along its generators; a point (no
     nonzero generator) along the axes (|x − c|∞ <= tol). Python floats, each operation rounded
-    as IEEE 754 prescribes: the same on every machine, and no square underflows (each
-    generator is scaled by its largest entry first).
+    as IEEE 754 prescribes and every sum taken from the left: the same on every machine, and no
+    square underflows (each generator is scaled by its largest entry first).
     """
     columns = [(a, b) for a, b in zip(*generators.tolist(), strict=True) if a or b]
     if not columns:
@@ -140,21 +130,28 @@ def zonotope_2d_halfspaces(generators: np.ndarray, tol: float) -> list[HalfSpace
     if not any(abs(ux * vy - uy * vx) >= FLAT_SINE
                for i, (ux, uy) in enumerate(units) for vx, vy in units[i + 1:]):
         directions += units  # a flat set
-    return [(dx, dy, sum(abs(dx * a + dy * b) for a, b in columns) + tol)
+    return [(dx, dy, _left_sum(abs(dx * a + dy * b) for a, b in columns) + tol)
             for dx, dy in directions]
 
 
 def zonotope_2d_contains(center: np.ndarray, generators: np.ndarray, point: np.ndarray,
                          tol: float) -> bool:
     """Whether ``point`` (2,) lies in the 2-D zonotope ⟨c, G⟩, ``center`` (2,), ``generators``
-    (2, e), up to ``tol`` (m): in every half-space of :func:`zonotope_2d_halfspaces`."""
-    return _within(center, zonotope_2d_halfspaces(generators, tol), point)
+    (2, e), up to ``tol`` (m): |d·(x − c)| <= b for every half-space (d, b) of
+    :func:`zonotope_2d_halfspaces_reference`, compiled
+    (:func:`~sse_cosim.reporting.recorder_kernels.contains_2d`)."""
+    return bool(contains_2d(_float_point(center), _float_array(generators),
+                            _float_point(point), tol))
 
 
-def _within(center: np.ndarray, halfspaces: list[HalfSpace], point: np.ndarray) -> bool:
-    """Whether ``point`` (2,) lies in every half-space about ``center`` (2,)."""
-    x, y = float(point[0]) - float(center[0]), float(point[1]) - float(center[1])
-    return all(abs(dx * x + dy * y) <= bound for dx, dy, bound in halfspaces)
+def _float_point(point: np.ndarray) -> np.ndarray:
+    """``point`` (2,) as float64 (the kernels' one type; no copy if it is one)."""
+    return np.asarray(point, dtype=np.float64)
+
+
+def _float_array(values: np.ndarray) -> np.ndarray:
+    """``values`` as a C-ordered float64 array (no copy if it is one)."""
+    return np.ascontiguousarray(values, dtype=np.float64)
 
 
 def _unit(a: float, b: float) -> tuple[float, float]:
@@ -163,6 +160,15 @@ def _unit(a: float, b: float) -> tuple[float, float]:
     a, b = a / scale, b / scale
     length = math.sqrt(a * a + b * b)
     return a / length, b / length
+
+
+def _left_sum(values: Iterable[float]) -> float:
+    """Σ ``values`` from the left, from 0.0 (``sum`` compensates its rounding from Python
+    3.12 on)."""
+    total = 0.0
+    for value in values:
+        total += value
+    return total
 
 
 @dataclass(frozen=True)
@@ -248,7 +254,10 @@ class RunRecorder:
     rows: list[dict[str, Any]] = field(default_factory=list)
     truth_rows: list[dict[str, Any]] = field(default_factory=list)  # t, pedestrian, x, y
     pedestrian_rows: list[dict[str, Any]] = field(default_factory=list)  # per vehicle and person
-    set_lines: list[dict[str, Any]] = field(default_factory=list)
+    # the sets to write, each (t, vehicle, node, track, kind, center, generators) with its
+    # position set's own read-only arrays: nothing for the garbage collector to walk while the
+    # run goes (:attr:`set_lines` makes the lines)
+    set_records: list[tuple[Any, ...]] = field(default_factory=list)
     regions: list[RegionRecord] = field(default_factory=list)  # serialised only when written
     scenes: list[SceneFrame] = field(default_factory=list)
     key_moments: KeyMoments = field(default_factory=KeyMoments)
@@ -264,6 +273,10 @@ class RunRecorder:
     # node -> pid -> the steps from which the node holds it (True: detected) or has handed it
     # over (False), each a change (anonymous checks)
     custody: dict[str, dict[str, list[tuple[int, bool]]]] = field(default_factory=dict)
+    # the position sets made at the current step, by their estimate's identity (with it, so
+    # that no id is reused): an estimate fused, shared or checked again is not recomputed
+    step_positions: dict[int, tuple[Zonotope, PositionSet]] = field(
+        init=False, repr=False, compare=False, default_factory=dict)
 
     def __post_init__(self) -> None:
         self.start(self.scenario)
@@ -283,6 +296,8 @@ class RunRecorder:
     def __call__(self, result: StepResult) -> None:
         t = round(result.snapshot.time, 6)
         truths = {pid: np.asarray(p.position) for pid, p in sorted(result.snapshot.persons.items())}
+        points = _TruePoints.of(truths)
+        self.step_positions = {}
         if self.anonymous:  # (by id, every set names its pedestrian: nothing to remember)
             self._note_detected(result)
         self.truth_rows += [{"t": t, "pedestrian": pid, "x": xy[0], "y": xy[1]}
@@ -292,10 +307,11 @@ class RunRecorder:
             self.replay.add(result, [(s.node, s.pedestrian, s.position.zonotope, s.detected)
                                      for s in local])
         for ego in result.vehicles.values():
-            self._vehicle_step(t, result, ego, truths, local)
+            self._vehicle_step(t, result, ego, truths, points, local)
 
     def _vehicle_step(self, t: float, result: StepResult, ego: EgoStep,
-                      truths: dict[str, np.ndarray], local: list[_LocalSet]) -> None:
+                      truths: dict[str, np.ndarray], points: _TruePoints,
+                      local: list[_LocalSet]) -> None:
         """One automated vehicle's row, checks, sets and regions at one step."""
         vehicle = ego.vehicle
         bus = result.snapshot.vehicles[vehicle]
@@ -309,24 +325,25 @@ class RunRecorder:
             "level": ego.decision.level.label,
             "emergency": ego.decision.level is SpeedLevel.EMERGENCY,
         }
-        local_sets = self._record_local_sets(t, row, result, vehicle, local)
+        self._record_local_sets(t, row, result, vehicle, local)
         self._flags(row, result, ego)
         checks = {pid: _PedestrianCheck(pid) for pid in truths}
+        held = _HeldRegions.of(ego, points)
         if self.anonymous:
-            fused, regions = self._check_anonymous(t, result, ego, truths, checks)
+            fused, regions = self._check_anonymous(t, result, ego, truths, held, checks)
         else:
-            fused, regions = self._check_labelled(t, ego, truths, checks)
+            fused, regions = self._check_labelled(t, ego, truths, held, checks)
         for key, position in fused.items():
             self._note_fusion(t, key, position, ego)
-        row["fused_area"] = _total(z.area() for z in fused.values())
+        row["fused_area"] = _total(z.area for z in fused.values())
         row["fused_contains_truth"] = _all(c.fused for c in checks.values())
         row["possible_area"] = _total(r.area for r in regions.values())
         row["possible_contains_truth"] = _all(c.refined for c in checks.values())
-        self._note_regions(t, ego)
-        footprint = bus.footprint.polygon()
-        for pid, check in checks.items():
-            check.accounted_for = self._check_accounted(t, pid, ego, truths[pid])
-            check.distance = _distance(footprint, truths[pid])
+        self._note_regions(t, vehicle, held)
+        distances = shapely.distance(bus.footprint.polygon(), points.array).tolist()
+        for (pid, check), distance in zip(checks.items(), distances, strict=True):
+            check.accounted_for = self._check_accounted(t, pid, held, truths[pid])
+            check.distance = distance
             self.pedestrian_rows.append({"t": t, "vehicle": vehicle, **check.row()})
         row["accounted_for"] = _all(c.accounted_for for c in checks.values())
         row["path_clear"] = ego.picture.path_clear
@@ -344,13 +361,14 @@ class RunRecorder:
         wanted = shared_fusion_now + self._wants_scene(t)
         if not (moments or wanted):
             return
-        frame = _frame(t, result, ego, local_sets,
+        frame = _frame(t, result, held.unobserved,
+                       [(s.node, s.position.zonotope) for s in local],
                        {key: z.zonotope for key, z in fused.items()}, truths)
         self.scenes += [frame] * wanted
         self.key_moments.frames.update(dict.fromkeys(moments, frame))
 
     def _check_labelled(self, t: float, ego: EgoStep, truths: dict[str, np.ndarray],
-                        checks: dict[str, _PedestrianCheck]
+                        held: _HeldRegions, checks: dict[str, _PedestrianCheck]
                         ) -> tuple[dict[str, PositionSet], dict[str, shapely.Geometry]]:
         """Each pedestrian in its own fused set and refined region; those of the pedestrians in
         the scene (position sets) by id."""
@@ -358,14 +376,14 @@ class RunRecorder:
                  for pid in truths if pid in ego.estimate.fused}
         for pid, position in fused.items():
             checks[pid].fused = self._check(t, FUSED, pid, [position], truths[pid])
-        regions = {pid: ego.possible[pid] for pid in truths if pid in ego.possible}
+        regions = {pid: held.refined[pid] for pid in truths if pid in held.refined}
         for pid, region in regions.items():
-            checks[pid].refined = self._check_region(t, pid, [region], ego.window,
-                                                     truths[pid])
+            checks[pid].refined = self._check_region(t, pid, [region], held, truths[pid])
         return fused, regions
 
     def _check_anonymous(self, t: float, result: StepResult, ego: EgoStep,
-                         truths: dict[str, np.ndarray], checks: dict[str, _PedestrianCheck]
+                         truths: dict[str, np.ndarray], held: _HeldRegions,
+                         checks: dict[str, _PedestrianCheck]
                          ) -> tuple[dict[str, PositionSet], dict[str, shapely.Geometry]]:
         """Each pedestrian the vehicle knows of (module docstring) in some fused set and some
         refined region; every fused set (position sets) and refined region, by fused key."""
@@ -375,9 +393,9 @@ class RunRecorder:
             known |= self._held_by(sender, result.step - age)
         for pid in sorted(known & truths.keys()):
             checks[pid].fused = self._check(t, FUSED, pid, list(fused.values()), truths[pid])
-            checks[pid].refined = self._check_region(t, pid, list(ego.possible.values()),
-                                                     ego.window, truths[pid])
-        return fused, dict(ego.possible)
+            checks[pid].refined = self._check_region(t, pid, list(held.refined.values()), held,
+                                                     truths[pid])
+        return fused, dict(held.refined)
 
     def _note_detected(self, result: StepResult) -> None:
         """Each node holds each pedestrian it detects now (anonymous checks)."""
@@ -439,14 +457,19 @@ class RunRecorder:
     def _position(self, estimate: Zonotope) -> PositionSet:
         """The position set of a state estimate that the recorder writes and checks, from the
         estimate's arrays and the scenario's estimator settings (the estimator's claim C Z ⊕
-        box(jitter), not its memo)."""
+        box(jitter), not its memo); made once per step and estimate (``step_positions``)."""
+        kept = self.step_positions.get(id(estimate))
+        if kept is not None and kept[0] is estimate:
+            return kept[1]
         if estimate.dim != self.state_dim:
             raise ValueError(f"a {estimate.dim}-D estimate; the state model "
                              f"{self.scenario.estimator.state_model!r} has {self.state_dim}")
-        return PositionSet.of(estimate, self.jitter)
+        position = PositionSet.of(estimate, self.jitter)
+        self.step_positions[id(estimate)] = (estimate, position)
+        return position
 
     def _record_local_sets(self, t: float, row: dict[str, Any], result: StepResult,
-                           vehicle: str, local: list[_LocalSet]) -> list[tuple[str, Zonotope]]:
+                           vehicle: str, local: list[_LocalSet]) -> None:
         """The local sets in ``vehicle``'s record: their lines; per node whether it detects
         any pedestrian and the total area of its sets (None without any)."""
         for s in local:
@@ -456,15 +479,14 @@ class RunRecorder:
         for node in result.tracks:
             mine = [s for s in local if s.node == node]
             row[f"{node}_detected"] = any(s.detected for s in mine)
-            row[f"{node}_area"] = _total(s.position.area() for s in mine)
-        return [(s.node, s.position.zonotope) for s in local]
+            row[f"{node}_area"] = _total(s.position.area for s in mine)
 
     def _note_fusion(self, t: float, pid: str, position: PositionSet, ego: EgoStep) -> None:
         """Record a fused set (``pid``: its pedestrian, or its fused key): its line, whether it
         outgrew its smallest input, the first fusion and the first fusion of shared sets."""
         inputs = ego.estimate.inputs[pid]
-        smallest = min(self._position(z).area() for z in inputs.values())
-        if position.area() > smallest * (1 + 1e-9) + 1e-12:
+        smallest = min(self._position(z).area for z in inputs.values())
+        if position.area > smallest * (1 + 1e-9) + 1e-12:
             self.fusion_larger_than_input += 1
         self._set_line(t, ego.vehicle, FUSED, pid, "fused", position)
         if FUSED not in self.first_detection:
@@ -495,18 +517,19 @@ class RunRecorder:
         return self._violation_unless(inside, t, node, pid, truth)
 
     def _check_region(self, t: float, pid: str, regions: list[shapely.Geometry],
-                      window: shapely.Geometry, truth: np.ndarray) -> bool:
+                      held: _HeldRegions, truth: np.ndarray) -> bool:
         """Whether pedestrian ``pid``'s true position lies in one of ``regions``, or outside
-        the ``window`` in which regions are kept (there every walkable place counts as
+        the window in which regions are kept (there every walkable place counts as
         occupied)."""
-        inside = _outside_or_in(window, regions, truth)
+        inside = held.outside_or_in(pid, regions)
         return self._violation_unless(inside, t, "possible", pid, truth)
 
-    def _check_accounted(self, t: float, pid: str, ego: EgoStep, truth: np.ndarray) -> bool:
+    def _check_accounted(self, t: float, pid: str, held: _HeldRegions,
+                         truth: np.ndarray) -> bool:
         """Whether the pedestrian is where the controller looks for pedestrians: inside a
         refined region (any track's) or the unobserved area, or outside the window where
         hidden ground is tracked (there every walkable place counts as occupied)."""
-        inside = _outside_or_in(ego.window, [ego.unobserved, *ego.possible.values()], truth)
+        inside = held.outside_or_in(pid, held.accounting(pid))
         return self._violation_unless(inside, t, UNACCOUNTED, pid, truth)
 
     def _violation_unless(self, inside: bool, t: float, node: str, pid: str,
@@ -516,17 +539,17 @@ class RunRecorder:
                                     "truth": truth.tolist()})
         return inside
 
-    def _note_regions(self, t: float, ego: EgoStep) -> None:
-        """Keep the regions the controller used this step: every known pedestrian's refined
-        region (by id) and the unobserved area, so that anyone can re-check them."""
-        self.regions.extend(RegionRecord(t, REFINED, pid, region, ego.vehicle)
-                            for pid, region in sorted(ego.possible.items()))
-        self.regions.append(RegionRecord(t, UNOBSERVED, None, ego.unobserved, ego.vehicle))
+    def _note_regions(self, t: float, vehicle: str, held: _HeldRegions) -> None:
+        """Keep the regions ``vehicle``'s controller used this step: every known pedestrian's
+        refined region (by id) and the unobserved area, so that anyone can re-check them."""
+        self.regions.extend(RegionRecord(t, REFINED, pid, region, vehicle)
+                            for pid, region in sorted(held.refined.items()))
+        self.regions.append(RegionRecord(t, UNOBSERVED, None, held.unobserved, vehicle))
 
     def _set_line(self, t: float, vehicle: str, node: str, track: str, kind: str,
                   position: PositionSet) -> None:
-        self.set_lines.append({"t": t, "vehicle": vehicle, "node": node, "track": track,
-                               "kind": kind, **position.line()})
+        self.set_records.append((t, vehicle, node, track, kind, position.center,
+                                 position.generators))
 
     @staticmethod
     def _moment(t: float, ego: EgoStep) -> dict[str, float]:
@@ -542,9 +565,17 @@ class RunRecorder:
             return
         self.first_shared_fusion = {
             "t": t,
-            "input_areas_m2": {n: self._position(z).area() for n, z in inputs.items()},
-            "fused_area_m2": fused_position.area(),
+            "input_areas_m2": {n: self._position(z).area for n, z in inputs.items()},
+            "fused_area_m2": fused_position.area,
         }
+
+    @property
+    def set_lines(self) -> list[dict[str, Any]]:
+        """The lines of ``sets.jsonl``: t, vehicle, node, track, kind, then the position set,
+        ``center`` (2 floats) and ``generators`` (2 rows of e floats)."""
+        return [{"t": t, "vehicle": vehicle, "node": node, "track": track, "kind": kind,
+                 "center": center.tolist(), "generators": generators.tolist()}
+                for t, vehicle, node, track, kind, center, generators in self.set_records]
 
     def _wants_scene(self, t: float) -> bool:
         dt = self.scenario.simulation.step_length_s
@@ -680,12 +711,60 @@ class _PedestrianCheck:
 
 
 
-def _outside_or_in(window: shapely.Geometry, regions: list[shapely.Geometry],
-                   truth: np.ndarray) -> bool:
-    """Whether ``truth`` (2,) lies outside ``window`` or in one of ``regions`` (to 1e-7 m)."""
-    point = shapely.Point(truth)
-    return not window.contains(point) or any(
-        shapely.distance(region, point) <= 1e-7 for region in regions)
+@dataclass(frozen=True)
+class _TruePoints:
+    """The pedestrians' true positions at one step as shapely points, made once for every
+    check: ``by_id`` pedestrian id -> point, ``array`` the same points, shape (k,), in that
+    order."""
+
+    by_id: dict[str, shapely.Point]
+    array: np.ndarray
+
+    @classmethod
+    def of(cls, truths: dict[str, np.ndarray]) -> _TruePoints:
+        """The points of ``truths`` (pedestrian id -> position (2,))."""
+        array = shapely.points(np.array([*truths.values()], dtype=np.float64).reshape(-1, 2))
+        return cls(dict(zip(truths, array, strict=True)), array)
+
+
+@dataclass(frozen=True)
+class _HeldRegions:
+    """An automated vehicle's regions at one step as polygons, each made once: its refined
+    regions (``refined``: track key -> polygons, in the vehicle's order) and unobserved area,
+    and per pedestrian whether its true position lies outside the window in which regions are
+    kept (``outside``) and that position (``points``)."""
+
+    refined: dict[str, shapely.Geometry]
+    unobserved: shapely.Geometry
+    outside: dict[str, bool]
+    points: dict[str, shapely.Point]
+
+    @classmethod
+    def of(cls, ego: EgoStep, points: _TruePoints) -> _HeldRegions:
+        """``ego``'s regions, and where the ``points`` lie."""
+        outside = np.logical_not(shapely.contains(ego.window.geometry(), points.array))
+        return cls({key: region.geometry() for key, region in ego.possible.items()},
+                   ego.unobserved.geometry(), dict(zip(points.by_id, outside.tolist(),
+                                                       strict=True)), points.by_id)
+
+    @cached_property
+    def everywhere(self) -> list[shapely.Geometry]:
+        """The unobserved area and every refined region."""
+        return [self.unobserved, *self.refined.values()]
+
+    def accounting(self, pid: str) -> list[shapely.Geometry]:
+        """:attr:`everywhere`, after pedestrian ``pid``'s own refined region if a track has its
+        id: the one most likely to hold it (any of them accounts for it)."""
+        own = self.refined.get(pid)
+        return self.everywhere if own is None else [own, *self.everywhere]
+
+    def outside_or_in(self, pid: str, regions: list[shapely.Geometry]) -> bool:
+        """Whether pedestrian ``pid`` lies outside the window or in one of ``regions`` (to
+        1e-7 m)."""
+        point = self.points[pid]
+        return self.outside[pid] or any(
+            shapely.distance(region, point) <= 1e-7 for region in regions)
+
 
 def _total(values) -> float | None:
     """The sum of ``values``, None if there are none (no set, no area)."""
@@ -710,12 +789,9 @@ def _entries(flags: list[bool]) -> int:
     return sum(now and not before for before, now in pairwise([False, *flags]))
 
 
-def _distance(footprint: shapely.Polygon, truth: np.ndarray) -> float:
-    return float(footprint.distance(shapely.Point(truth)))
-
-
-def _frame(t: float, result: StepResult, ego: EgoStep, local_sets: list[tuple[str, Zonotope]],
-           fused: dict[str, Zonotope], truths: dict[str, np.ndarray]) -> SceneFrame:
+def _frame(t: float, result: StepResult, unobserved: shapely.Geometry,
+           local_sets: list[tuple[str, Zonotope]], fused: dict[str, Zonotope],
+           truths: dict[str, np.ndarray]) -> SceneFrame:
     snap = result.snapshot
     strips = [
         (obs.node, normal, float(value), float(radius))
@@ -728,13 +804,13 @@ def _frame(t: float, result: StepResult, ego: EgoStep, local_sets: list[tuple[st
     return SceneFrame(
         time=t,
         footprints={v.id: (v.kind, v.footprint.polygon()) for v in snap.vehicles.values()},
-        sectors={name: (o.node, o.visible, o.occluded)
+        sectors={name: (o.node, o.visible.geometry(), o.occluded.geometry())
                  for name, o in result.observations.items() if o.pose is not None},
         strips=strips,
-        local_sets=list(local_sets),
+        local_sets=local_sets,
         fused_sets=dict(fused),
         truths={pid: (float(xy[0]), float(xy[1])) for pid, xy in truths.items()},
-        unobserved=ego.unobserved,
+        unobserved=unobserved,
     )
 
 

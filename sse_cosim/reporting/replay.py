@@ -25,6 +25,7 @@ import numpy as np
 import shapely
 
 from sse_cosim.control.speed import SpeedLevel
+from sse_cosim.regions import Region
 from sse_cosim.reporting.shapes import polygon_parts
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sets import Zonotope
@@ -129,7 +130,7 @@ class ReplayLog:
                           round(v.speed, 2)] for v in snap.vehicles.values()],
             "pedestrians": [[p.id, _cm(p.position[0]), _cm(p.position[1]), round(p.speed, 2)]
                             for _, p in sorted(snap.persons.items())],
-            "sectors": [[name, self.pool.add(o.visible), self.pool.add(o.occluded)]
+            "sectors": [[name, self.pool.add(_shape(o.visible)), self.pool.add(_shape(o.occluded))]
                         for name, o in result.observations.items() if o.pose is not None],
             "strips": self._strips(result),
             "local": [[node, pid, self.pool.add_vertices(z.vertices()), int(detected)]
@@ -142,7 +143,7 @@ class ReplayLog:
         sensor's view box: [sensor, pedestrian, [polygon, ...]]."""
         bands = []
         for name, obs in result.observations.items():
-            box = _view_box(obs.visible, obs.occluded)
+            box = _view_box(_shape(obs.visible), _shape(obs.occluded))
             for pid, detection in obs.detections.items():
                 s = detection.strips
                 bands.append([name, pid, [
@@ -160,10 +161,15 @@ class ReplayLog:
             "level": int(ego.decision.level),
             "fused": [[pid, self.pool.add_vertices(result.model.position(z).vertices())]
                       for pid, z in sorted(ego.estimate.fused.items())],
-            "refined": [[pid, self.pool.add(region)]
+            "refined": [[pid, self.pool.add(region.geometry())]
                         for pid, region in sorted(ego.possible.items())],
-            "unobserved": self.pool.add(ego.unobserved),
+            "unobserved": self.pool.add(ego.unobserved.geometry()),
         }
+
+
+def _shape(region: Region | None) -> shapely.Geometry | None:
+    """A region's polygons (None for None)."""
+    return None if region is None else region.geometry()
 
 
 def _view_box(*regions: shapely.Geometry | None) -> tuple[float, float, float, float] | None:

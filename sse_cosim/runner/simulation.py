@@ -33,12 +33,13 @@ from typing import Any
 
 import numpy as np
 
+from sse_cosim import regions
 from sse_cosim.control.speed import SpeedLevel
 from sse_cosim.estimation.motion import motion_model
 from sse_cosim.estimation.observer import EstimatorSettings
 from sse_cosim.pipeline.ego import Ego
 from sse_cosim.pipeline.result import StepCallback, StepResult
-from sse_cosim.pipeline.stages import first_level, outgoing, sense
+from sse_cosim.pipeline.stages import first_level, outgoing, sense, views_by_node
 from sse_cosim.runner.timing import NoTimer, StageTimer
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors import specs_from_scenario
@@ -96,9 +97,10 @@ def simulate(
                                      config.max_generators)
         specs = specs_from_scenario(scenario)
         faults = FaultInjector(scenario, specs, fault_rng)
-        observers = first_level(config.association, scenario.node_ids(), model, settings)
+        kind = regions.kind(config.regions)
+        observers = first_level(config.association, scenario.node_ids(), model, settings, kind)
         n_steps = round(scenario.simulation.duration_s / dt)
-        egos = [Ego(vid, scenario, world.roadmap, model, settings, specs, rng)
+        egos = [Ego(vid, scenario, world.roadmap, model, settings, specs, rng, kind)
                 for vid, rng in zip(automated, [first_link_rng, *link_rngs], strict=True)]
         for step in range(n_steps):
             timer.start()
@@ -108,15 +110,16 @@ def simulate(
                                       scenario, *_breaks(world))
             active = [ego for ego in egos if ego.id in snapshot.vehicles]
             timer.lap("sumo")
-            observations = sense(snapshot, specs, faults, noise_rng)
+            observations = sense(snapshot, specs, faults, noise_rng, kind)
+            views = views_by_node(observations, kind)
             timer.lap("geometry")
             tracks = observers.step(step, observations)
             timer.lap("local_fusion")
             if active:  # building a message marks its faults (docs/faults.md): only when sent
-                messages = outgoing(step, snapshot, observations, tracks, faults, model)
+                messages = outgoing(step, snapshot, observations, views, tracks, faults, model)
                 for ego in active:
                     ego.sharing.send(snapshot, messages)
-            results = {ego.id: ego.step(step, snapshot, observations, tracks, timer)
+            results = {ego.id: ego.step(step, snapshot, observations, views, tracks, timer)
                        for ego in active}
             for vid, result in results.items():
                 world.set_speed(vid, result.decision.command_mps,

@@ -12,6 +12,7 @@ from typing import Any, Literal, TypeVar
 from pydantic import Field, field_validator, model_validator
 
 from sse_cosim.estimation.motion import MODELS
+from sse_cosim.regions import KINDS
 from sse_cosim.scenario.base import NonNegativeFloat, PositiveFloat, StrictModel
 from sse_cosim.sensors.kinds import Sensor, SensorMount
 from sse_cosim.sets import available_fusion_methods, available_gain_methods
@@ -170,6 +171,9 @@ class V2X(StrictModel):
 StateModel = Literal[tuple(MODELS)]  # the registered names, in order
 """A registered motion model's name (:data:`sse_cosim.estimation.motion.MODELS`)."""
 
+RegionKindName = Literal[tuple(KINDS)]  # the registered names, in order
+"""A registered region representation's name (:data:`sse_cosim.regions.KINDS`)."""
+
 
 class Estimator(StrictModel):
     state_model: StateModel = Field(
@@ -216,6 +220,12 @@ class Estimator(StrictModel):
         "zonotope",
         description="Pedestrian regions the controller uses: the zonotopes refined with negative "
         "information, or a Kalman filter's 3-sigma ellipses (baseline, not guaranteed).",
+    )
+    regions: RegionKindName = Field(
+        "polygon",
+        description="How the regions (where a pedestrian may be, what is seen) are kept: "
+        "'polygon', exact polygons whose dilations are mitred (the reference), or 'raster', "
+        "cells of 0.1 m that hold every point the polygon would (docs/method.md, Regions).",
     )
     association: Literal["labelled", "anonymous"] = Field(
         "labelled",

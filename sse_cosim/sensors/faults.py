@@ -28,8 +28,8 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import shapely
 
+from sse_cosim.regions import RegionKind
 from sse_cosim.scenario.model import FaultWindow, LinkFault, NodeFault, Scenario, SensorFault
 from sse_cosim.sensors.measurement import Detection
 from sse_cosim.sensors.observe import SensorObservation
@@ -96,9 +96,11 @@ class FaultInjector:
     # --- sensors --------------------------------------------------------------------------
 
     def corrupt_observations(
-        self, snapshot: Snapshot, observations: dict[str, SensorObservation]
+        self, snapshot: Snapshot, observations: dict[str, SensorObservation],
+        kind: RegionKind | None = None,
     ) -> dict[str, SensorObservation]:
-        """The observations as the faulty sensors report them (same order)."""
+        """The observations as the faulty sensors report them (same order; their regions of
+        ``kind``, None when regions were not requested)."""
         active = self._active(SensorFault)
         if not active:
             return observations
@@ -108,18 +110,20 @@ class FaultInjector:
             obs = result[fault.sensor]
             if obs.pose is None:  # its carrier is not in the scene: nothing to corrupt
                 continue
-            result[fault.sensor] = self._corrupt(key, fault, obs, snapshot.time, truth)
+            result[fault.sensor] = self._corrupt(key, fault, obs, snapshot.time, truth, kind)
         return result
 
     def _corrupt(self, key: str, fault: SensorFault, obs: SensorObservation, time: float,
-                 truth: Mapping[str, np.ndarray]) -> SensorObservation:
+                 truth: Mapping[str, np.ndarray], kind: RegionKind | None) -> SensorObservation:
         spec = self.specs[fault.sensor]
         if fault.kind == "dropout":
             if self.rng.random() >= fault.dropout_probability:
                 return obs
-            nothing = shapely.Polygon()
-            return replace(obs, detections={}, visible=None if obs.visible is None else nothing,
-                           occluded=_hidden_by_lost_frame(obs.visible, obs.occluded))
+            if kind is None:
+                return replace(obs, detections={})
+            # a lost frame hides the whole sector
+            return replace(obs, detections={}, visible=kind.empty(),
+                           occluded=kind.union_all([obs.visible, obs.occluded]))
         if fault.kind == "bias":
             detections = {pid: _biased(d, fault, truth.get(pid))
                           for pid, d in obs.detections.items()}
@@ -175,12 +179,6 @@ def _biased(detection: Detection, fault: SensorFault, truth: np.ndarray | None) 
         exact = portable.matmul(strips.normals, truth)
         values = exact + np.clip(values - exact, -strips.radii, strips.radii)
     return replace(detection, strips=Strips(strips.normals, values, strips.radii))
-
-
-def _hidden_by_lost_frame(*parts: shapely.Geometry | None) -> shapely.Geometry | None:
-    """What a lost frame hides: the whole sector (None when regions were not requested)."""
-    present = [p for p in parts if p is not None]
-    return shapely.union_all(present) if present else None
 
 
 # --- bookkeeping: when was each fault detected? --------------------------------------------

@@ -297,25 +297,6 @@ def _arc_offsets(span: float, resolution: int) -> np.ndarray:
     return offsets
 
 
-@lru_cache(maxsize=256)
-def _cached_sector(
-    x: float, y: float, heading: float, fov_rad: float, range_m: float, resolution: int
-) -> shapely.Polygon:
-    polygon = sector_polygon(Pose(x, y, heading), fov_rad, range_m, resolution)
-    shapely.prepare(polygon)
-    return polygon
-
-
-def cached_sector_polygon(
-    pose: Pose, fov_rad: float, range_m: float, resolution: int = 16
-) -> shapely.Polygon:
-    """:func:`sector_polygon`, memoised by pose, opening, range and resolution.
-
-    Meant for static sensors (road-side units); the result is shared, do not mutate it.
-    """
-    return _cached_sector(pose.x, pose.y, pose.heading, fov_rad, range_m, resolution)
-
-
 def shadow_points_reference(origin: np.ndarray, boxes: Boxes, range_m: float
                             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(points (m, 4 + f, 2), reach (m,), inside (m,))``: the points whose convex hull is
@@ -369,18 +350,19 @@ def visibility_regions(
     *,
     resolution: int = 16,
     sector: shapely.Polygon | None = None,
+    kept: IdentityMemo[tuple[BaseGeometry, BaseGeometry]] | None = None,
 ) -> tuple[BaseGeometry, BaseGeometry]:
     """``(visible, occluded)``: the sector minus / intersected with the boxes' shadows.
 
     ``boxes`` are the occluders (the carrier already left out); only those reaching the
     sector's bounding circle are used. ``sector`` overrides the computed sector polygon
-    (e.g. a cached one of a static sensor). The two regions partition the sector.
+    (e.g. the one a static sensor keeps). The two regions partition the sector.
 
     A static sensor (same pose, same ``sector`` object) whose near occluders stand still
-    (a parked truck) gets the same regions step after step: they are memoised on the pose,
-    the sector and the occluders' exact coordinates, so a hit returns the identical result.
+    (a parked truck) gets the same regions step after step: with the sensor's memo ``kept``
+    they are kept by the pose, the sector and the occluders' exact coordinates, so a hit
+    returns the identical result.
     """
-    given = sector is not None  # a computed sector is new every call: nothing to reuse
     if sector is None:
         sector = sector_polygon(pose, fov_rad, range_m, resolution)
     near = boxes.subset(boxes.distances(pose.position) <= range_m) if len(boxes) else boxes
@@ -391,11 +373,8 @@ def visibility_regions(
         shadow = shapely.union_all(shadow_polygons(pose.position, near, range_m))
         return shapely.difference(sector, shadow), shapely.intersection(sector, shadow)
 
-    if not given:
+    if kept is None:
         return regions()
     key = (pose.x, pose.y, pose.heading, fov_rad, range_m, id(sector),
            near.centers.tobytes(), near.axes.tobytes(), near.half.tobytes())
-    return _REGIONS.get(key, (sector,), regions)
-
-
-_REGIONS: IdentityMemo[tuple[BaseGeometry, BaseGeometry]] = IdentityMemo(64)
+    return kept.get(key, (sector,), regions)

@@ -6,9 +6,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
-import shapely
-from shapely.geometry.base import BaseGeometry
 
+from sse_cosim.regions import Region, RegionKind
 from sse_cosim.sensors.geometry import (
     Boxes,
     in_sector,
@@ -27,7 +26,9 @@ class SensorObservation:
 
     ``pose`` is None when the carrier is not in the scene (then nothing is seen);
     ``detections`` by person id; ``visible``/``occluded`` are None unless regions were
-    requested (empty polygons when the carrier is absent).
+    requested (empty when the carrier is absent): ``visible`` lies inside what the sensor
+    sees (made ``inner``); ``occluded`` is its polygonal sector's part in the occluders'
+    shadows (made ``outer``).
     """
 
     sensor: str
@@ -35,8 +36,8 @@ class SensorObservation:
     time: float
     pose: Pose | None
     detections: dict[str, Detection] = field(default_factory=dict)
-    visible: BaseGeometry | None = None
-    occluded: BaseGeometry | None = None
+    visible: Region | None = None
+    occluded: Region | None = None
 
 
 def seen_mask(
@@ -57,7 +58,7 @@ def observe(
     snapshot: Snapshot,
     sensor_specs: Mapping[str, SensorSpec],
     rng: np.random.Generator,
-    want_regions: bool = False,
+    regions: RegionKind | None = None,
 ) -> dict[str, SensorObservation]:
     """Every sensor's observation at this snapshot, by sensor name (``sensor_specs`` order;
     a ``carrier_type`` sensor as its instances on the vehicles in the scene, in its place:
@@ -67,7 +68,7 @@ def observe(
     and the segment to it misses every footprint but the carrier's. The tests run for all
     sensors × persons × footprints in one vectorized pass; the kinds' strips draw from ``rng``
     sensor by sensor (in order), persons in snapshot order, so a seeded generator reproduces
-    them. Regions (shapely) are only computed when ``want_regions``.
+    them. Regions are only computed when a ``regions`` kind is given.
     """
     vehicles = list(snapshot.vehicles.values())
     index = {v.id: i for i, v in enumerate(vehicles)}
@@ -85,7 +86,7 @@ def observe(
         spec = sensor_specs[name]
         where = locate(spec, snapshot)
         if where is None:  # carrier not (or no longer) in the scene: sees nothing
-            empty = shapely.Polygon() if want_regions else None
+            empty = None if regions is None else regions.empty()
             result[name] = SensorObservation(name, spec.node, snapshot.time, None, {}, empty, empty)
         else:
             pose, carrier_id = where
@@ -110,15 +111,17 @@ def observe(
                 for h, st in zip(hits, strips, strict=True)
             }
         visible = occluded = None
-        if want_regions:
-            visible, occluded = visibility_regions(
+        if regions is not None:
+            shown, hidden = visibility_regions(
                 pose,
                 spec.fov_rad,
                 spec.range_m,
                 boxes.subset(occluders[row]),
                 resolution=spec.resolution,
                 sector=spec.sector(pose),
+                kept=spec.views if spec.is_static else None,
             )
+            visible, occluded = regions.inner(shown), regions.outer(hidden)
         result[name] = SensorObservation(
             name, spec.node, snapshot.time, pose, detections, visible, occluded
         )

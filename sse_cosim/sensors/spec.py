@@ -16,12 +16,16 @@ from typing import TYPE_CHECKING
 
 import shapely
 
-from sse_cosim.sensors.geometry import cached_sector_polygon, sector_polygon
+from sse_cosim.memo import IdentityMemo
+from sse_cosim.sensors.geometry import sector_polygon
 from sse_cosim.sensors.kinds import Camera, SensorKind
 from sse_cosim.world.snapshot import Pose, Snapshot, VehicleState
 
 if TYPE_CHECKING:  # the schema is only needed for type checking
     from sse_cosim.scenario.model import RoadSideUnit, Scenario, Sensor
+
+
+VIEWS_KEPT = 8  # a static sensor keeps its regions for this many sets of occluders
 
 
 @dataclass(frozen=True)
@@ -46,6 +50,9 @@ class SensorSpec:
     static_pose: Pose | None = None
     resolution: int = 16
     carrier_type: str | None = None
+    # a static sensor's newest visible and occluded regions, by occluders (visibility_regions)
+    views: IdentityMemo[tuple[shapely.Geometry, shapely.Geometry]] = field(
+        default_factory=lambda: IdentityMemo(VIEWS_KEPT), compare=False, repr=False)
 
     @classmethod
     def from_config(
@@ -97,10 +104,21 @@ class SensorSpec:
         """The world pose of a static sensor (computed once), None on a vehicle."""
         return None if self.static_pose is None else self.mounted_on(self.static_pose)
 
+    @cached_property
+    def static_sector(self) -> shapely.Polygon | None:
+        """A static sensor's field-of-view polygon (computed once, prepared), None on a
+        vehicle."""
+        pose = self.static_sensor_pose
+        if pose is None:
+            return None
+        polygon = sector_polygon(pose, self.fov_rad, self.range_m, self.resolution)
+        shapely.prepare(polygon)
+        return polygon
+
     def sector(self, pose: Pose) -> shapely.Polygon:
-        """The field-of-view polygon at ``pose``; memoised for static sensors."""
-        if self.is_static:
-            return cached_sector_polygon(pose, self.fov_rad, self.range_m, self.resolution)
+        """The field-of-view polygon at ``pose`` (a static sensor's, kept, at its pose)."""
+        if self.is_static and pose == self.static_sensor_pose:
+            return self.static_sector
         return sector_polygon(pose, self.fov_rad, self.range_m, self.resolution)
 
 

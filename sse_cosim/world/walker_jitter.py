@@ -89,8 +89,8 @@ import numpy as np
 import shapely
 import sumolib
 
-from sse_cosim.estimation.occupancy import dilate
 from sse_cosim.files import write_text_atomic
+from sse_cosim.regions import PolygonRegion
 from sse_cosim.world.acceleration_assumption import AccelerationBounds, needed_jitter
 from sse_cosim.world.assumptions import MotionBounds, admits, least_jitter, path_jitter
 from sse_cosim.world.extent import SceneExtent
@@ -107,7 +107,7 @@ def _patch_of(ground: shapely.Geometry, runs: Sequence[np.ndarray]) -> shapely.G
     """The ground patch that holds the walk pieces ``runs`` (each (k, 2)) where they are off
     the plain ``ground``: each stretch of consecutive positions off it, with the position
     before and after, as a line dilated by :data:`GROUND_BAND_M` (a polygon holding the disc
-    dilation, :func:`~sse_cosim.estimation.occupancy.dilate`); empty if none is off."""
+    dilation, :meth:`~sse_cosim.regions.PolygonRegion.dilate`); empty if none is off."""
     lines = []
     for xy in runs:
         off = shapely.distance(ground, shapely.points(xy.reshape(-1, 2))) > 0.0
@@ -117,7 +117,7 @@ def _patch_of(ground: shapely.Geometry, runs: Sequence[np.ndarray]) -> shapely.G
                          else shapely.Point(piece[0]))
     if not lines:
         return shapely.Polygon()
-    return dilate(shapely.union_all(lines), GROUND_BAND_M)
+    return PolygonRegion(shapely.union_all(lines)).dilate(GROUND_BAND_M).shape
 
 
 def _stretches(flags: np.ndarray) -> list[tuple[int, int]]:
@@ -250,7 +250,7 @@ def cache_key(sumo_version: str, step_s: float, speed_mps: float, radius_m: floa
     """The cache entry of measurements with these settings (``accel_mps2``: the
     bounded-acceleration model's, None for a speed-bounded model)."""
     key = (f"sumo {sumo_version}|step {step_s:.10g} s|speed {speed_mps:.10g} m/s"
-           f"|radius {radius_m:.10g} m|ground band {GROUND_BAND_M:g} m")
+           f"|radius {radius_m:.10g} m|ground band {GROUND_BAND_M:g} m, mitred")
     return key if accel_mps2 is None else f"{key}|accel {accel_mps2:.10g} m/s2"
 
 

@@ -16,7 +16,6 @@ from sse_cosim.control.picture import (
     Picture,
     SceneContext,
     Source,
-    _around,
     _arrivals,
     arrival_floors,
     assess,
@@ -25,6 +24,8 @@ from sse_cosim.control.picture import (
 )
 from sse_cosim.control.speed import SpeedLevel, level_speed, paper_level
 from sse_cosim.estimation.motion import motion_model
+from sse_cosim.regions import PolygonRegion as R
+from sse_cosim.regions import kind
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.world.network import build_network
@@ -34,6 +35,7 @@ SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "s1_pedestrian.to
 # a run takes the jitter measured for its network (sse_cosim/world/walker_jitter.py); the
 # controller's geometry is tested with a fixed one
 JITTER_M = 0.35
+K = kind("polygon")
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +47,7 @@ def context() -> SceneContext:
     pedestrians = motion_model(
         scenario.estimator.model_copy(update={"position_jitter_m": JITTER_M}), dt)
     return SceneContext.build(roadmap, bus.route_edges, bus, scenario.controller, pedestrians,
-                              scenario.pedestrian_radius_m(), dt)
+                              scenario.pedestrian_radius_m(), dt, K)
 
 
 def picture(**changes) -> Picture:
@@ -95,9 +97,9 @@ def test_a_pedestrian_in_the_lane_ahead_triggers_an_emergency_stop(context):
     front = np.array(context.route_line.interpolate(start - 20.0).coords[0])
     in_lane = shapely.Point(front + np.array([10.0, 0.0])).buffer(0.5)
     on_far_sidewalk = shapely.Point(front[0] + 10.0, 7.0).buffer(0.5)
-    empty = shapely.Polygon()
-    stop = assess(context, front, 14.0, empty, empty, [Source(in_lane)])
-    clear = assess(context, front, 14.0, empty, empty, [Source(on_far_sidewalk)])
+    empty = K.empty()
+    stop = assess(context, front, 14.0, empty, empty, [Source(R(in_lane))])
+    clear = assess(context, front, 14.0, empty, empty, [Source(R(on_far_sidewalk))])
     assert stop.pedestrian_in_stopping_distance and stop.pedestrian_near_path
     assert not clear.pedestrian_near_path and not clear.pedestrian_in_stopping_distance
 
@@ -108,7 +110,7 @@ def test_hidden_area_counts_only_within_reach_of_the_crossing(context):
     near = shapely.box(196.0, -8.0, 198.0, -6.0)  # sidewalk right at the zebra
     far = shapely.box(150.0, -8.0, 152.0, -6.0)  # sidewalk 46 m before it
     for hidden, expected in ((near, True), (far, False)):
-        result = assess(context, front, 20.0, hidden, hidden, [])
+        result = assess(context, front, 20.0, R(hidden), R(hidden), [])
         assert (result.unresolved_occluded_m2 > 1.0) is expected
         assert result.own_occluded_m2 == pytest.approx(hidden.area, rel=1e-6)
 
@@ -132,8 +134,8 @@ def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
     (zone,) = context.zones
     south = zone.polygon.bounds[1]
     pedestrian = shapely.Point(200.0, south - 5.0).buffer(0.5)  # 4.5 m from the zone
-    empty = shapely.Polygon()
-    result = assess(context, front, 10.0, empty, empty, [Source(pedestrian)])
+    empty = K.empty()
+    result = assess(context, front, 10.0, empty, empty, [Source(R(pedestrian))])
     (outlook,) = result.zones
     eps, speed = context.pedestrians.jitter, context.pedestrians.max_speed
     assert outlook.arrival_s == pytest.approx((4.5 - 2 * eps) / speed, abs=1e-3)
@@ -142,9 +144,9 @@ def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
                                                + context.bus.length_m, abs=1e-6)
     at_zebra = np.array(context.route_line.interpolate(start - 3.0).coords[0])
     # from standstill the bus needs about 5 s to clear the zebra: 1.6 s is too short
-    assert not assess(context, at_zebra, 0.0, empty, empty, [Source(pedestrian)]).path_clear
+    assert not assess(context, at_zebra, 0.0, empty, empty, [Source(R(pedestrian))]).path_clear
     far = shapely.Point(200.0, south - 40.0).buffer(0.5)
-    assert assess(context, at_zebra, 0.0, empty, empty, [Source(far)]).path_clear
+    assert assess(context, at_zebra, 0.0, empty, empty, [Source(R(far))]).path_clear
 
 
 def front_before_zebra(context: SceneContext, metres: float) -> np.ndarray:
@@ -157,10 +159,10 @@ def test_a_pedestrian_in_view_who_may_be_beyond_the_window_arrives_as_early_as_f
         context):
     front = front_before_zebra(context, 40.0)
     (zone,) = context.zones
-    empty = shapely.Polygon()
+    empty = K.empty()
     far = shapely.Point(200.0, zone.polygon.bounds[1] - 20.0).buffer(0.5)
-    inside = assess(context, front, 10.0, empty, empty, [Source(far)], [Source(far)])
-    beyond = assess(context, front, 10.0, empty, empty, [Source(far)], [Source(far)],
+    inside = assess(context, front, 10.0, empty, empty, [Source(R(far))], [Source(R(far))])
+    beyond = assess(context, front, 10.0, empty, empty, [Source(R(far))], [Source(R(far))],
                     in_view_beyond=True)
     assert zone.beyond_arrival_s < inside.zones[0].in_view_arrival_s < np.inf
     assert beyond.zones[0].in_view_arrival_s == zone.beyond_arrival_s
@@ -171,17 +173,18 @@ def test_an_arrival_comes_at_most_the_elapsed_time_sooner_than_the_last_picture_
         context):
     front = front_before_zebra(context, 40.0)
     (zone,) = context.zones
-    empty = shapely.Polygon()
+    empty = K.empty()
     south = zone.polygon.bounds[1]
     far = shapely.Point(200.0, south - 8.0).buffer(0.5)
     near = shapely.Point(200.0, south - 2.0).buffer(0.5)  # the set grew faster than the bound
-    before = assess(context, front, 10.0, empty, empty, [Source(far)])
+    before = assess(context, front, 10.0, empty, empty, [Source(R(far))])
     floors = arrival_floors(before, 0.1)
     assert floors == {0: pytest.approx(before.zones[0].arrival_s - 0.1)}
-    now = assess(context, front, 10.0, empty, empty, [Source(near)], floors=floors)
+    now = assess(context, front, 10.0, empty, empty, [Source(R(near))], floors=floors)
     assert now.zones[0].arrival_s == pytest.approx(before.zones[0].arrival_s - 0.1)
-    assert assess(context, front, 10.0, empty, empty, [Source(near)]).zones[0].arrival_s < floors[0]
-    nearer_later = assess(context, front, 10.0, empty, empty, [Source(far)], floors={0: 0.0})
+    alone = assess(context, front, 10.0, empty, empty, [Source(R(near))])
+    assert alone.zones[0].arrival_s < floors[0]
+    nearer_later = assess(context, front, 10.0, empty, empty, [Source(R(far))], floors={0: 0.0})
     assert nearer_later.zones[0].arrival_s == before.zones[0].arrival_s  # sets count too
 
 
@@ -189,9 +192,9 @@ def test_floors_come_only_from_a_picture_made_while_consistent(context):
     # ArrivalMemory: an inconsistent step gets no floors, and the picture it makes is not
     # kept: the next consistent step has no floors either, until a consistent picture is kept.
     front = front_before_zebra(context, 40.0)
-    empty = shapely.Polygon()
+    empty = K.empty()
     far = shapely.Point(200.0, context.zones[0].polygon.bounds[1] - 8.0).buffer(0.5)
-    picture = assess(context, front, 10.0, empty, empty, [Source(far)])
+    picture = assess(context, front, 10.0, empty, empty, [Source(R(far))])
     memory = ArrivalMemory(0.1)
     assert memory.floors(1, inconsistent=False) == {}
     memory.keep(1, picture, inconsistent=False)
@@ -215,12 +218,12 @@ def test_arrivals_in_one_call_are_the_earliest_arrival_of_each_zone():
         sources = [shapely.box(x, y, x + w, y + h).buffer(rng.uniform(0.0, 1.0), quad_segs=2)
                    for x, y, w, h in rng.uniform(0.0, 20.0, size=(rng.integers(1, 4), 4))]
         zones = [shapely.box(x, y, x + 3.0, y + 2.0) for x, y in rng.uniform(0.0, 30.0, (3, 2))]
-        got = _arrivals([Source(g) for g in (shapely.Polygon(), *sources)],
-                        [ConflictZone(z, 0.0, 0.0, np.inf) for z in zones], pedestrians)
+        got = _arrivals([Source(R(g)) for g in (shapely.Polygon(), *sources)],
+                        [ConflictZone(R(z), 0.0, 0.0, np.inf) for z in zones], pedestrians, K)
         expected = [max(0.0, min(s.distance(z) for s in sources) - 0.6) / 1.5 for z in zones]
         assert got.tolist() == expected
-    as_zones = [ConflictZone(z, 0.0, 0.0, np.inf) for z in zones]
-    assert _arrivals([Source(shapely.Polygon())], as_zones, pedestrians).tolist() == [np.inf] * 3
+    as_zones = [ConflictZone(R(z), 0.0, 0.0, np.inf) for z in zones]
+    assert _arrivals([Source(K.empty())], as_zones, pedestrians, K).tolist() == [np.inf] * 3
 
 
 def test_route_pieces_are_shapelys_substrings(context):
@@ -241,9 +244,12 @@ def test_route_pieces_are_shapelys_substrings(context):
                 assert shapely.to_wkb(got) == shapely.to_wkb(substring(line, start, end))
 
 
-def test_the_kept_widening_of_a_crossing_is_its_buffer(context):
-    area = context.crossings[0].area
+def test_the_kept_widening_of_a_crossing_is_its_dilation(context):
+    crossing = context.crossings[0]
     for radius in (0.5, 3.0, 0.5):
-        assert _around(area, radius).equals_exact(area.buffer(radius), 0.0)
-    assert _around(shapely.box(0, 0, 1, 1), 3.0).equals_exact(
-        shapely.box(0, 0, 1, 1).buffer(3.0), 0.0)
+        kept = context.relevant(crossing, radius)
+        assert kept is context.relevant(crossing, radius)
+        assert kept.shape.equals_exact(crossing.area.dilate(radius).shape, 0.0)
+        # it holds every point within the radius of the crossing (the dilation contract)
+        ring = crossing.area.shape.exterior.buffer(radius * (1 - 1e-9), quad_segs=64)
+        assert kept.shape.covers(shapely.difference(ring, crossing.area.shape.buffer(-1e-9)))

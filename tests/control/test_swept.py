@@ -25,10 +25,13 @@ from sse_cosim.control.swept import (
     touch_extent,
 )
 from sse_cosim.estimation.motion import motion_model
+from sse_cosim.regions import kind
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import RoadMap, load_roadmap
+
+K = kind("polygon")
 
 ROOT = Path(__file__).resolve().parents[2]
 JUNCTION = ROOT / "scenarios" / "junction.toml"
@@ -49,7 +52,7 @@ def turn_context(roadmap: RoadMap) -> SceneContext:
     sc = load_scenario(JUNCTION, {"automated.bus_we.route_edges": TURN})
     dt = sc.simulation.step_length_s
     return SceneContext.build(roadmap, TURN, sc.automated["bus_we"], sc.controller,
-                              motion_model(sc.estimator, dt), sc.pedestrian_radius_m(), dt)
+                              motion_model(sc.estimator, dt), sc.pedestrian_radius_m(), dt, K)
 
 
 def test_a_straight_route_sweeps_the_centre_line_widened_by_half_the_width() -> None:
@@ -76,7 +79,7 @@ def test_the_straight_routes_of_the_junction_keep_their_zones(roadmap: RoadMap) 
     for bus_id in ("bus_we", "bus_sn"):
         bus = sc.automated[bus_id]
         context = SceneContext.build(roadmap, bus.route_edges, bus, sc.controller, pedestrians,
-                                     sc.pedestrian_radius_m(), 0.1)
+                                     sc.pedestrian_radius_m(), 0.1, K)
         zones = [(z.polygon.area, z.start_m, z.end_m) for z in context.zones]
         assert np.array(zones) == pytest.approx(np.array([(12.6, 172.5, 176.5),
                                                           (12.6, 183.5, 187.5)]))
@@ -118,5 +121,6 @@ def test_on_the_right_turn_the_side_cutting_in_reaches_the_corner(roadmap: RoadM
     the old corridor did not have."""
     context = turn_context(roadmap)
     corner = shapely.box(-7.5, -7.5, -3.5, -3.5)  # the walking area inside the turn
-    assert any(z.polygon.intersects(corner) and not z.polygon.within(roadmap.crossing_area)
+    assert any(z.polygon.shape.intersects(corner)
+               and not z.polygon.shape.within(roadmap.crossing_area)
                for z in context.zones)

@@ -35,9 +35,12 @@ from swept_checks import (
 from sse_cosim.control.picture import SceneContext, route_lanes
 from sse_cosim.control.swept import RoutePath, body_sweep, swept_region
 from sse_cosim.estimation.motion import motion_model
+from sse_cosim.regions import kind
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.world.roadmap import RoadMap
+
+K = kind("polygon")
 
 ROOT = Path(__file__).resolve().parents[2]
 NET = ROOT / "tests" / "networks" / "town_corner" / "corner.net.xml"
@@ -135,7 +138,8 @@ def test_a_pedestrian_where_the_front_cuts_the_corner_is_in_the_way(town_run) ->
     # stands in the zone)
     dt = sc.simulation.step_length_s
     pedestrians = motion_model(sc.estimator.model_copy(update={"position_jitter_m": 0.3}), dt)
-    context = SceneContext.build(roadmap, ROUTE, bus, sc.controller, pedestrians, radius, dt)
+    context = SceneContext.build(roadmap, ROUTE, bus, sc.controller, pedestrians, radius, dt,
+                                 K)
     touching = [line.project(shapely.Point(0.5 * (c[1] + c[2]))) for c in corners
                 if shapely.Polygon(c).distance(spot) <= radius]
     assert_in_the_way(context, spot, radius, touching, min(touching) - 20.0)

@@ -12,15 +12,17 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-import shapely
 
 from sse_cosim.control.picture import SceneContext, assess
 from sse_cosim.estimation.motion import motion_model
+from sse_cosim.regions import kind
 from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.world.demand import plan_actors
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import RoadMap, load_roadmap
+
+K = kind("polygon")
 
 ROOT = Path(__file__).resolve().parents[2]
 SOURCES = ROOT / "tests" / "networks" / "two_zebras"
@@ -58,7 +60,7 @@ def scene(roadmap: RoadMap, route: list[str]) -> SceneContext:
     pedestrians = motion_model(sc.estimator.model_copy(update={"position_jitter_m": JITTER_M}),
                                dt)
     return SceneContext.build(roadmap, route, sc.automated["bus"], sc.controller, pedestrians,
-                              sc.pedestrian_radius_m(), dt)
+                              sc.pedestrian_radius_m(), dt, K)
 
 
 @pytest.fixture(scope="module")
@@ -85,17 +87,17 @@ def test_the_pedestrian_walks_over_the_zebra_that_makes_its_walk_shortest(
 def test_the_safe_policy_has_a_zone_on_each_zebra_nearest_first(
         roadmap: RoadMap, context: SceneContext) -> None:
     first, second = context.zones
-    assert first.polygon.within(roadmap.crossings[0].area)
-    assert second.polygon.within(roadmap.crossings[1].area)
+    assert first.polygon.shape.within(roadmap.crossings[0].area)
+    assert second.polygon.shape.within(roadmap.crossings[1].area)
     assert (first.start_m, first.end_m, second.start_m, second.end_m) == pytest.approx(
         (198.0, 202.0, 258.0, 262.0), abs=1e-6)
     # hidden ground is tracked around both, so neither counts as always occupied
-    assert all(context.window.contains(c.area) for c in roadmap.crossings)
+    assert all(context.window.shape.contains(c.area) for c in roadmap.crossings)
     assert min(z.beyond_arrival_s for z in context.zones) > 0.0
 
 
 def test_both_zones_stay_in_the_picture_until_cleared(context: SceneContext) -> None:
-    empty = shapely.Polygon()
+    empty = K.empty()
     length = context.bus.length_m
     for front_s, zones in ((100.0, [0, 1]), (202.0 + length + 0.1, [1]), (262.0 + length, [])):
         front = np.array(context.route_line.interpolate(front_s).coords[0])
@@ -108,7 +110,7 @@ def test_the_paper_policys_crossing_is_the_nearest_not_yet_cleared(context: Scen
     starts = [context.crossing_at(s).start_m for s in (0.0, 201.0, 202.0 + length - 0.1,
                                                       202.0 + length + 0.1, 400.0)]
     assert starts == pytest.approx([198.0, 198.0, 198.0, 258.0, 258.0])
-    empty = shapely.Polygon()
+    empty = K.empty()
     front = np.array(context.route_line.interpolate(230.0).coords[0])
     picture = assess(context, front, 10.0, empty, empty, [])
     assert picture.crossing_ahead and picture.distance_to_crossing == pytest.approx(28.0)
@@ -119,7 +121,7 @@ def test_a_route_without_crossings_has_no_crossing_ahead(roadmap: RoadMap) -> No
     context = scene(roadmap, ["DE"])  # from D, past the second zebra, to the dead end
     assert context.crossings == () and context.zones == ()
     assert context.crossing_at(10.0) is None and context.reach_radius(10.0) == 0.0
-    empty = shapely.Polygon()
+    empty = K.empty()
     front = np.array(context.route_line.interpolate(10.0).coords[0])
     picture = assess(context, front, 10.0, empty, empty, [])
     assert picture.distance_to_crossing is None and not picture.crossing_ahead

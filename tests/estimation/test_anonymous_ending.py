@@ -28,6 +28,8 @@ from sse_cosim.estimation.observer import (
 )
 from sse_cosim.estimation.occupancy import EndedTrack, UnobservedArea
 from sse_cosim.estimation.v2x import Message, V2XLink
+from sse_cosim.regions import PolygonRegion as R
+from sse_cosim.regions import kind
 from sse_cosim.scenario.model import V2X, Estimator
 from sse_cosim.sets import Strips, Zonotope
 
@@ -40,7 +42,8 @@ SIDEWALK = shapely.box(0.0, 0.0, 40.0, 2.0)  # the walkable ground
 VIEW = shapely.box(-1.0, -1.0, 10.0, 3.0)  # the node's camera: x < 10
 FAR = shapely.box(10.0, -1.0, 41.0, 3.0)  # its second camera, on for the first FAR_STEPS
 FAR_STEPS = 5
-EMPTY = shapely.Polygon()
+K = kind("polygon")
+EMPTY = K.empty()
 
 
 def motion_model() -> MotionModel:
@@ -73,12 +76,12 @@ def scan(rng: np.random.Generator, step: int, position: np.ndarray) -> NodeScan:
                                                   np.full(2, NOISE)))
                   for name, view in views(step).items()
                   if view.contains(shapely.Point(position)))
-    return NodeScan(found, views(step))
+    return NodeScan(found, {name: R(view) for name, view in views(step).items()})
 
 
 def message(step: int, tracks: LocalTracks) -> Message:
     return Message("rsu", step, {key: t.estimate for key, t in tracks.items()},
-                   shapely.union_all(list(views(step).values())),
+                   R(shapely.union_all(list(views(step).values()))),
                    frozenset(key for key, t in tracks.items() if t.detected), False,
                    tracks.ended, tracks.ended_since)
 
@@ -94,7 +97,7 @@ def test_a_track_that_joins_no_detection_ends_and_is_listed_while_kept():
     hidden beyond the view's edge ends END_AFTER_STEPS steps after it split off.)"""
     rng = np.random.default_rng(3)
     model = motion_model()
-    observer = AnonymousNodeObserver("rsu", model, SETTINGS)
+    observer = AnonymousNodeObserver("rsu", model, SETTINGS, K)
     last_seen, ends = None, []
     for k, position in enumerate(walk(rng, 120)):
         tracks = observer.step(k, scan(rng, k, position))
@@ -119,10 +122,10 @@ def test_the_vehicle_holds_a_handed_over_pedestrian_in_its_unobserved_area(laten
     step; without the handover it is in neither at some step (what the test would catch)."""
     rng = np.random.default_rng(5)
     model = motion_model()
-    observer = AnonymousNodeObserver("rsu", model, SETTINGS)
+    observer = AnonymousNodeObserver("rsu", model, SETTINGS, K)
     link = V2XLink(V2X(latency_steps=latency), np.random.default_rng(0))
-    handed = UnobservedArea(SIDEWALK, model, latency)
-    without = UnobservedArea(SIDEWALK, model, latency)
+    handed = UnobservedArea(R(SIDEWALK), model, latency, K)
+    without = UnobservedArea(R(SIDEWALK), model, latency, K)
     missed = 0
     for k, position in enumerate(walk(rng, 200)):
         tracks = observer.step(k, scan(rng, k, position))
@@ -137,8 +140,8 @@ def test_the_vehicle_holds_a_handed_over_pedestrian_in_its_unobserved_area(laten
         estimates = [z for by_sender in shared.estimates.values() for z in by_sender.values()]
         point = shapely.Point(position)
         in_track = held(model, estimates, position)
-        assert in_track or unobserved.distance(point) <= 1e-7, k
-        missed += not (in_track or bare.distance(point) <= 1e-7)
+        assert in_track or unobserved.shape.distance(point) <= 1e-7, k
+        missed += not (in_track or bare.shape.distance(point) <= 1e-7)
     assert missed > 0
 
 
@@ -147,19 +150,19 @@ def test_a_new_newest_message_hands_over_what_it_lists_or_everything_kept():
     does not list every step since, every track of the kept one too; a first message none."""
     link = V2XLink(V2X(latency_steps=0), np.random.default_rng(0))
     kept, listed, older = (Zonotope(np.full(2, float(i)), np.eye(2)) for i in range(3))
-    link.send(Message("rsu", 3, {"rsu:0": kept}, VIEW,
+    link.send(Message("rsu", 3, {"rsu:0": kept}, R(VIEW),
                       ended=(EndedTrack(2, older),), ended_since=0), 0.0)
     link.deliver(3)
     assert link.take_ended() == []
-    link.send(Message("rsu", 5, {}, VIEW, ended=(EndedTrack(2, older), EndedTrack(4, listed)),
+    link.send(Message("rsu", 5, {}, R(VIEW), ended=(EndedTrack(2, older), EndedTrack(4, listed)),
                       ended_since=1), 0.0)
     link.deliver(5)
     assert [(t.step, t.estimate) for t in link.take_ended()] == [(4, listed)]
-    link.send(Message("rsu", 9, {}, VIEW, ended=(), ended_since=7), 0.0)
+    link.send(Message("rsu", 9, {}, R(VIEW), ended=(), ended_since=7), 0.0)
     link.deliver(9)
     assert link.take_ended() == []  # steps 6-8 unlisted, but message 5 held no track
-    link.send(Message("rsu", 10, {"rsu:1": kept}, VIEW, ended_since=10), 0.0)
-    link.send(Message("rsu", 14, {}, VIEW, ended=(EndedTrack(13, listed),), ended_since=12),
+    link.send(Message("rsu", 10, {"rsu:1": kept}, R(VIEW), ended_since=10), 0.0)
+    link.send(Message("rsu", 14, {}, R(VIEW), ended=(EndedTrack(13, listed),), ended_since=12),
               0.0)
     link.deliver(14)
     assert [(t.step, t.estimate) for t in link.take_ended()] == [(13, listed), (10, kept)]

@@ -20,7 +20,6 @@ from sse_cosim.estimation.association import (
     AnonymousDetection,
     LocalTrack,
     NodeTracks,
-    _polygon,
     associate,
     associate_nodes,
 )
@@ -30,6 +29,8 @@ from sse_cosim.estimation.observer import AnonymousNodeObserver, EstimatorSettin
 from sse_cosim.estimation.occupancy import OccupancyTracker
 from sse_cosim.estimation.v2x import Message, V2XLink
 from sse_cosim.pipeline.stages import RefinedRegions, detected_now
+from sse_cosim.regions import PolygonRegion as R
+from sse_cosim.regions import kind
 from sse_cosim.scenario.model import V2X, Estimator
 from sse_cosim.sets import Strips, Zonotope
 
@@ -37,6 +38,7 @@ DT = 0.5
 SPEED = 1.5  # m/s: at most 0.75 m per step
 NOISE = 0.3  # m: strip half-width
 SETTINGS = EstimatorSettings("enclose", "girard", 8)
+K = kind("polygon")
 
 
 def fusion(sets):
@@ -88,7 +90,7 @@ class Node:
         self.seen |= {i for i, p in enumerate(observed)
                       if any(s.region.contains(Point(p)) for s in self.sensors)}
         result = associate(self.model, SETTINGS, self.tracks, found,
-                           {s.name: s.region for s in self.sensors}, k, self.next_id)
+                           {s.name: R(s.region) for s in self.sensors}, k, self.next_id, K)
         self.tracks, self.next_id = result.tracks, result.next_id
         self.most_tracks = max(self.most_tracks, len(self.tracks))
 
@@ -162,8 +164,8 @@ def test_fusion_across_nodes_keeps_every_detected_pedestrian(seed, people):
         for node in nodes:
             node.step(rng, k, path)
         fused = associate_nodes(
-            [NodeTracks(name, {t.track_id: t.estimate for t in node.tracks}, node.visible)
-             for name, node in zip("ab", nodes, strict=True)], model, fusion)
+            [NodeTracks(name, {t.track_id: t.estimate for t in node.tracks}, R(node.visible))
+             for name, node in zip("ab", nodes, strict=True)], model, fusion, K)
         sources = sorted(s for f in fused for s in f.sources)
         assert sources == sorted((name, t.track_id) for name, node in zip("ab", nodes,
                                                                           strict=True)
@@ -229,15 +231,15 @@ def test_pedestrian_hidden_then_reappearing():
     assert model.position(holding[0].estimate).volume() < (2 * NOISE) ** 2 * 2
     for track in final:
         if track is not holding[0]:  # the occluded box's set, nothing visible
-            assert occluder.buffer(1e-5).covers(_polygon(track.estimate))
+            assert occluder.buffer(1e-5).covers(K.convex_outer(track.estimate.vertices()).shape)
 
 
 def test_two_sensors_seeing_the_same_person_start_one_track():
     model = motion_model()
     rng = np.random.default_rng(3)
     found = detections(rng, np.array([[1.0, 1.0]]), [WIDE, Sensor("other", WIDE.region)])
-    result = associate(model, SETTINGS, (), found, {"wide": WIDE.region,
-                                                    "other": WIDE.region}, 0, 0)
+    result = associate(model, SETTINGS, (), found, {"wide": R(WIDE.region),
+                                                    "other": R(WIDE.region)}, 0, 0, K)
     assert len(result.tracks) == 1 and result.tracks[0].joined == (0, 1)
     track = result.tracks[0].estimate
     assert track.volume() < min(model.initial_set(model.path_strips(d.strips), "enclose")
@@ -286,9 +288,9 @@ def test_nodes_fuse_only_certain_pairs():
     b.step(rng, 2, alone)
     a.step(rng, 2, np.vstack([alone, close]))
     fused = associate_nodes([NodeTracks("a", {t.track_id: t.estimate for t in a.tracks},
-                                        a.visible),
+                                        R(a.visible)),
                              NodeTracks("b", {t.track_id: t.estimate for t in b.tracks},
-                                        b.visible)], model, fusion)
+                                        R(b.visible))], model, fusion, K)
     pairs = [f for f in fused if len(f.sources) == 2]
     assert len(pairs) == 1 and covered(model, [pairs[0].estimate], alone[0])
     assert all(len(f.sources) == 1 for f in fused if f is not pairs[0])
@@ -305,7 +307,8 @@ def test_tracks_that_claim_the_same_pedestrian_both_keep_it():
               LocalTrack(1, Zonotope(np.array([0.3, 0.0]), 0.5 * np.eye(2)), 0, True))
     found = detections(np.random.default_rng(0), np.zeros((1, 2)),
                        [Sensor("left", left), Sensor("right", right)])
-    result = associate(model, SETTINGS, tracks, found, {"left": left, "right": right}, 0, 2)
+    result = associate(model, SETTINGS, tracks, found, {"left": R(left), "right": R(right)}, 0, 2,
+                       K)
     assert [t.track_id for t in result.tracks if covered(model, [t.estimate], np.zeros(2))] \
         == [0, 1]
 
@@ -315,7 +318,7 @@ def test_near_duplicate_tracks_merge_into_a_set_that_covers_both():
     first = Zonotope(np.array([0.0, 0.0]), 0.5 * np.eye(2))
     second = Zonotope(np.array([0.01, 0.0]), 0.5 * np.eye(2))
     tracks = (LocalTrack(0, first, 0, True), LocalTrack(1, second, 0, False))
-    result = associate(model, SETTINGS, tracks, [], {}, 0, 2)
+    result = associate(model, SETTINGS, tracks, [], {}, 0, 2, K)
     assert len(result.tracks) == 1 and result.tracks[0].occupied
     merged = result.tracks[0].estimate
     assert merged.contains(np.vstack([first.vertices(), second.vertices()]), tol=1e-9).all()
@@ -327,10 +330,10 @@ def test_overlapping_tracks_of_pedestrians_the_other_node_cannot_see_are_kept_ap
     model = motion_model()
     p1, p2 = np.array([0.0, 0.0]), np.array([0.6, 0.0])
     a = NodeTracks("a", {0: Zonotope(np.array([0.25, 0.0]), 0.3 * np.eye(2))},
-                   Point(p1).buffer(0.2))
+                   R(Point(p1).buffer(0.2)))
     b = NodeTracks("b", {0: Zonotope(np.array([0.35, 0.0]), 0.3 * np.eye(2))},
-                   Point(p2).buffer(0.2))
-    fused = associate_nodes([a, b], model, fusion)
+                   R(Point(p2).buffer(0.2)))
+    fused = associate_nodes([a, b], model, fusion, K)
     assert sorted(f.sources for f in fused) == [(("a", 0),), (("b", 0),)]
     assert all(covered(model, [f.estimate for f in fused], p) for p in (p1, p2))
 
@@ -340,14 +343,14 @@ def test_a_track_is_not_fused_with_a_larger_track_that_holds_someone_else():
     b's also holds P2, whom a cannot see (the certain pair must hold both ways)."""
     model = motion_model()
     p1, p2 = np.array([0.0, 0.0]), np.array([1.0, 0.0])
-    a = NodeTracks("a", {0: Zonotope(p1, 0.3 * np.eye(2))}, box(-3, -3, 0.7, 3))
+    a = NodeTracks("a", {0: Zonotope(p1, 0.3 * np.eye(2))}, R(box(-3, -3, 0.7, 3)))
     b = NodeTracks("b", {0: Zonotope(np.array([0.5, 0.0]), np.diag([0.9, 0.5]))},
-                   box(-3, -3, 3, 3))
-    fused = associate_nodes([a, b], model, fusion)
+                   R(box(-3, -3, 3, 3)))
+    fused = associate_nodes([a, b], model, fusion, K)
     assert sorted(f.sources for f in fused) == [(("a", 0),), (("b", 0),)]
     assert all(covered(model, [f.estimate for f in fused], p) for p in (p1, p2))
-    b_alone = NodeTracks("b", {0: Zonotope(p1, 0.35 * np.eye(2))}, box(-3, -3, 3, 3))
-    assert [f.sources for f in associate_nodes([a, b_alone], model, fusion)] \
+    b_alone = NodeTracks("b", {0: Zonotope(p1, 0.35 * np.eye(2))}, R(box(-3, -3, 3, 3)))
+    assert [f.sources for f in associate_nodes([a, b_alone], model, fusion, K)] \
         == [(("a", 0), ("b", 0))]
 
 
@@ -356,7 +359,7 @@ def test_anonymous_node_observer_keeps_every_pedestrian(state_model):
     config = Estimator(state_model=state_model, max_pedestrian_speed_mps=SPEED,
                        max_velocity_change_mps=2 * SPEED, position_jitter_m=0.3)
     model = motion.motion_model(config, DT)
-    observer = AnonymousNodeObserver("car", model, SETTINGS)
+    observer = AnonymousNodeObserver("car", model, SETTINGS, K)
     rng = np.random.default_rng(4)
     sensors = [Sensor("front", Point(-1, 0).buffer(3.0)), Sensor("side", box(-1, -20, 20, 20))]
     paths = crossing_walks(rng, 3, 14)
@@ -365,7 +368,7 @@ def test_anonymous_node_observer_keeps_every_pedestrian(state_model):
         seen |= {i for i, p in enumerate(path)
                  if any(s.region.contains(Point(p)) for s in sensors)}
         tracks = observer.step(k, NodeScan(tuple(detections(rng, path, sensors)),
-                                           {s.name: s.region for s in sensors}))
+                                           {s.name: R(s.region) for s in sensors}))
         assert all(key == t.person_id and key.startswith("car:") and t.step == k
                    for key, t in tracks.items())
         for i in seen:
@@ -378,7 +381,7 @@ def test_a_track_off_the_walkable_ground_ends():
     ground = box(-5, -1, 5, 1)
     tracks = (LocalTrack(0, Zonotope(np.array([0.0, 0.0]), 0.3 * np.eye(2)), 0, True),
               LocalTrack(1, Zonotope(np.array([0.0, 4.0]), 0.3 * np.eye(2)), 0, True))
-    result = associate(model, SETTINGS, tracks, [], {}, 1, 2, ground)
+    result = associate(model, SETTINGS, tracks, [], {}, 1, 2, K, R(ground))
     assert [t.track_id for t in result.tracks] == [0]
 
 
@@ -397,11 +400,11 @@ def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined
     model = motion_model()
     sensors = {"bus": [random_sensor(rng, "bus_a"), random_sensor(rng, "bus_b")],
                "rsu": [random_sensor(rng, "rsu_a")]}
-    observers = {node: AnonymousNodeObserver(node, model, SETTINGS) for node in sensors}
-    views = {node: unary_union([s.region for s in mine]) for node, mine in sensors.items()}
-    centre = AnonymousFusionCentre(model, SETTINGS, "enclose", ["bus_a", "bus_b"], "bus")
+    observers = {node: AnonymousNodeObserver(node, model, SETTINGS, K) for node in sensors}
+    views = {node: R(unary_union([s.region for s in mine])) for node, mine in sensors.items()}
+    centre = AnonymousFusionCentre(model, SETTINGS, "enclose", ["bus_a", "bus_b"], "bus", K)
     link = V2XLink(V2X(latency_steps=1), np.random.default_rng(0))
-    refined = RefinedRegions(OccupancyTracker(model), history=False)
+    refined = RefinedRegions(OccupancyTracker(model, K), history=False)
     first_seen: dict[str, dict[int, int]] = {node: {} for node in sensors}
     handed: list[Zonotope] = []
     for k, positions in enumerate(crossing_walks(rng, people, 12)):
@@ -411,7 +414,7 @@ def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined
                 if any(s.region.contains(Point(p)) for s in mine):
                     first_seen[node].setdefault(i, k)
             scan = NodeScan(tuple(detections(rng, positions, mine)),
-                            {s.name: s.region for s in mine})
+                            {s.name: R(s.region) for s in mine})
             tracks[node] = observers[node].step(k, scan)
         link.send(Message("rsu", k, {key: t.estimate for key, t in tracks["rsu"].items()},
                           views["rsu"],
@@ -438,7 +441,8 @@ def test_a_vehicle_holds_every_pedestrian_it_knows_of_in_a_fused_set_and_refined
             if covered(model, handed, positions[i]):
                 continue
             assert covered(model, estimate.fused.values(), positions[i]), (k, i)
-            assert any(r.distance(Point(positions[i])) <= 1e-7 for r in possible.values()), (k, i)
+            assert any(r.shape.distance(Point(positions[i])) <= 1e-7
+                       for r in possible.values()), (k, i)
 
 
 @pytest.mark.parametrize(("seed", "people"), [(9, 3), (94, 2), (204, 2)])

@@ -14,6 +14,8 @@ from shapely.geometry.base import BaseGeometry
 from sse_cosim.estimation.association import AnonymousDetection, LocalTrack, associate
 from sse_cosim.estimation.motion import MotionModel, motion_model
 from sse_cosim.estimation.observer import EstimatorSettings
+from sse_cosim.regions import PolygonRegion as R
+from sse_cosim.regions import kind
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips
 
@@ -22,6 +24,7 @@ SPEED = 2.5  # m/s, the estimator's bound
 JITTER = 0.3  # m
 NOISE = 1.0  # m: a road-side camera's strip half-width (S3)
 SETTINGS = EstimatorSettings("enclose", "girard", 8)
+K = kind("polygon")
 OCCLUDER = box(0.0, 0.0, 12.0, 2.5)  # a parked truck; the camera's view is all but it
 VIEW = box(-40.0, -40.0, 40.0, 40.0).difference(OCCLUDER)
 
@@ -51,8 +54,8 @@ def run(path: np.ndarray, view: BaseGeometry, seed: int = 0
     next_id, history = 0, []
     for k, p in enumerate(path):
         assert view.contains(Point(p))
-        result = associate(motion, SETTINGS, tracks, [detection(rng, p)], {"cam": view}, k,
-                           next_id)
+        result = associate(motion, SETTINGS, tracks, [detection(rng, p)], {"cam": R(view)}, k,
+                           next_id, K)
         tracks, next_id = result.tracks, result.next_id
         held = [t for t in tracks
                 if bool(motion.position(t.estimate).contains(p, tol=1e-7))]

@@ -15,8 +15,12 @@ import shapely.ops
 from sse_cosim.control.picture import FAN, ConflictZone, Source, _arrivals
 from sse_cosim.estimation.motion import Separation, bounded_acceleration, motion_model
 from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver
+from sse_cosim.regions import PolygonRegion as R
+from sse_cosim.regions import kind
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips, Zonotope
+
+K = kind("polygon")
 
 DT = 0.1
 V_MAX, A_MAX = 2.5, 3.2
@@ -82,8 +86,8 @@ def test_the_arrival_is_never_later_than_a_fastest_walk(seed):
             continue
         speed, angle = rng.uniform(0, V_MAX), rng.uniform(0, 2 * math.pi)
         velocity = speed * np.array([math.cos(angle), math.sin(angle)])
-        source = Source(shapely.Point(start).buffer(1e-6), state(start, velocity, 1e-6, 0.05))
-        arrival = _arrivals([source], [ConflictZone(zone, 0, 0, math.inf)], m)[0]
+        source = Source(R(shapely.Point(start).buffer(1e-6)), state(start, velocity, 1e-6, 0.05))
+        arrival = _arrivals([source], [ConflictZone(R(zone), 0, 0, math.inf)], m, K)[0]
         assert arrival <= fastest_arrival_steps(start, velocity, zone) * DT + 1e-9
 
 
@@ -92,11 +96,11 @@ def test_standing_or_walking_along_arrives_later_than_running_at_the_zone():
     says; standing, walking east along the kerb or walking away south it needs longer, in that
     order; without a state it is the speed bound's worst case."""
     m = model(jitter=0.2)
-    zone = ConflictZone(shapely.box(-5, 0, 5, 3), 0, 0, math.inf)
-    region = shapely.Point(0, -3).buffer(0.3)  # 2.7 m from the zone
+    zone = ConflictZone(R(shapely.box(-5, 0, 5, 3)), 0, 0, math.inf)
+    region = R(shapely.Point(0, -3).buffer(0.3))  # 2.7 m from the zone
     def arrival(velocity):
         known = None if velocity is None else state((0, -3), velocity, 0.3, 0.1)
-        return _arrivals([Source(region, known)], [zone], m)[0]
+        return _arrivals([Source(region, known)], [zone], m, K)[0]
     worst = (2.7 - 0.4) / V_MAX
     assert arrival(None) == pytest.approx(worst)
     assert arrival((0, V_MAX)) == pytest.approx(worst, abs=1e-9)

@@ -6,8 +6,11 @@ import shapely
 
 from sse_cosim.estimation.kalman import KalmanTracker, initial, update
 from sse_cosim.estimation.motion import motion_model
+from sse_cosim.regions import kind
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips
+
+K = kind("polygon")
 
 
 def test_first_two_strips_give_their_exact_gaussian():
@@ -21,7 +24,7 @@ def test_first_two_strips_give_their_exact_gaussian():
 
 def test_ellipse_polygon_circumscribes_the_three_sigma_ellipse():
     state = initial(Strips(np.eye(2), [0.0, 0.0], [0.9, 0.3]), 0)
-    polygon = state.ellipse()
+    polygon = shapely.Polygon(state.ellipse())
     for angle in np.linspace(0, 2 * np.pi, 50):
         point = np.array([0.9 * np.cos(angle), 0.3 * np.sin(angle)])  # on the 3-sigma ellipse
         assert polygon.covers(shapely.Point(point))
@@ -36,7 +39,7 @@ def test_tracker_predicts_and_updates_and_the_option_exists():
     first = tracker.tracks["p"].cov.copy()
     tracker.step(3, {})
     assert np.all(np.diag(tracker.tracks["p"].cov) > np.diag(first))
-    assert tracker.regions()["p"].covers(shapely.Point(5.0, 1.0))
+    assert tracker.regions(K)["p"].shape.covers(shapely.Point(5.0, 1.0))
     assert Estimator().filter == "zonotope" and Estimator(filter="kalman").filter == "kalman"
     with pytest.raises(ValueError):
         Estimator(filter="particle")

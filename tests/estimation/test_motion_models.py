@@ -14,8 +14,12 @@ from pydantic import ValidationError
 from sse_cosim.control.picture import ConflictZone, Source, _arrivals
 from sse_cosim.estimation.motion import MODELS, LinearModel, motion_model
 from sse_cosim.estimation.occupancy import UnobservedArea
+from sse_cosim.regions import PolygonRegion as R
+from sse_cosim.regions import kind
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Zonotope
+
+K = kind("polygon")
 
 DT = 0.1
 SPEED, JITTER = 2.5, 0.3
@@ -80,9 +84,9 @@ def build_slow(settings: Estimator, step_length: float, jitter: float) -> Slow:
 def regrown(model: LinearModel) -> float:
     """The unobserved area (m²) of a 40 m sidewalk 3 steps after its first half was seen."""
     walkable = shapely.box(0, 0, 40, 2)
-    area = UnobservedArea(walkable, model, latency_steps=0)
-    area.update(0, shapely.box(0, -1, 20, 3), [])
-    return area.update(3, shapely.Polygon(), []).area
+    area = UnobservedArea(R(walkable), model, latency_steps=0, kind=K)
+    area.update(0, R(shapely.box(0, -1, 20, 3)), [])
+    return area.update(3, K.empty(), []).area
 
 
 def test_a_registry_entry_is_all_a_new_model_needs(monkeypatch):
@@ -97,7 +101,7 @@ def test_a_registry_entry_is_all_a_new_model_needs(monkeypatch):
     assert regrown(slow) == pytest.approx(regrown(half), abs=1e-9)
     # 3 steps: it regrows 0.375 m less into the seen half (x 2 m of sidewalk, 0.81 m²)
     assert regrown(slow) < regrown(position) - 0.7
-    zone = ConflictZone(shapely.box(10, 0, 12, 2), 0.0, 0.0, np.inf)
-    source = Source(shapely.box(0, 0, 1, 2))
-    assert _arrivals([source], [zone], slow)[0] == pytest.approx(
-        2.0 * _arrivals([source], [zone], position)[0])
+    zone = ConflictZone(R(shapely.box(10, 0, 12, 2)), 0.0, 0.0, np.inf)
+    source = Source(R(shapely.box(0, 0, 1, 2)))
+    assert _arrivals([source], [zone], slow, K)[0] == pytest.approx(
+        2.0 * _arrivals([source], [zone], position, K)[0])

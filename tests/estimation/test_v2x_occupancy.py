@@ -12,17 +12,27 @@ from sse_cosim.estimation.occupancy import (
     OccupancyTracker,
     TrackedWindow,
     UnobservedArea,
-    dilate,
 )
 from sse_cosim.estimation.v2x import Message, V2XLink
+from sse_cosim.regions import PolygonRegion, kind
 from sse_cosim.scenario.model import V2X, Estimator
 from sse_cosim.sets import Zonotope
 
 DT = 0.1
+K = kind("polygon")
+
+
+def R(shape: shapely.Geometry) -> PolygonRegion:
+    return PolygonRegion(shape)
+
+
+def dilate(shape: shapely.Geometry, distance: float) -> shapely.Geometry:
+    return R(shape).dilate(distance).shape
 
 
 def message(sender: str, step: int) -> Message:
-    return Message(sender, step, {"ped": Zonotope(np.zeros(2), np.eye(2))}, shapely.box(0, 0, 1, 1))
+    return Message(sender, step, {"ped": Zonotope(np.zeros(2), np.eye(2))},
+                   R(shapely.box(0, 0, 1, 1)))
 
 
 def test_latency_delays_delivery_and_newest_message_wins():
@@ -55,7 +65,7 @@ def test_stale_estimates_are_predicted_to_now():
 def test_the_picture_names_senders_whose_newest_message_reports_an_inconsistency():
     model = motion_model(Estimator(position_jitter_m=0.3), DT)
     link = V2XLink(V2X(latency_steps=0), np.random.default_rng(0))
-    link.send(Message("car", 0, {}, shapely.Polygon(), inconsistent=True), 5.0)
+    link.send(Message("car", 0, {}, K.empty(), inconsistent=True), 5.0)
     link.send(message("rsu1", 0), 5.0)
     link.deliver(0)
     assert link.picture(0, model).inconsistent == {"car"}
@@ -66,15 +76,15 @@ def test_the_picture_names_senders_whose_newest_message_reports_an_inconsistency
 
 def test_a_tracker_that_forgets_is_a_fresh_one():
     model = motion_model(Estimator(position_jitter_m=0.3), DT)
-    walkable = shapely.box(-20, -20, 20, 20)
-    used, fresh = OccupancyTracker(model, walkable), OccupancyTracker(model, walkable)
+    walkable = R(shapely.box(-20, -20, 20, 20))
+    used, fresh = OccupancyTracker(model, K, walkable), OccupancyTracker(model, K, walkable)
     small = {"ped": Zonotope(np.zeros(2), np.eye(2) * 0.5)}
     large = {"ped": Zonotope(np.zeros(2), np.eye(2) * 3.0)}
     used.update(0, small, {})
     assert used.update(1, large, {})["ped"].area < fresh.update(1, large, {})["ped"].area
     used.forget()
-    assert used.update(2, large, {})["ped"].equals(OccupancyTracker(model, walkable)
-                                                   .update(2, large, {})["ped"])
+    assert used.update(2, large, {})["ped"].shape.equals(OccupancyTracker(model, K, walkable)
+                                                         .update(2, large, {})["ped"].shape)
 
 
 def test_dilate_circumscribes_the_disc():
@@ -88,12 +98,12 @@ def test_dilate_circumscribes_the_disc():
 def test_unobserved_area_is_cleared_by_views_and_grows_back_from_unseen_ground():
     model = motion_model(Estimator(position_jitter_m=0.0, max_pedestrian_speed_mps=1.0),
                          DT)
-    walkable = shapely.box(0, 0, 20, 2)
-    area = UnobservedArea(walkable, model, latency_steps=0)
-    seen = shapely.box(0, -1, 10, 3)
+    walkable = R(shapely.box(0, 0, 20, 2))
+    area = UnobservedArea(walkable, model, latency_steps=0, kind=K)
+    seen = R(shapely.box(0, -1, 10, 3))
     first = area.update(0, seen, [])
     assert abs(first.area - 20.0) < 1e-6  # the half in view is clear
-    regrown = area.update(1, shapely.Polygon(), [])
+    regrown = area.update(1, K.empty(), [])
     # the cleared half regrows from the unseen half at 1 m/s: 0.1 m per step (+ polygon slack)
     assert 20.0 + 2 * 0.1 - 1e-6 <= regrown.area <= 2 * (10.0 + 0.1 * 1.1)
 
@@ -101,21 +111,21 @@ def test_unobserved_area_is_cleared_by_views_and_grows_back_from_unseen_ground()
 def test_shared_views_apply_at_the_step_they_were_taken():
     model = motion_model(Estimator(position_jitter_m=0.0, max_pedestrian_speed_mps=1.0),
                          DT)
-    walkable = shapely.box(0, 0, 20, 2)
-    area = UnobservedArea(walkable, model, latency_steps=2)
+    walkable = R(shapely.box(0, 0, 20, 2))
+    area = UnobservedArea(walkable, model, latency_steps=2, kind=K)
     for step in range(2):
-        area.update(step, shapely.Polygon(), [])
+        area.update(step, K.empty(), [])
     # the view taken at step 0 arrives at step 2: carried two steps forward, not eroded
-    now = area.update(2, shapely.Polygon(), [shapely.box(-1, -1, 21, 3)])
+    now = area.update(2, K.empty(), [R(shapely.box(-1, -1, 21, 3))])
     assert now.is_empty
 
 
 def test_known_pedestrian_region_excludes_clear_regions_and_keeps_the_truth():
     model = motion_model(Estimator(position_jitter_m=0.3), DT)
-    tracker = OccupancyTracker(model)
+    tracker = OccupancyTracker(model, K)
     fused = {"ped": Zonotope(np.array([5.0, 0.0]), np.eye(2) * 3.0)}
-    view = shapely.box(0, -5, 4, 5)  # saw x < 4 without the pedestrian
-    region = tracker.update(0, fused, {"ped": [ClearRegion(view, 0)]})["ped"]
+    view = R(shapely.box(0, -5, 4, 5))  # saw x < 4 without the pedestrian
+    region = tracker.update(0, fused, {"ped": [ClearRegion(view, 0)]})["ped"].shape
     assert not region.intersects(shapely.box(0, -2, 3.5, 2))
     assert region.covers(shapely.Point(6.0, 1.0))
 
@@ -128,17 +138,17 @@ def test_windowed_unobserved_area_keeps_everything_the_full_tracker_has_inside_t
     window = shapely.box(24, -6, 36, 8)
     rng = np.random.default_rng(7)
     for latency in (0, 2):
-        full = UnobservedArea(walkable, model, latency)
-        windowed = UnobservedArea(walkable, model, latency, window=window)
+        full = UnobservedArea(R(walkable), model, latency, K)
+        windowed = UnobservedArea(R(walkable), model, latency, K, window=R(window))
         for step in range(40):
             x, y = rng.uniform(0, 60), rng.uniform(-8, 10)
-            own = shapely.box(x, y, x + rng.uniform(2, 30), y + rng.uniform(2, 15))
-            shared = [shapely.box(20, -10, 40, 12)] if rng.random() < 0.5 else []
-            expected = full.update(step, own, shared).intersection(window)
-            got = windowed.update(step, own, shared)
+            own = R(shapely.box(x, y, x + rng.uniform(2, 30), y + rng.uniform(2, 15)))
+            shared = [R(shapely.box(20, -10, 40, 12))] if rng.random() < 0.5 else []
+            expected = full.update(step, own, shared).shape.intersection(window)
+            got = windowed.update(step, own, shared).shape
             assert expected.difference(got.buffer(1e-7)).area < 1e-9, (latency, step)
-        everything = shapely.box(-10, -20, 70, 20)
-        cleared = windowed.update(40 + latency, everything, [everything])
+        everything = R(shapely.box(-10, -20, 70, 20))
+        cleared = windowed.update(40 + latency, everything, [everything]).shape
         # seen everywhere now (latency 0): only paths just entering across the rim remain
         assert latency or cleared.intersection(window.buffer(-1.5)).is_empty
 
@@ -151,15 +161,15 @@ def test_the_kept_move_of_the_base_is_the_move_computed_afresh():
     window = shapely.box(24, -6, 36, 8)
     rng = np.random.default_rng(11)
     for latency in (1, 2):
-        kept = UnobservedArea(walkable, model, latency, window=window)
-        afresh = UnobservedArea(walkable, model, latency, window=window)
+        kept = UnobservedArea(R(walkable), model, latency, K, window=R(window))
+        afresh = UnobservedArea(R(walkable), model, latency, K, window=R(window))
         for step in range(30):
             x, y = rng.uniform(0, 60), rng.uniform(-8, 10)
-            own = shapely.box(x, y, x + rng.uniform(2, 30), y + rng.uniform(2, 15))
-            shared = [shapely.box(20, -10, 40, 12)] if rng.random() < 0.5 else []
+            own = R(shapely.box(x, y, x + rng.uniform(2, 30), y + rng.uniform(2, 15)))
+            shared = [R(shapely.box(20, -10, 40, 12))] if rng.random() < 0.5 else []
             afresh._base_moved = None
-            assert kept.update(step, own, shared).equals_exact(
-                afresh.update(step, own, shared), 0.0), (latency, step)
+            assert kept.update(step, own, shared).shape.equals_exact(
+                afresh.update(step, own, shared).shape, 0.0), (latency, step)
         assert kept._base_moved is not None
 
 
@@ -176,8 +186,8 @@ def test_a_known_region_kept_in_the_window_holds_the_pedestrian_who_leaves_and_c
     step_length = model.max_speed * DT
     for seed in range(4):
         rng = np.random.default_rng(seed)
-        windowed = OccupancyTracker(model, walkable, window)
-        whole = OccupancyTracker(model, walkable)
+        windowed = OccupancyTracker(model, K, R(walkable), R(window))
+        whole = OccupancyTracker(model, K, R(walkable))
         truth, estimate, heading, largest = np.array([30.0, 1.5]), None, 1.0, 0.0
         for step in range(700):
             if truth[0] > 75.0:
@@ -195,8 +205,9 @@ def test_a_known_region_kept_in_the_window_holds_the_pedestrian_who_leaves_and_c
                 continue  # a step without an update: the next one moves two steps
             x0 = rng.uniform(0, 110)
             views = [shapely.box(x0, -1, x0 + rng.uniform(2, 12), 4)]
-            clear = [ClearRegion(v, 0) for v in views if v.distance(shapely.Point(truth)) > 1e-3]
-            region = windowed.update(step, {"p": estimate}, {"p": clear})["p"]
+            clear = [ClearRegion(R(v), 0) for v in views
+                     if v.distance(shapely.Point(truth)) > 1e-3]
+            region = windowed.update(step, {"p": estimate}, {"p": clear})["p"].shape
             largest = max(largest, whole.update(step, {"p": estimate}, {"p": clear})["p"].area)
             point = shapely.Point(truth)
             assert region.buffer(1e-7).covers(point) or not window.contains(point), (seed, step)
@@ -215,20 +226,21 @@ def test_the_inflow_holds_every_path_that_enters_the_bounds_from_outside():
     model = motion_model(Estimator(position_jitter_m=0.3), DT)
     walkable = shapely.union(shapely.box(0, 0, 60, 2), shapely.box(28, -8, 32, 10))
     window = shapely.box(24, -6, 36, 8)
-    tracked = TrackedWindow(window, walkable, model)
+    tracked = TrackedWindow(R(window), R(walkable), model, K)
     ground = dilate(walkable, model.jitter)
+    bounds = tracked.tracked.shape
     rng = np.random.default_rng(5)
     for steps in (1, 2, 5):
-        inflow = tracked.inflow(steps).buffer(1e-7)
+        inflow = tracked.inflow(steps).shape.buffer(1e-7)
         entered = 0
-        x0, y0, x1, y1 = tracked.bounds.buffer(model.reach_m(steps)).bounds
+        x0, y0, x1, y1 = bounds.buffer(model.reach_m(steps)).bounds
         for _ in range(20000):
             start = shapely.Point(rng.uniform(x0, x1), rng.uniform(y0, y1))
-            if not ground.contains(start) or tracked.bounds.contains(start):
+            if not ground.contains(start) or bounds.contains(start):
                 continue
             angle, length = rng.uniform(0, 2 * np.pi), rng.uniform(0, model.reach_m(steps))
             end = shapely.Point(start.x + length * np.cos(angle), start.y + length * np.sin(angle))
-            if tracked.bounds.contains(end):
+            if bounds.contains(end):
                 entered += 1
                 assert inflow.covers(end), (steps, start, end)
         assert entered > 50
@@ -242,9 +254,9 @@ def test_ground_nobody_saw_off_the_walkable_keeps_no_path_alive():
     model = motion_model(Estimator(position_jitter_m=1.0), DT)
     sidewalk, road = shapely.box(-10, -3, 10, 0), shapely.box(-10, 0, 10, 7)
     fused = {"ped": Zonotope(np.array([0.0, -1.5]), np.diag([8.0, 1.5]))}
-    seen = [ClearRegion(shapely.box(-20, -20, 20, 0), 0)]  # the sidewalk side, not the road
-    kept = OccupancyTracker(model, sidewalk).update(0, fused, {"ped": seen})["ped"]
+    seen = [ClearRegion(R(shapely.box(-20, -20, 20, 0)), 0)]  # the sidewalk side, not the road
+    kept = OccupancyTracker(model, K, R(sidewalk)).update(0, fused, {"ped": seen})["ped"].shape
     assert kept.intersection(shapely.box(-5, -3, 5, 0)).is_empty
-    plain = OccupancyTracker(model).update(0, fused, {"ped": seen})["ped"]
+    plain = OccupancyTracker(model, K).update(0, fused, {"ped": seen})["ped"].shape
     assert not plain.intersection(shapely.box(-5, -1, 5, 0)).is_empty
     assert not road.is_empty

@@ -25,8 +25,12 @@ from sse_cosim.estimation.motion import MotionModel, motion_model
 from sse_cosim.estimation.observer import EstimatorSettings, LocalObservers, Track
 from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.v2x import Message, V2XLink
+from sse_cosim.regions import PolygonRegion as R
+from sse_cosim.regions import kind
 from sse_cosim.scenario.model import V2X, Estimator
 from sse_cosim.sets import Strips, Zonotope
+
+K = kind("polygon")
 
 BUS = "bus"  # the automated vehicle's id (its node)
 
@@ -102,7 +106,7 @@ class Harness:
         nodes = sorted({s.node for s in self.sensors.values()} | {BUS})
         observers = LocalObservers.labelled(nodes, self.model, settings)
         link = V2XLink(V2X(latency_steps=self.latency), np.random.default_rng(0))
-        centre = FusionCentre(self.model, settings, "strips", self.sensors, BUS)
+        centre = FusionCentre(self.model, settings, "strips", self.sensors, BUS, K)
         records = []
         for k, p in enumerate(truth):
             detections = self._detections(rng, k, p)
@@ -125,7 +129,7 @@ class Harness:
         estimate = tracks[PED].estimate
         if self.estimate_hook is not None:
             estimate = self.estimate_hook(k, node, estimate)
-        return Message(node, k, {PED: estimate}, shapely.Polygon(), frozenset(seen),
+        return Message(node, k, {PED: estimate}, K.empty(), frozenset(seen),
                        disagrees(tracks.values()))
 
     def _detections(self, rng, k: int, p: np.ndarray) -> dict[str, dict[str, dict]]:
@@ -156,7 +160,7 @@ class Harness:
             near = where + direction * (gap + size / 2 * np.sqrt(2))
             box = shapely.box(*(near - size / 2), *(near + size / 2))
             assert not box.covers(shapely.Point(where))
-            regions.append(ClearRegion(box, age))
+            regions.append(ClearRegion(R(box), age))
         return regions
 
 

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 import shapely
 
-from sse_cosim.estimation.bus_screen import _eroded, contradicted
+from sse_cosim.estimation.bus_screen import contradicted
 from sse_cosim.estimation.motion import motion_model
-from sse_cosim.estimation.occupancy import QUAD_SEGMENTS, ClearRegion
+from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.vote import (
     READMIT_STEPS,
     Probation,
@@ -17,11 +17,14 @@ from sse_cosim.estimation.vote import (
     largest_consistent_groups,
     vote,
 )
+from sse_cosim.regions import PolygonRegion as R
+from sse_cosim.regions import kind
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Zonotope
 
 # jitter 0.3 m; reach 2.5 m/s x 0.1 s = 0.25 m per step
 MODEL = motion_model(Estimator(max_pedestrian_speed_mps=2.5, position_jitter_m=0.3), 0.1)
+K = kind("polygon")
 
 
 def box(x: float, y: float, half: float = 1.0) -> Zonotope:
@@ -89,25 +92,23 @@ def test_negative_information_never_contradicts_a_set_that_holds_the_path(gap):
         size = rng.uniform(2, 20)
         centre = p + direction * (gap + size / np.sqrt(2))
         region = shapely.box(*(centre - size / 2), *(centre + size / 2))
-        assert not contradicted(estimate, [ClearRegion(region, 0)], MODEL)
+        assert not contradicted(estimate, [ClearRegion(R(region), 0)], MODEL, K)
 
 
 def test_a_set_inside_a_clear_view_is_contradicted():
-    view = shapely.box(-10, -10, 10, 10)
-    assert contradicted(box(0, 0), [ClearRegion(view, 0)], MODEL)
-    assert not contradicted(box(9.5, 0), [ClearRegion(view, 0)], MODEL)
-    assert not contradicted(box(0, 0), [ClearRegion(view, 40)], MODEL)  # seen long ago
+    view = R(shapely.box(-10, -10, 10, 10))
+    assert contradicted(box(0, 0), [ClearRegion(view, 0)], MODEL, K)
+    assert not contradicted(box(9.5, 0), [ClearRegion(view, 0)], MODEL, K)
+    assert not contradicted(box(0, 0), [ClearRegion(view, 40)], MODEL, K)  # seen long ago
 
 
-def test_kept_erosions_are_the_erosion_of_that_region_at_that_distance():
-    # _eroded keeps the newest erosions by region identity and distance: a kept one is the
-    # buffer computed afresh, and an equal region that is another object, or another
-    # distance, is not served a kept one.
-    view = shapely.box(-10, -10, 10, 10).union(shapely.box(5, 5, 20, 8))
-    first = _eroded(view, 0.7)
-    assert _eroded(view, 0.7) is first
-    assert first.equals_exact(view.buffer(-0.7, quad_segs=QUAD_SEGMENTS), 0.0)
-    other = _eroded(view, 1.2)
-    assert other.equals_exact(view.buffer(-1.2, quad_segs=QUAD_SEGMENTS), 0.0)
-    twin = shapely.box(-10, -10, 10, 10).union(shapely.box(5, 5, 20, 8))
-    assert _eroded(twin, 0.7) is not first
+def test_a_region_keeps_its_erosions():
+    # a region serves the erosion it computed before at the same distance, equal to one
+    # computed afresh; another distance, or an equal region that is another object, computes
+    view = R(shapely.box(-10, -10, 10, 10).union(shapely.box(5, 5, 20, 8)))
+    first = view.erode(0.7)
+    assert view.erode(0.7) is first
+    twin = R(shapely.box(-10, -10, 10, 10).union(shapely.box(5, 5, 20, 8)))
+    assert twin.erode(0.7) is not first
+    assert twin.erode(0.7).shape.equals_exact(first.shape, 0.0)
+    assert view.erode(1.2).area < first.area

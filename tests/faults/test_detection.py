@@ -11,8 +11,12 @@ from sse_cosim.estimation.bus_screen import BusScreener
 from sse_cosim.estimation.motion import motion_model
 from sse_cosim.estimation.occupancy import ClearRegion
 from sse_cosim.estimation.vote import READMIT_STEPS
+from sse_cosim.regions import PolygonRegion as R
+from sse_cosim.regions import kind
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips, Zonotope
+
+K = kind("polygon")
 
 BUS = "bus"  # the automated vehicle's id (its node)
 
@@ -142,10 +146,10 @@ def test_a_claim_inside_a_clear_view_is_dropped_or_kept_in_conflict():
     """A phantom: beside a real claim it is left out; alone it is kept, flagged (it could be
     a real pedestrian placed wrong)."""
     model = motion_model(Estimator(position_jitter_m=0.3), DT)
-    screener = BusScreener(model, BUS)
+    screener = BusScreener(model, K, BUS)
     ghost = Zonotope(np.array([0.0, 0.0]), np.eye(2))
     real = Zonotope(np.array([30.0, 0.0]), np.eye(2))
-    view = [ClearRegion(shapely.box(-10, -10, 10, 10), 1)]
+    view = [ClearRegion(R(shapely.box(-10, -10, 10, 10)), 1)]
     seen = frozenset({"p"})  # rsu1 reports it as detected
     alone = screener.screen({}, {"p": {"rsu1": ghost}}, {"p": view}, seen)
     assert alone.conflicts == {"p": {"rsu1"}} and "p" in alone.received
@@ -156,13 +160,13 @@ def test_a_claim_inside_a_clear_view_is_dropped_or_kept_in_conflict():
 def test_a_pedestrian_nobody_detects_whose_every_set_lies_in_a_clear_view_has_left():
     """SUMO removed it at its destination: no flag, no fused set, no refined region."""
     model = motion_model(Estimator(position_jitter_m=0.3), DT)
-    screener = BusScreener(model, BUS)
+    screener = BusScreener(model, K, BUS)
     ghost = Zonotope(np.array([0.0, 0.0]), np.eye(2))
-    view = [ClearRegion(shapely.box(-10, -10, 10, 10), 0)]
+    view = [ClearRegion(R(shapely.box(-10, -10, 10, 10)), 0)]
     screen = screener.screen({"p": ghost}, {"p": {"rsu1": ghost}}, {"p": view})
     assert screen.gone == {"p"}
     assert not screen.flags() and not screen.own and not screen.received
-    partly = [ClearRegion(shapely.box(-10, -10, 0.5, 10), 0)]  # part of the set is unseen
+    partly = [ClearRegion(R(shapely.box(-10, -10, 0.5, 10)), 0)]  # part of the set is unseen
     assert screener.screen({"p": ghost}, {}, {"p": partly}).gone == frozenset()
 
 

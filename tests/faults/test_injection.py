@@ -11,12 +11,16 @@ import shapely
 from sse_cosim.control.speed import SpeedLevel, fallback_floor
 from sse_cosim.errors import UserError
 from sse_cosim.estimation.motion import motion_model
+from sse_cosim.regions import PolygonRegion as R
+from sse_cosim.regions import kind as region_kind
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.scenario.model import Controller
 from sse_cosim.sensors import SensorObservation, measure, specs_from_scenario
 from sse_cosim.sensors.faults import FaultInjector, FaultLog, FaultStatus, is_active
 from sse_cosim.sets import Zonotope
 from sse_cosim.world.snapshot import PersonState, Pose, Snapshot
+
+K = region_kind("polygon")
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 TRUTH = np.array([200.0, -5.0])
@@ -44,9 +48,9 @@ def observe_at(time: float, truth=TRUTH, seed: int = 0):
     from sse_cosim.sensors.measurement import Detection
 
     detection = Detection("rsu1_cam", "rsu1", time, "pedestrian", strips)
-    view = shapely.box(190, -15, 215, 0)
+    view = R(shapely.box(190, -15, 215, 0))
     obs = SensorObservation("rsu1_cam", "rsu1", time, POSE, {"pedestrian": detection}, view,
-                            shapely.Polygon())
+                            K.empty())
     return snap, {"rsu1_cam": obs}
 
 
@@ -58,7 +62,7 @@ def corrupt(inj: FaultInjector, time: float, truth=TRUTH):
     """(observation before, after the faults, the fault's status) at ``time``."""
     inj.begin_step(time)
     snap, obs = observe_at(time, truth)
-    after = inj.corrupt_observations(snap, obs)["rsu1_cam"]
+    after = inj.corrupt_observations(snap, obs, K)["rsu1_cam"]
     return obs["rsu1_cam"], after, inj.statuses()["sensor.f"]
 
 

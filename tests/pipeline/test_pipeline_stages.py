@@ -18,40 +18,42 @@ from sse_cosim.pipeline.stages import (
     detected_now,
     detections_by_node,
     second_level,
-    union_or_empty,
+    views_by_node,
     views_of,
 )
+from sse_cosim.regions import PolygonRegion as R
+from sse_cosim.regions import kind
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sensors import Detection, SensorObservation
 from sse_cosim.sets import Strips, Zonotope
+from sse_cosim.world.snapshot import Pose
 
 BUS = "bus"  # the automated vehicle's id (its node)
+K = kind("polygon")
 
 DT = 0.1
 STRIPS = Strips(np.eye(2), np.zeros(2), np.ones(2))
 
 
-def observation(sensor: str, node: str, seen: tuple[str, ...], box) -> SensorObservation:
+def observation(sensor: str, node: str, seen: tuple[str, ...], box,
+                pose: Pose | None = None) -> SensorObservation:
     detections = {pid: Detection(sensor, node, 0.0, pid, STRIPS) for pid in seen}
-    return SensorObservation(sensor, node, 0.0, None, detections, shapely.box(*box), None)
+    return SensorObservation(sensor, node, 0.0, pose, detections, R(shapely.box(*box)),
+                             R(shapely.box(box[0], box[1], box[0] + 0.5, box[1] + 0.5)))
 
 
-def test_union_or_empty_skips_missing_and_empty_parts():
-    assert union_or_empty([None, shapely.Polygon()]).is_empty
-    assert union_or_empty([shapely.box(0, 0, 1, 1), None, shapely.box(1, 0, 2, 1)]).area == 2.0
-
-
-def test_union_or_empty_keeps_the_union_of_the_same_parts():
-    # The union of the same geometry objects is computed once; equal parts that are other
-    # objects, or the same parts in another order, get their own union, equal to a fresh one.
-    a, b = shapely.box(0, 0, 2, 1), shapely.box(1, 0, 3, 2)
-    first = union_or_empty([a, None, b])
-    assert union_or_empty([a, b]) is first
-    assert first.equals_exact(shapely.union_all([a, b]), 0.0)
-    again = union_or_empty([shapely.box(0, 0, 2, 1), b])
-    assert again is not first and again.equals_exact(first, 0.0)
-    swapped = union_or_empty([b, a])
-    assert swapped is not first and swapped.equals_exact(shapely.union_all([b, a]), 0.0)
+def test_each_node_views_the_union_of_its_present_sensors():
+    here = Pose(0.0, 0.0, 0.0)
+    observations = {"front": observation("front", BUS, (), (0, 0, 2, 1), here),
+                    "rear": observation("rear", BUS, (), (1, 0, 3, 2), here),
+                    "gone": observation("gone", BUS, (), (10, 10, 11, 11)),  # carrier absent
+                    "cam": observation("cam", "rsu1", (), (5, 5, 6, 6), here)}
+    views = views_by_node(observations, K)
+    assert set(views) == {BUS, "rsu1"}
+    assert views[BUS].visible.shape.equals_exact(
+        shapely.union_all([shapely.box(0, 0, 2, 1), shapely.box(1, 0, 3, 2)]), 0.0)
+    assert views[BUS].occluded.area == 0.5
+    assert views["rsu1"].visible.area == 1.0
 
 
 def test_detections_are_grouped_by_node_pedestrian_and_sensor():
@@ -69,8 +71,8 @@ def test_clear_regions_and_detections_join_the_bus_and_the_senders():
              observation("near", BUS, (), (5, 5, 6, 6))]
     z = Zonotope(np.zeros(2), np.eye(2))
     own = {"a": Track("a", z, 3, True)}
-    shared = SharedPicture({"b": {"rsu1": z}}, {"rsu1": shapely.box(9, 9, 10, 10)}, {"rsu1": 1},
-                           {"rsu1": frozenset({"b"})})
+    shared = SharedPicture({"b": {"rsu1": z}}, {"rsu1": R(shapely.box(9, 9, 10, 10))},
+                           {"rsu1": 1}, {"rsu1": frozenset({"b"})})
     clear = clear_regions(views, own, shared)
     assert [(c.region.bounds, c.age) for c in clear["a"]] == [
         ((5, 5, 6, 6), 0), ((9, 9, 10, 10), 1)]
@@ -83,28 +85,28 @@ def test_the_pedestrians_in_view_are_those_some_node_detects_now():
     "b" detected: "a" and "b" are in view, "c" is only known."""
     model = motion_model(Estimator(position_jitter_m=0.3), DT)
     fusion = second_level("labelled", model, EstimatorSettings("enclose", "girard", 8), "enclose",
-                          ["front"], BUS)
+                          ["front"], BUS, K)
     z = Zonotope(np.zeros(2), np.eye(2))
     own = {"a": Track("a", z, 3, True), "c": Track("c", z + np.array([9.0, 0.0]), 1, False)}
     shared = SharedPicture({"b": {"rsu1": z + np.array([0.0, 9.0])}},
-                           {"rsu1": shapely.box(-1, 8, 1, 10)}, {"rsu1": 1},
+                           {"rsu1": R(shapely.box(-1, 8, 1, 10))}, {"rsu1": 1},
                            {"rsu1": frozenset({"b"})})
-    estimate, _ = fusion.step({BUS: own, "rsu1": {}}, shared,
-                              [observation("front", BUS, ("a",), (-1, -1, 1, 1))])
+    front = observation("front", BUS, ("a",), (-1, -1, 1, 1))
+    estimate, _ = fusion.step({BUS: own, "rsu1": {}}, shared, [front], front.visible)
     assert set(estimate.fused) == {"a", "b", "c"}
     assert estimate.in_view == {"a", "b"}
 
 
 def test_refined_regions_forget_their_history_when_the_picture_turns_inconsistent():
     model = motion_model(Estimator(position_jitter_m=0.3), DT)
-    walkable = shapely.box(-20, -20, 20, 20)
+    walkable = R(shapely.box(-20, -20, 20, 20))
     small = {"ped": Zonotope(np.zeros(2), np.eye(2) * 0.5)}
     large = {"ped": Zonotope(np.zeros(2), np.eye(2) * 3.0)}
 
     def estimate(fused, inconsistent: bool) -> BusEstimate:
         return BusEstimate(BusScreen(), fused, StepFlags(inconsistent=inconsistent), {})
 
-    regions = RefinedRegions(OccupancyTracker(model, walkable))
+    regions = RefinedRegions(OccupancyTracker(model, K, walkable))
     regions.update(0, {}, estimate(small, False), {})
     kept = regions.update(1, {}, estimate(large, False), {})["ped"].area
     regions.update(2, {}, estimate(small, False), {})

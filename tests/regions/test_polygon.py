@@ -17,7 +17,6 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from sse_cosim.regions import KINDS, PolygonKind, Region
-from sse_cosim.regions import polygon as polygon_module
 
 SETTINGS = settings(
     derandomize=True,
@@ -163,19 +162,6 @@ def assert_far_inside(points: np.ndarray, shape: shapely.Geometry, distance: flo
 
 KIND_NAMES = pytest.mark.parametrize("name", sorted(KINDS))
 
-SHORT_ARCS = pytest.mark.xfail(
-    hasattr(polygon_module, "ARC_SAFETY"),  # the buffer with arcs, not the mitred one
-    strict=True,
-    reason="polygon.ARC_SAFETY = 1/cos(π/8) assumes arcs of 45° chords, but GEOS rounds a turn "
-    "to a whole number of chords (up to 67.5° each at 2 per quarter circle): the buffer's "
-    "chords dip up to 1 - cos(33.75°)/cos(22.5°) ≈ 10% of the distance inside the disc")
-
-
-def kinds_but(marks: pytest.MarkDecorator, *names: str) -> pytest.MarkDecorator:
-    """Every kind, those of ``names`` with ``marks`` (a known failure of theirs)."""
-    return pytest.mark.parametrize(
-        "name", [pytest.param(n, marks=marks) if n in names else n for n in sorted(KINDS)])
-
 
 @KIND_NAMES
 @SETTINGS
@@ -197,7 +183,7 @@ def test_an_inner_region_lies_inside_its_shape(name, shape, seed):
     assert KINDS[name].outer(shape).covers(region)
 
 
-@kinds_but(SHORT_ARCS, "polygon")
+@KIND_NAMES
 @SETTINGS
 @given(shapes(), DISTANCES, st.integers(0, 2**32 - 1))
 def test_a_dilation_contains_every_point_within_the_distance(name, shape, distance, seed):
@@ -208,8 +194,7 @@ def test_a_dilation_contains_every_point_within_the_distance(name, shape, distan
         assert_contains(dilated, shape.buffer(0.999 * distance, quad_segs=16), rng)
 
 
-@kinds_but(pytest.mark.xfail(strict=True, reason="GEOS buffers a shape by less than about "
-                             "1e-16 m to an empty polygon"), "polygon")
+@KIND_NAMES
 @SETTINGS
 @given(shapes(), st.sampled_from([1e-200, 1e-17]))
 def test_a_dilation_by_a_distance_below_the_rounding_still_holds_the_shape(name, shape,
@@ -217,7 +202,7 @@ def test_a_dilation_by_a_distance_below_the_rounding_still_holds_the_shape(name,
     assert covered(KINDS[name].outer(shape).dilate(distance).geometry(), shape)
 
 
-@kinds_but(SHORT_ARCS, "polygon")
+@KIND_NAMES
 @SETTINGS
 @given(shapes(), DISTANCES, st.integers(0, 2**32 - 1))
 def test_an_erosion_keeps_only_points_that_far_inside(name, shape, distance, seed):
@@ -311,8 +296,7 @@ def test_an_empty_region_is_empty_everywhere(name):
     assert empty.geometry().is_empty
 
 
-@kinds_but(pytest.mark.xfail(strict=True, reason="PolygonRegion.covers asks shapely, whose "
-                             "covers is false for an empty geometry"), "polygon")
+@KIND_NAMES
 def test_every_region_covers_the_empty_one(name):
     kind = KINDS[name]
     assert kind.outer(shapely.box(0, 0, 1, 1)).covers(kind.empty())
@@ -325,3 +309,15 @@ def test_polygon_regions_keep_their_shape(shape):
     kind = PolygonKind()
     assert kind.outer(shape).geometry().equals(shape)
     assert kind.inner(shape).geometry().equals(shape)
+
+
+@KIND_NAMES
+@SETTINGS
+@given(shapes(), DISTANCES)
+def test_a_dilation_reaches_no_farther_than_its_kind_says(name, shape, distance):
+    """Bounding boxes grown by ``reach_of`` hold the dilation (the occupancy's prefilter)."""
+    kind = KINDS[name]
+    region = kind.outer(shape)
+    dilated = region.dilate(distance).geometry()
+    far = shapely.distance(region.geometry(), shapely.points(shapely.get_coordinates(dilated)))
+    assert (far <= kind.reach_of(distance) + ROUNDING_M).all()

@@ -17,6 +17,7 @@ from sse_cosim.estimation.motion import MotionModel, motion_model
 from sse_cosim.estimation.observer import Track
 from sse_cosim.memo import IdentityMemo
 from sse_cosim.pipeline.result import StepResult
+from sse_cosim.regions import kind
 from sse_cosim.reporting.recorder import (
     CONTAINMENT_TOL_M,
     RunRecorder,
@@ -26,6 +27,8 @@ from sse_cosim.reporting.recorder import (
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.scenario.model import Estimator, Scenario
 from sse_cosim.sets import Zonotope
+
+K = kind("polygon")
 
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "s3_pedestrian.toml"
 PEDESTRIAN, NODE = "pedestrian", "rsu1"
@@ -46,7 +49,7 @@ def scripted_step(step: int, truth: tuple[float, float], estimate: Zonotope,
         vehicle="bus", shared=SimpleNamespace(ages={}),
         estimate=SimpleNamespace(fused={PEDESTRIAN: estimate},
                                  inputs={PEDESTRIAN: {NODE: estimate}}, flags=flags),
-        possible={}, unobserved=shapely.Polygon(), window=shapely.Polygon(),
+        possible={}, unobserved=K.empty(), window=K.empty(),
         picture=SimpleNamespace(path_clear=True, unresolved_occluded_m2=0.0, own_occluded_m2=0.0,
                                 distance_to_crossing=90.0),
         decision=SimpleNamespace(command_mps=10.0, level=SpeedLevel.NOMINAL))

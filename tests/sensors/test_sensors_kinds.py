@@ -15,6 +15,7 @@ from sensors_scene import RSU1, SETTINGS, bus, snapshot, truck
 
 from sse_cosim.cli.main import main
 from sse_cosim.errors import UserError
+from sse_cosim.regions import kind
 from sse_cosim.scenario.loader import load_scenario, validate_scenario
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.sensors import Camera, RangeBearing, SensorSpec, measure, observe
@@ -22,6 +23,8 @@ from sse_cosim.sensors.faults import FaultInjector
 from sse_cosim.sensors.kinds import CONFIGS, CameraConfig, RangeConfig
 from sse_cosim.sensors.kinds.range_bearing import range_bearing_strips
 from sse_cosim.world.snapshot import Pose
+
+K = kind("polygon")
 
 ROOT = Path(__file__).resolve().parents[2]
 TOL = 1e-9  # m: the strips hold the truth up to rounding
@@ -112,7 +115,7 @@ def test_a_range_sensor_sees_all_around_but_not_behind_the_truck():
     lidar = SensorSpec("lidar", "rsu1", RangeBearing(range_m=40.0), static_pose=RSU1)
     persons = {"west": (200.0, -9.5), "hidden": (182.0, -3.0), "far": (255.0, -9.5)}
     obs = observe(snapshot([truck(), bus(100.0)], persons), {"lidar": lidar},
-                  np.random.default_rng(0), want_regions=True)["lidar"]
+                  np.random.default_rng(0), regions=K)["lidar"]
     assert set(obs.detections) == {"west"}
     disc = math.pi * 40.0**2
     assert obs.visible.area + obs.occluded.area == pytest.approx(disc, rel=2e-3)

@@ -19,6 +19,7 @@ from sensors_scene import (
     truck,
 )
 
+from sse_cosim.regions import kind
 from sse_cosim.scenario.model import AutomatedVehicle, RoadSideUnit, Scenario, SensorMount
 from sse_cosim.sensors import (
     Boxes,
@@ -34,6 +35,8 @@ from sse_cosim.sensors import (
 )
 from sse_cosim.sensors.kinds import CameraConfig
 from sse_cosim.world.snapshot import Pose
+
+K = kind("polygon")
 
 PED = (190.0, -7.0)  # on the south sidewalk, level with the truck's middle
 CURB_PED = (190.0, -6.5)  # same x, 0.5 m from the kerb (closer to the truck)
@@ -103,7 +106,7 @@ def test_observe_the_paper_scene():
     # in its sector ((6, -16.5): 17.6 m, -70°, 40° off) but the truck is in the way: the
     # segment crosses y = -3.5 at x = 184 + 6 * 13 / 16.5 = 188.7, on the truck's top edge.
     snap = snapshot([bus(170.0), truck(), car()], {"p": PED}, time=3.0)
-    obs = observe(snap, paper_specs(), np.random.default_rng(1), want_regions=False)
+    obs = observe(snap, paper_specs(), np.random.default_rng(1))
     assert list(obs) == ["bus_front", "car_front", "rsu1_cam", "rsu2_cam"]
     assert {name: set(o.detections) for name, o in obs.items()} == {
         "bus_front": set(),
@@ -148,7 +151,7 @@ def test_the_trucks_own_sensor_ignores_the_truck():
     on_truck = SensorSpec("truck_rear", "truck", rear, yaw_rad=math.pi)
     on_unit = SensorSpec("unit", "unit", rear, yaw_rad=math.pi, static_pose=TRUCK_FRONT)
     snap = snapshot([truck(), bus(150.0)], {"p": (180.0, -4.75)})
-    obs = observe(snap, {"a": on_truck, "b": on_unit}, np.random.default_rng(0), True)
+    obs = observe(snap, {"a": on_truck, "b": on_unit}, np.random.default_rng(0), K)
     assert set(obs["a"].detections) == {"p"}
     assert not obs["b"].detections
     assert obs["a"].occluded.area == 0.0
@@ -158,7 +161,7 @@ def test_the_trucks_own_sensor_ignores_the_truck():
 def test_absent_carrier_sees_nothing():
     snap = snapshot([bus(170.0), truck()], {"p": PED})  # the car has not departed yet
     specs = paper_specs()
-    obs = observe(snap, specs, np.random.default_rng(1), want_regions=True)["car_front"]
+    obs = observe(snap, specs, np.random.default_rng(1), regions=K)["car_front"]
     assert obs.pose is None and not obs.detections
     assert obs.visible.is_empty and obs.occluded.is_empty
     plain = observe(snap, specs, np.random.default_rng(1))["car_front"]
@@ -236,10 +239,10 @@ def test_specs_from_the_scenario_schema_and_mounting():
 def test_empty_scenes():
     specs = paper_specs()
     rng = np.random.default_rng(0)
-    only_person = observe(snapshot([], {"p": PED}), specs, rng, want_regions=True)
+    only_person = observe(snapshot([], {"p": PED}), specs, rng, regions=K)
     assert set(only_person["rsu1_cam"].detections) == {"p"}  # no vehicle: nothing in the way
     assert only_person["rsu1_cam"].occluded.is_empty
     assert only_person["bus_front"].pose is None
-    nobody = observe(snapshot([bus(170.0), truck()], {}), specs, rng, want_regions=True)
+    nobody = observe(snapshot([bus(170.0), truck()], {}), specs, rng, regions=K)
     assert all(not o.detections for o in nobody.values())
     assert nobody["bus_front"].occluded.area > 0.0
