@@ -66,6 +66,19 @@ class Track:
     conflict: bool = False
 
 
+def bounded(model: MotionModel, settings: EstimatorSettings, estimate: Zonotope) -> Zonotope:
+    """``estimate`` cut by the model's state bounds and reduced to the node's generator budget
+    (each an over-approximation: sound), as every track ends its step."""
+    bound = model.bound_state(estimate)
+    return bound.reduce(settings.max_generators, settings.reduction_method)
+
+
+def coast(model: MotionModel, settings: EstimatorSettings, estimate: Zonotope) -> Zonotope:
+    """One step of a set nobody sees: predicted (Definition 1), then :func:`bounded`, as a node
+    carries a track it does not see (without the velocity windows only its own strips give)."""
+    return bounded(model, settings, model.predict(estimate))
+
+
 class LocalTracks(dict[str, Track]):
     """One node's tracks at a step (track key -> track) and the tracks it ended lately:
     ``ended`` holds every track it ended at a step >= ``ended_since`` (labelled tracks never
@@ -123,9 +136,8 @@ class NodeObserver:
         update = correct(self.model, self.settings.gain_method, predicted, strips,
                          self._suspicion.get(person_id, Suspicion()))
         self._suspicion[person_id] = update.suspicion
-        estimate = self._with_windows(step, person_id, update, strips)
-        estimate = self.model.bound_state(estimate)
-        estimate = estimate.reduce(self.settings.max_generators, self.settings.reduction_method)
+        estimate = bounded(self.model, self.settings,
+                           self._with_windows(step, person_id, update, strips))
         return Track(person_id, estimate, step, bool(strips), update.flagged, update.conflict)
 
     def _with_windows(self, step: int, person_id: str, update: TrackCorrection,

@@ -69,6 +69,7 @@ from sse_cosim.regions import Region, RegionKind
 from sse_cosim.sets import Zonotope
 
 COARSEN_M = 0.01  # regions are kept at most this much larger, in few pieces
+ROUNDING_GUARD_M = 1e-9  # far above any rounding of a set's coordinates (metres, < 1e5)
 
 
 @dataclass(frozen=True)
@@ -139,7 +140,12 @@ class OccupancyTracker:
         regions: dict[str, Region] = {}
         beyond: set[str] = set()
         for person_id, estimate in fused.items():
-            path = self.kind.convex_outer(self.model.path_set(estimate).vertices())
+            path_set = self.model.path_set(estimate)
+            if self._window is not None and self._window.misses(path_set):
+                beyond.add(person_id)  # its region would be cut to nothing by B
+                paths[person_id] = regions[person_id] = self.kind.empty()
+                continue
+            path = self.kind.convex_outer(path_set.vertices())
             # it may still be outside B unless its whole set is inside (the set holds it)
             outside = person_id in self.beyond and not self._window.tracked.covers(path)
             previous = self._paths.get(person_id)
@@ -202,6 +208,14 @@ class TrackedWindow:
             rim = near.dilate(eps).difference(self.tracked)
             self._inflows[steps] = rim.dilate(reach) if reach > 0 else self.kind.empty()
         return self._inflows[steps]
+
+    def misses(self, path_set: Zonotope) -> bool:
+        """Whether the box around ``path_set`` (2-D) lies apart from B's bounding box: then
+        the path is outside B (by more than a rounding of the box's sums: its vertices, summed
+        in another order, may stray from it by that)."""
+        (x0, y0), (x1, y1) = path_set.interval_hull()
+        b, g = self.tracked.bounds, ROUNDING_GUARD_M
+        return x1 + g < b[0] or b[2] < x0 - g or y1 + g < b[1] or b[3] < y0 - g
 
     def clip(self, region: Region) -> Region:
         """``region`` ∩ B."""

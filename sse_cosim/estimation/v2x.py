@@ -3,8 +3,13 @@
 A message leaves a node at step k and arrives at step k + latency unless it is dropped
 (probability ``drop_probability``, drawn from the scenario's seeded generator) or the sender
 is farther than ``range_m`` from the bus when sending. The bus keeps the newest message per
-sender; a stale estimate is predicted forward to the current step before it is fused. Visible
-regions are used at the step they were seen (:mod:`sse_cosim.estimation.occupancy`).
+sender; its estimates are predicted forward to the current step before they are fused: exactly
+over the link's latency (Definition 1, as every message arrives), and beyond it, while the
+sender stays silent (out of range, its messages dropped or late, or gone), one step at a time
+by the link's ``coast`` (for the automated vehicles: predicted, bounded and reduced, as the
+sender itself carries a track it does not see), so a silent step costs one coast per estimate
+and the sets keep a bounded size however long the silence. Visible regions are used at the
+step they were seen (:mod:`sse_cosim.estimation.occupancy`).
 
 Ended tracks. A node's message lists the tracks it ended at every step from ``ended_since``
 to its own (:class:`~sse_cosim.estimation.observer.AnonymousNodeObserver`). When a sender's
@@ -24,6 +29,7 @@ pedestrian out of its unobserved area through that sender's views before.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,12 +86,19 @@ class V2XLink:
     """Every node's link to one automated vehicle, with the scenario's range, latency and
     losses."""
 
-    def __init__(self, config: V2X, rng: np.random.Generator) -> None:
+    def __init__(self, config: V2X, rng: np.random.Generator,
+                 coast: Callable[[Zonotope], Zonotope] | None = None) -> None:
+        """``coast``: one silent step of a received estimate (module docstring); None: the
+        exact prediction by one step at any age (Definition 1; the sets grow by the
+        process noise's generators each step)."""
         self.config = config
         self.rng = rng
+        self.coast = coast
         self._in_flight: list[tuple[int, Message]] = []
         self.latest: dict[str, Message] = {}
         self._handed: list[EndedTrack] = []  # ended tracks delivered, not yet taken
+        # sender -> (its newest message's step, the step its estimates are brought to, them)
+        self._coasted: dict[str, tuple[int, int, dict[str, Zonotope]]] = {}
 
     def send(self, message: Message, distance_to_bus: float, extra_latency_steps: int = 0) -> bool:
         """Queue ``message``; False if out of range or dropped. ``extra_latency_steps`` delay
@@ -120,11 +133,10 @@ class V2XLink:
     def picture(self, step: int, model: MotionModel) -> SharedPicture:
         """The newest message of every sender, predicted to ``step``."""
         estimates: dict[str, dict[str, Zonotope]] = {}
-        for sender, message in sorted(self.latest.items()):
-            for person_id, estimate in message.estimates.items():
-                age = step - message.sent_step
-                estimates.setdefault(person_id, {})[sender] = model.predict(estimate, age)
         latest = sorted(self.latest.items())
+        for sender, message in latest:
+            for person_id, estimate in self._brought(sender, message, step, model).items():
+                estimates.setdefault(person_id, {})[sender] = estimate
         return SharedPicture(
             estimates,
             regions={sender: m.visible_region for sender, m in latest},
@@ -132,6 +144,27 @@ class V2XLink:
             detected={sender: m.detected for sender, m in latest},
             inconsistent=frozenset(sender for sender, m in latest if m.inconsistent),
         )
+
+
+    def _brought(self, sender: str, message: Message, step: int, model: MotionModel
+                 ) -> dict[str, Zonotope]:
+        """``message``'s estimates at ``step``: predicted exactly up to its arrival on time
+        (``sent_step`` + latency), then coasted one step at a time, from where the previous
+        step left them (module docstring)."""
+        on_time = message.sent_step + self.config.latency_steps
+        if step <= on_time:
+            return {pid: model.predict(z, step - message.sent_step)
+                    for pid, z in message.estimates.items()}
+        kept = self._coasted.get(sender)
+        if kept is None or kept[0] != message.sent_step or kept[1] > step:
+            kept = (message.sent_step, on_time, {pid: model.predict(z, on_time - message.sent_step)
+                                                for pid, z in message.estimates.items()})
+        coast = self.coast or model.predict
+        estimates = kept[2]
+        for _ in range(step - kept[1]):
+            estimates = {pid: coast(z) for pid, z in estimates.items()}
+        self._coasted[sender] = (message.sent_step, step, estimates)
+        return estimates
 
 
 def _handed_over(kept: Message, newest: Message) -> list[EndedTrack]:

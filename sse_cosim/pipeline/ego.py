@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import partial
 from typing import Protocol
 
 import numpy as np
@@ -21,7 +22,7 @@ from sse_cosim.control.picture import ArrivalMemory, Picture, SceneContext, Sour
 from sse_cosim.control.speed import Decision, fallback_floor, make_policy
 from sse_cosim.estimation.fusion_centre import BusEstimate
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import EstimatorSettings
+from sse_cosim.estimation.observer import EstimatorSettings, coast
 from sse_cosim.estimation.occupancy import UnobservedArea
 from sse_cosim.estimation.v2x import SharedPicture, V2XLink
 from sse_cosim.pipeline.stages import (
@@ -76,7 +77,8 @@ class Ego:
         vehicle = scenario.automated[vehicle_id]
         self.id = vehicle_id
         self.controller = scenario.controller
-        self.sharing = Sharing(V2XLink(scenario.v2x, link_rng), model, vehicle_id)
+        link = V2XLink(scenario.v2x, link_rng, partial(coast, model, settings))
+        self.sharing = Sharing(link, model, vehicle_id)
         self.fusion = second_level(config.association, model, settings, config.fusion_method,
                                    specs, vehicle_id, kind)
         self.context = SceneContext.build(

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
+import pytest
 import shapely
 
-from sse_cosim.estimation.motion import motion_model
+from sse_cosim.estimation.motion import MODELS, motion_model
+from sse_cosim.estimation.observer import EstimatorSettings, coast
 from sse_cosim.estimation.occupancy import (
     COARSEN_M,
     ClearRegion,
@@ -16,7 +20,7 @@ from sse_cosim.estimation.occupancy import (
 from sse_cosim.estimation.v2x import Message, V2XLink
 from sse_cosim.regions import PolygonRegion, kind
 from sse_cosim.scenario.model import V2X, Estimator
-from sse_cosim.sets import Zonotope
+from sse_cosim.sets import Strips, Zonotope
 
 DT = 0.1
 K = kind("polygon")
@@ -60,6 +64,38 @@ def test_stale_estimates_are_predicted_to_now():
     aged = link.picture(3, model).estimates["ped"]["rsu1"]
     grown = 2.0 * (1.0 + 3 * model.max_speed * DT)
     assert abs(aged.volume() - grown**2) < 1e-9
+
+
+@pytest.mark.parametrize("state_model", list(MODELS))
+def test_a_silent_senders_estimates_coast_bounded_and_hold_the_exact_prediction(state_model):
+    """Beyond the latency a received estimate is coasted (predicted, bounded, reduced): its
+    generators stay at the budget however long the sender is silent, and (2-D, where the
+    state bounds are none) it holds the exact prediction (support in every direction at least
+    the exact one's); a picture asked again at an earlier step starts over from the
+    message. (The 4-D model's coast is the unseen track's step, tested with the observer.)"""
+    config = Estimator(state_model=state_model, position_jitter_m=0.0)
+    model = motion_model(config, DT)
+    settings = EstimatorSettings(config.gain_method, config.reduction_method,
+                                 config.max_generators)
+    link = V2XLink(V2X(latency_steps=1), np.random.default_rng(0),
+                   partial(coast, model, settings))
+    first = model.predict(Zonotope(np.zeros(2), np.eye(2))) if model.dim == 2 else \
+        model.bound_state(model.initial_set(Strips(np.eye(2), np.zeros(2), np.ones(2)),
+                                            config.gain_method))
+    link.send(Message("car", 0, {"ped": first}, R(shapely.box(0, 0, 1, 1))), 5.0)
+    link.deliver(1)
+    angles = np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)
+    directions = np.zeros((24, model.dim))
+    directions[:, 0], directions[:, 1] = np.cos(angles), np.sin(angles)
+    for step in (1, 2, 30, 120):
+        coasted = link.picture(step, model).estimates["ped"]["car"]
+        exact = model.predict(first, step)
+        assert coasted.n_generators <= max(settings.max_generators, first.n_generators
+                                           + model.process_noise.n_generators)
+        assert model.dim == 4 or np.all(coasted.support(directions)
+                                        >= exact.support(directions) - 1e-9)
+    assert link.picture(2, model).estimates["ped"]["car"].n_generators <= \
+        settings.max_generators
 
 
 def test_the_picture_names_senders_whose_newest_message_reports_an_inconsistency():
