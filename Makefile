@@ -51,7 +51,7 @@ test: $(DEVSTAMP)
 bench: $(BENCHSTAMP)
 	$(BIN)/sse-cosim bench --out results/
 
-# The safety campaign (sweeps/safety.toml; S1-S3 about 45 minutes on two cores, crowd.toml's
+# The safety campaign (sweeps/safety.toml; S1-S3 about 25 minutes on two cores, crowd.toml's
 # and junction.toml's runs 10 to 20 times as long each, several hours in all): results/safety/
 # and results/safety.md; exit status 4 if a safety target is missed.
 safety: $(STAMP)

@@ -205,20 +205,21 @@ def _growth(stages: dict[str, float], reference: dict[str, float], top: int = 2)
 
 
 LOOP_STEP = ("the stage table (item 1) and the profile at the end of this file: most of a step "
-             "is shapely's overlay calls (buffer, intersection, difference, union) in the "
-             "occupancy and sensor stages, each on small polygons, and the rest is spread over "
-             "every stage. Next: a raster over-approximation of the unobserved area and of the "
-             "known regions (the occupancy stage) and of the sensors' visible and hidden "
-             "regions (in the geometry stage), with a test that proves it covers the exact "
-             "polygons on random shapes; the controller and the recorder would then read "
-             "rasters.")
+             "is shapely's overlay calls (buffer, intersection, difference, union) behind the "
+             "Region layer, on small polygons one pedestrian and one view at a time, in the "
+             "occupancy and screening stages, and the Python around each call. The raster "
+             "representation (`estimator.regions = \"raster\"`) is sound but no faster one "
+             "operation at a time (docs/method.md, \"Regions\"). Next: one compiled call per "
+             "step for every pedestrian's region on a shared grid (the path regions' "
+             "recurrence and the negative information's cuts as mask operations), so that the "
+             "per-call cost is paid once a step, not once a pedestrian and view.")
 ANONYMOUS_STEP = ("the stage tables (item 1: `anonymous` against `default_enclose`; item 3b) "
                   "and the profile of the anonymous run at the end of this file: the extra "
                   "time is the nodes' set-membership association "
                   "(`estimation.association.associate`, in `local_fusion`), whose possibilities "
-                  "and candidates are shapely overlays (buffer, intersection, difference), one "
-                  "track and one sensor's view at a time. Next: the association's regions on "
-                  "the fast Region representation, every track of a node at once.")
+                  "and candidates are Region overlays (buffer, intersection, difference), one "
+                  "track and one sensor's view at a time. Next: every track of a node at once, "
+                  "in the batched region step of item 1's next step.")
 NEXT_STEPS = {
     "1 co-sim": LOOP_STEP,
     "1b": LOOP_STEP,
@@ -227,9 +228,9 @@ NEXT_STEPS = {
     "3b crowd": "the stage line of item 3b: the negative information (`occupancy`: every "
                 "known pedestrian's region and the unobserved area), the bus's screening and "
                 "fusion (`sharing_fusion`) and the recorder's checks (`output`) each work one "
-                "pedestrian at a time. Next: the fast Region representation "
-                "for every pedestrian's region at once, and the bus's screening, fusion and "
-                "the recorder's containment checks batched over the pedestrians.",
+                "pedestrian at a time. Next: one compiled region step for every pedestrian at "
+                "once (item 1's next step), and the bus's screening (a set against the views "
+                "it may lie in) and fusion batched over the pedestrians.",
     "kernel enclose": "the table of item 2: *kernel alone* is the one compiled call "
                       "(strips normalized, clipped, enclosed, the volume gain as its "
                       "fallback); *compiled* adds the public function's Python (checks, "
@@ -240,8 +241,8 @@ NEXT_STEPS = {
           "are one compiled call per node and step; what is left is the bus's refined region "
           "of every known pedestrian (shapely's buffer and overlay calls, one pedestrian at a "
           "time, against every node's view), the fusion of each pedestrian's sets and the "
-          "sensors' strips. Next: the raster over-approximation of item 1, for every "
-          "pedestrian's region at once.",
+          "sensors' strips. Next: item 1's next step, one compiled region step for every "
+          "pedestrian at once.",
     "4 Dask cluster": "item 4b, its CPU table: the cluster's own processes (scheduler, "
                       "nannies, Dask workers) take CPU time beside the runs on the same 2 "
                       "cores, while the local pool pays its workers' start-up in each half. "

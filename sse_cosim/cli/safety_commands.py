@@ -39,7 +39,7 @@ def safety(campaign_file: Path, out_dir: Path | None, workers: int | None, execu
     (estimator.max_pedestrian_speed_mps), and the bus always finishes its route. The
     campaign runs every scenario of the file for every step-out time, walking speed,
     start behind the parked truck, truck position, noise bound of the shared sensors and
-    seed (2,127 runs with sweeps/safety.toml: S1 to S3's 1,245 take about 45 minutes on two
+    seed (2,127 runs with sweeps/safety.toml: S1 to S3's 1,245 take about 25 minutes on two
     cores, scenarios/crowd.toml's 498 about 20 times as long per run,
     scenarios/junction.toml's 114 about 2 minutes each, and scenarios/town.toml's 270
     about a minute each).

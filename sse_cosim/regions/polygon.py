@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import shapely
@@ -46,7 +47,7 @@ class PolygonRegion:
     def area(self) -> float:
         return float(self.shape.area)
 
-    @property
+    @cached_property
     def bounds(self) -> tuple[float, float, float, float]:
         return NO_BOUNDS if self.shape.is_empty else tuple(self.shape.bounds)
 

@@ -31,7 +31,9 @@ import numpy as np
 from sse_cosim.memo import IdentityMemo
 from sse_cosim.sets import Strips, Zonotope, intersect_block_strips, intersect_strips, portable
 
-POSITION_MEMO = 64  # position sets MotionModel.position keeps
+POSITION_MEMO = 1024
+"""Path and position sets a MotionModel keeps (each, about 1 kB): a crowd's step asks for those
+of some hundred estimates (every source of every pedestrian), each several times."""
 VELOCITY = 2  # a (position, velocity) state's velocity block starts at this entry
 
 
@@ -166,7 +168,10 @@ class LinearModel:
     step_length: float
     jitter: float = 0.0
     velocity_windows: tuple[int, ...] = ()
-    # the newest POSITION_MEMO position sets, by their estimates' identities
+    # the newest POSITION_MEMO path and position sets, by their estimates' identities
+    _paths: IdentityMemo[Zonotope] = field(
+        default_factory=lambda: IdentityMemo(POSITION_MEMO), init=False, repr=False,
+        compare=False)
     _positions: IdentityMemo[Zonotope] = field(
         default_factory=lambda: IdentityMemo(POSITION_MEMO), init=False, repr=False,
         compare=False)
@@ -260,8 +265,10 @@ class LinearModel:
         return estimate
 
     def path_set(self, estimate: Zonotope) -> Zonotope:
-        """C Z: the set of the path's 2-D position (no jitter; see :meth:`position`)."""
-        return _linear_map(self.position_matrix, estimate)
+        """C Z: the set of the path's 2-D position (no jitter; see :meth:`position`), kept
+        for the newest estimates as :meth:`position` is."""
+        return self._paths.get(id(estimate), (estimate,),
+                               lambda: _linear_map(self.position_matrix, estimate))
 
     def position(self, estimate: Zonotope) -> Zonotope:
         """The set of the simulated 2-D position: C Z (+) box(jitter).
