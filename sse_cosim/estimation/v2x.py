@@ -145,7 +145,6 @@ class V2XLink:
             inconsistent=frozenset(sender for sender, m in latest if m.inconsistent),
         )
 
-
     def _brought(self, sender: str, message: Message, step: int, model: MotionModel
                  ) -> dict[str, Zonotope]:
         """``message``'s estimates at ``step``: predicted exactly up to its arrival on time
@@ -153,18 +152,22 @@ class V2XLink:
         step left them (module docstring)."""
         on_time = message.sent_step + self.config.latency_steps
         if step <= on_time:
-            return {pid: model.predict(z, step - message.sent_step)
-                    for pid, z in message.estimates.items()}
+            return _predicted(message, step, model)
         kept = self._coasted.get(sender)
         if kept is None or kept[0] != message.sent_step or kept[1] > step:
-            kept = (message.sent_step, on_time, {pid: model.predict(z, on_time - message.sent_step)
-                                                for pid, z in message.estimates.items()})
+            kept = (message.sent_step, on_time, _predicted(message, on_time, model))
         coast = self.coast or model.predict
         estimates = kept[2]
         for _ in range(step - kept[1]):
             estimates = {pid: coast(z) for pid, z in estimates.items()}
         self._coasted[sender] = (message.sent_step, step, estimates)
         return estimates
+
+
+def _predicted(message: Message, step: int, model: MotionModel) -> dict[str, Zonotope]:
+    """``message``'s estimates predicted exactly to ``step`` (Definition 1)."""
+    return {pid: model.predict(z, step - message.sent_step)
+            for pid, z in message.estimates.items()}
 
 
 def _handed_over(kept: Message, newest: Message) -> list[EndedTrack]:
