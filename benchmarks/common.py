@@ -15,7 +15,8 @@ from scipy.optimize import linprog
 
 from sse_cosim.estimation.bus_fusion import fuse_sets
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver
+from sse_cosim.estimation.observer import NodeObserver
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.sets import Strips, Zonotope
 
 CONTAINMENT_TOL = 1e-7

@@ -99,11 +99,11 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from sse_cosim.estimation.motion import MotionModel
+from sse_cosim.estimation.settings import EstimatorSettings, bounded
 from sse_cosim.estimation.vote import interval_hull
 from sse_cosim.regions import Region, RegionKind
 from sse_cosim.sets import (
@@ -117,9 +117,6 @@ from sse_cosim.sets import (
 from sse_cosim.sets.enclosure import clip_to_strips, enclose_polygon, unit_directions
 from sse_cosim.sets.portable import matmul
 from sse_cosim.sets.zonotope import FloatArray, full_rank
-
-if TYPE_CHECKING:
-    from sse_cosim.estimation.observer import EstimatorSettings
 
 MEET_TOL = 1e-6
 """m: strips widened by this before the candidate test (R1), so rounding errs to "meets"."""
@@ -296,8 +293,7 @@ def _pool(scene: _Scene, members: Sequence[LocalTrack], occupied: bool) -> Local
     union = _hull([t.estimate for t in members], np.hstack([t.estimate.generators
                                                              for t in members]))
     settings = scene.settings
-    return replace(first, estimate=union.reduce(settings.max_generators,
-                                                settings.reduction_method),
+    return replace(first, estimate=settings.reduce(union),
                    occupied=occupied, joined=joined)
 
 
@@ -317,8 +313,7 @@ def _join_hidden(tracks: list[LocalTrack], piece: LocalTrack, model: MotionModel
         union = _hull(both, np.hstack([z.generators for z in both]))
         limit = (1.0 + MERGE_GROWTH) * (model.position(track.estimate).volume() + area)
         if model.position(union).volume() <= limit:
-            merged = replace(track, estimate=union.reduce(settings.max_generators,
-                                                   settings.reduction_method),
+            merged = replace(track, estimate=settings.reduce(union),
                              joined=tuple(sorted({*track.joined, *piece.joined})))
             return [*tracks[:i], merged, *tracks[i + 1:]]
     return None
@@ -442,8 +437,7 @@ def _finish(scene: _Scene, track: LocalTrack, estimate: Zonotope, occupied: bool
     if scene.ground is not None and not scene.ground.intersects(
             scene.region(scene.model.position(estimate))):
         return None  # R6: off the walkable ground
-    estimate = scene.model.bound_state(estimate)  # the speed bound, always true (A3)
-    estimate = estimate.reduce(scene.settings.max_generators, scene.settings.reduction_method)
+    estimate = bounded(scene.model, scene.settings, estimate)  # the speed bound (A3), reduced
     return replace(track, estimate=estimate, occupied=occupied, joined=tuple(sorted(joined)))
 
 
@@ -526,8 +520,7 @@ def _merge(tracks: list[LocalTrack], model: MotionModel, settings: EstimatorSett
                     continue
                 first, second = tracks[i], tracks[j]
                 tracks[i] = replace(
-                    first, estimate=union.reduce(settings.max_generators,
-                                                 settings.reduction_method),
+                    first, estimate=settings.reduce(union),
                     occupied=first.occupied or second.occupied,
                     joined=tuple(sorted({*first.joined, *second.joined})))
                 del tracks[j]

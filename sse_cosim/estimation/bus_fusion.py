@@ -5,7 +5,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import EstimatorSettings, Track
+from sse_cosim.estimation.observer import Track
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.sets import Zonotope, fuse
 
 
@@ -39,8 +40,6 @@ def fuse_sets(
     smallest input."""
     if len(inputs) == 1:
         return inputs[0]
-    reduced = fuse(list(inputs), fusion_method).reduce(
-        settings.max_generators, settings.reduction_method
-    )
+    reduced = settings.reduce(fuse(list(inputs), fusion_method))
     return min([reduced, *inputs], key=lambda z: model.position(z).volume())
 

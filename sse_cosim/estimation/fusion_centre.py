@@ -19,8 +19,9 @@ from sse_cosim.estimation.bus_fusion import fuse_at_bus
 from sse_cosim.estimation.bus_screen import BusScreen, BusScreener
 from sse_cosim.estimation.flags import StepFlags, step_flags
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import EstimatorSettings, Track
+from sse_cosim.estimation.observer import Track
 from sse_cosim.estimation.occupancy import ClearRegion
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.estimation.v2x import SharedPicture
 from sse_cosim.regions import RegionKind
 from sse_cosim.sets import Zonotope

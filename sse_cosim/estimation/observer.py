@@ -25,6 +25,7 @@ from sse_cosim.estimation.association import AnonymousDetection, Association, as
 from sse_cosim.estimation.correction import Suspicion, TrackCorrection, correct
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import EndedTrack
+from sse_cosim.estimation.settings import EstimatorSettings, bounded
 from sse_cosim.estimation.vote import CONSISTENCY_TOL
 from sse_cosim.regions import Region, RegionKind
 from sse_cosim.sets import Strips, Zonotope, intersect_strips, portable
@@ -38,15 +39,6 @@ ENDED_KEPT_STEPS = 50
 """A node's messages list the tracks it ended in this many steps up to the message's own: a
 receiver that missed fewer messages in a row learns every ending from the next one
 (:class:`~sse_cosim.estimation.v2x.V2XLink`)."""
-
-
-@dataclass(frozen=True)
-class EstimatorSettings:
-    """The named methods a node uses (scenario ``[estimator]``)."""
-
-    gain_method: str
-    reduction_method: str
-    max_generators: int
 
 
 @dataclass(frozen=True)
@@ -64,19 +56,6 @@ class Track:
     detected: bool
     flagged: frozenset[str] = frozenset()
     conflict: bool = False
-
-
-def bounded(model: MotionModel, settings: EstimatorSettings, estimate: Zonotope) -> Zonotope:
-    """``estimate`` cut by the model's state bounds and reduced to the node's generator budget
-    (each an over-approximation: sound), as every track ends its step."""
-    bound = model.bound_state(estimate)
-    return bound.reduce(settings.max_generators, settings.reduction_method)
-
-
-def coast(model: MotionModel, settings: EstimatorSettings, estimate: Zonotope) -> Zonotope:
-    """One step of a set nobody sees: predicted (Definition 1), then :func:`bounded`, as a node
-    carries a track it does not see (without the velocity windows only its own strips give)."""
-    return bounded(model, settings, model.predict(estimate))
 
 
 class LocalTracks(dict[str, Track]):

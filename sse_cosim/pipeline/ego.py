@@ -22,8 +22,8 @@ from sse_cosim.control.picture import ArrivalMemory, Picture, SceneContext, Sour
 from sse_cosim.control.speed import Decision, fallback_floor, make_policy
 from sse_cosim.estimation.fusion_centre import BusEstimate
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import EstimatorSettings, coast
 from sse_cosim.estimation.occupancy import UnobservedArea
+from sse_cosim.estimation.settings import EstimatorSettings, coast
 from sse_cosim.estimation.v2x import SharedPicture, V2XLink
 from sse_cosim.pipeline.stages import (
     NodeView,

@@ -20,7 +20,6 @@ from sse_cosim.estimation.fusion_centre import BusEstimate, FusionCentre
 from sse_cosim.estimation.kalman import KalmanTracker, all_detections
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.observer import (
-    EstimatorSettings,
     LocalObservers,
     LocalTracks,
     NodeInput,
@@ -28,6 +27,7 @@ from sse_cosim.estimation.observer import (
     Track,
 )
 from sse_cosim.estimation.occupancy import ClearRegion, EndedTrack, OccupancyTracker
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.estimation.v2x import Message, SharedPicture, V2XLink
 from sse_cosim.regions import Region, RegionKind
 from sse_cosim.sensors import SensorObservation, SensorSpec, observe

@@ -36,7 +36,7 @@ import numpy as np
 from sse_cosim import regions
 from sse_cosim.control.speed import SpeedLevel
 from sse_cosim.estimation.motion import motion_model
-from sse_cosim.estimation.observer import EstimatorSettings
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.pipeline.ego import Ego
 from sse_cosim.pipeline.result import StepCallback, StepResult
 from sse_cosim.pipeline.stages import first_level, outgoing, sense, views_by_node

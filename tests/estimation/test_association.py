@@ -25,8 +25,9 @@ from sse_cosim.estimation.association import (
 )
 from sse_cosim.estimation.bus_fusion import fuse_sets
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.estimation.observer import AnonymousNodeObserver, EstimatorSettings, NodeScan
+from sse_cosim.estimation.observer import AnonymousNodeObserver, NodeScan
 from sse_cosim.estimation.occupancy import OccupancyTracker
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.estimation.v2x import Message, V2XLink
 from sse_cosim.pipeline.stages import RefinedRegions, detected_now
 from sse_cosim.regions import PolygonRegion as R

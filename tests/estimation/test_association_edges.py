@@ -13,7 +13,7 @@ from shapely.geometry.base import BaseGeometry
 
 from sse_cosim.estimation.association import AnonymousDetection, LocalTrack, associate
 from sse_cosim.estimation.motion import MotionModel, motion_model
-from sse_cosim.estimation.observer import EstimatorSettings
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.regions import PolygonRegion as R
 from sse_cosim.regions import kind
 from sse_cosim.scenario.model import Estimator

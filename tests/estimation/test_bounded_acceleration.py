@@ -14,7 +14,8 @@ import shapely.ops
 
 from sse_cosim.control.picture import FAN, ConflictZone, Source, _arrivals
 from sse_cosim.estimation.motion import Separation, bounded_acceleration, motion_model
-from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver
+from sse_cosim.estimation.observer import NodeObserver
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.regions import PolygonRegion as R
 from sse_cosim.regions import kind
 from sse_cosim.scenario.model import Estimator

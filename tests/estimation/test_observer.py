@@ -9,7 +9,8 @@ import pytest
 
 from sse_cosim.estimation.bus_fusion import fuse_at_bus
 from sse_cosim.estimation.motion import POSITION_MEMO, motion_model
-from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver
+from sse_cosim.estimation.observer import NodeObserver
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips, Zonotope
 

@@ -9,7 +9,8 @@ import pytest
 
 from sse_cosim.estimation import track_kernels
 from sse_cosim.estimation.motion import motion_model
-from sse_cosim.estimation.observer import EstimatorSettings, NodeObserver
+from sse_cosim.estimation.observer import NodeObserver
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.sets import Strips
 

@@ -9,7 +9,6 @@ import pytest
 import shapely
 
 from sse_cosim.estimation.motion import MODELS, motion_model
-from sse_cosim.estimation.observer import EstimatorSettings, coast
 from sse_cosim.estimation.occupancy import (
     COARSEN_M,
     ClearRegion,
@@ -17,6 +16,7 @@ from sse_cosim.estimation.occupancy import (
     TrackedWindow,
     UnobservedArea,
 )
+from sse_cosim.estimation.settings import EstimatorSettings, coast
 from sse_cosim.estimation.v2x import Message, V2XLink
 from sse_cosim.regions import PolygonRegion, kind
 from sse_cosim.scenario.model import V2X, Estimator

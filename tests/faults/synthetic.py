@@ -22,8 +22,9 @@ from sse_cosim.estimation.bus_screen import BusScreen
 from sse_cosim.estimation.flags import StepFlags, disagrees
 from sse_cosim.estimation.fusion_centre import FusionCentre
 from sse_cosim.estimation.motion import MotionModel, motion_model
-from sse_cosim.estimation.observer import EstimatorSettings, LocalObservers, Track
+from sse_cosim.estimation.observer import LocalObservers, Track
 from sse_cosim.estimation.occupancy import ClearRegion
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.estimation.v2x import Message, V2XLink
 from sse_cosim.regions import PolygonRegion as R
 from sse_cosim.regions import kind

@@ -9,8 +9,9 @@ from sse_cosim.estimation.bus_screen import BusScreen
 from sse_cosim.estimation.flags import StepFlags
 from sse_cosim.estimation.fusion_centre import BusEstimate
 from sse_cosim.estimation.motion import motion_model
-from sse_cosim.estimation.observer import EstimatorSettings, Track
+from sse_cosim.estimation.observer import Track
 from sse_cosim.estimation.occupancy import OccupancyTracker
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.estimation.v2x import SharedPicture
 from sse_cosim.pipeline.stages import (
     RefinedRegions,

@@ -13,7 +13,8 @@ import shapely
 
 from sse_cosim.errors import UserError
 from sse_cosim.estimation.motion import motion_model
-from sse_cosim.estimation.observer import EstimatorSettings, LocalObservers
+from sse_cosim.estimation.observer import LocalObservers
+from sse_cosim.estimation.settings import EstimatorSettings
 from sse_cosim.pipeline.stages import detections_by_node
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.scenario.model import Estimator
