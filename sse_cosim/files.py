@@ -1,4 +1,6 @@
-"""Crash-safe file output: every file is written whole or not at all (write, then rename)."""
+"""Crash-safe file output: every file is written whole or not at all (write, then rename); and
+the reading of the TOML files that plan work (sweeps, campaigns, searches), with one-line
+errors."""
 
 from __future__ import annotations
 
@@ -6,11 +8,16 @@ import contextlib
 import json
 import os
 import tempfile
+import tomllib
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
+
+from pydantic import BaseModel, ValidationError
 
 from sse_cosim.errors import UserError
+
+M = TypeVar("M", bound=BaseModel)
 
 
 @contextlib.contextmanager
@@ -72,3 +79,23 @@ def read_plan(path: Path, command: str) -> dict[str, Any]:
     except (OSError, json.JSONDecodeError) as exc:
         raise UserError(str(path), "", f"cannot be read ({exc})",
                         f"name a folder written by `{command}`") from None
+
+
+def read_toml_model(path: Path, model: type[M], what: str, missing_fix: str,
+                    example_fix: str) -> M:
+    """The TOML file at ``path`` validated as ``model``; a :class:`UserError` naming the file
+    and the field (``params[0].values``) otherwise. ``what`` names the file in the error when
+    it is missing ("sweep file"), ``missing_fix`` and ``example_fix`` are the fixes offered."""
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise UserError(str(path), "", f"{what} not found", missing_fix) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise UserError(str(path), "syntax", str(exc), "fix the TOML syntax there") from None
+    try:
+        return model.model_validate(raw)
+    except ValidationError as exc:
+        err = exc.errors(include_url=False)[0]
+        where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in err["loc"])
+        message = str(err["msg"]).removeprefix("Value error, ")
+        raise UserError(str(path), where.lstrip("."), message, example_fix) from None

@@ -39,6 +39,7 @@ def register_commands() -> None:
     from sse_cosim.cli import (  # noqa: F401
         bench_commands,
         commands,
+        falsify_commands,
         safety_commands,
         sweep_commands,
     )

@@ -599,7 +599,7 @@ class RunRecorder:
                     for vid in present(self.scenario.automated)}
         distances = [r["distance_bus_pedestrian"] for r in self.rows
                      if r["distance_bus_pedestrian"] is not None]
-        return {
+        summary = {
             "scenario": self.scenario.name,
             "pedestrian": bool(pedestrians),
             "nodes": self.scenario.node_ids(),
@@ -621,6 +621,10 @@ class RunRecorder:
             "contact_steps": sum(r["collision"] for r in self.rows),
             "route_completed": _all_known([v["route_completed"] for v in vehicles.values()]),
         }
+        contact = [r["t"] for r in self.rows if r["collision"]]
+        if contact:  # only a run with a collision has the key (the falsifier orders it in time)
+            summary["first_collision_t_s"] = contact[0]
+        return summary
 
     def _vehicle_figures(self, rows: list[dict[str, Any]],
                          route_completed: bool | None) -> dict[str, Any]:

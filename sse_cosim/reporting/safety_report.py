@@ -428,7 +428,7 @@ def render(campaign: CampaignFolder, table: pd.DataFrame, targets: Sequence[Targ
         "",
         "## Grid",
         "",
-        _table([{"axis": "scenarios", "field": "",
+        markdown_table([{"axis": "scenarios", "field": "",
                  "values": ", ".join(f"`{Path(s).stem}`" for s in plan["scenarios"])},
                 *({"axis": a["column"], "field": f"`{a['path']}`",
                    "values": ", ".join(_value_text(v) for v in a["values"])}
@@ -446,13 +446,13 @@ def render(campaign: CampaignFolder, table: pd.DataFrame, targets: Sequence[Targ
         "",
         "## Targets",
         "",
-        _table([{"target": t.label, "measured": t.measured, "verdict": t.verdict,
+        markdown_table([{"target": t.label, "measured": t.measured, "verdict": t.verdict,
                  "runs that break it": _keys(k for k, _ in t.offenders),
                  "runs whose summary lacks the key": _keys(t.missing)} for t in targets]),
         "",
         "## Per scenario and overall",
         "",
-        _table(scenario_rows(table)),
+        markdown_table(scenario_rows(table)),
         "",
         "Containment violations per set: " + (
             ", ".join(f"`{name}` {n}" for name, n in violations_by_set(table).items())
@@ -460,7 +460,7 @@ def render(campaign: CampaignFolder, table: pd.DataFrame, targets: Sequence[Targ
         "",
         "## Worst runs",
         "",
-        _table(worst_runs(table)),
+        markdown_table(worst_runs(table)),
         "",
         "## Heat maps",
         "",
@@ -474,7 +474,8 @@ def render(campaign: CampaignFolder, table: pd.DataFrame, targets: Sequence[Targ
         "The pedestrian cannot walk from its start to the zebra by the step-out time (the "
         "demand planner's verdict, `sse_cosim.world.demand.plan_actors`).",
         "",
-        _table(not_feasible_rows(table, campaign.columns)) if count[NOT_FEASIBLE] else "None.",
+        (markdown_table(not_feasible_rows(table, campaign.columns)) if count[NOT_FEASIBLE]
+         else "None."),
         "",
         "## Failed and unfinished runs",
         "",
@@ -484,7 +485,8 @@ def render(campaign: CampaignFolder, table: pd.DataFrame, targets: Sequence[Targ
     return "\n".join(lines)
 
 
-def _table(rows: Sequence[Mapping[str, str]]) -> str:
+def markdown_table(rows: Sequence[Mapping[str, str]]) -> str:
+    """``rows`` (each header -> cell) as a Markdown table; "None." without rows."""
     if not rows:
         return "None."
     header = list(rows[0])

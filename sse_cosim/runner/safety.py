@@ -26,17 +26,16 @@ campaign with a :class:`UserError` (a safety grid holds only meaningful values).
 from __future__ import annotations
 
 import itertools
-import tomllib
 from collections import Counter
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from sse_cosim.errors import UserError
-from sse_cosim.files import write_json_atomic
+from sse_cosim.files import read_toml_model, write_json_atomic
 from sse_cosim.reporting.outputs import TaskOutcome
 from sse_cosim.reporting.safety_report import SAFETY_PLAN
 from sse_cosim.runner.batch import scenario_files
@@ -191,20 +190,8 @@ def _only_scenarios(campaign: Campaign, stems: Sequence[str]) -> Campaign:
 
 
 def _read_campaign_file(path: Path) -> CampaignFile:
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise UserError(str(path), "", "campaign file not found",
-                        "run from the project folder or give --file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise UserError(str(path), "syntax", str(exc), "fix the TOML syntax there") from None
-    try:
-        return CampaignFile.model_validate(raw)
-    except ValidationError as exc:
-        err = exc.errors(include_url=False)[0]
-        where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in err["loc"])
-        message = str(err["msg"]).removeprefix("Value error, ")
-        raise UserError(str(path), where.lstrip("."), message, FILE_FIX) from None
+    return read_toml_model(path, CampaignFile, "campaign file",
+                           "run from the project folder or give --file", FILE_FIX)
 
 
 def _quick_subset(campaign: Campaign, quick: QuickSubset) -> Campaign:

@@ -21,17 +21,16 @@ import hashlib
 import itertools
 import json
 import re
-import tomllib
 from collections import Counter
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from sse_cosim.errors import UserError
-from sse_cosim.files import portable_path, write_json_atomic
+from sse_cosim.files import portable_path, read_toml_model, write_json_atomic
 from sse_cosim.reporting.outputs import RUNS_FOLDER, TaskOutcome
 from sse_cosim.reporting.sweep_report import SWEEP_PLAN
 from sse_cosim.runner.batch import scenario_files
@@ -203,20 +202,8 @@ class SweepSpec:
 
 def load_sweep_file(path: Path) -> SweepSpec:
     """Read and validate a sweep file; problems become one-line errors naming file and field."""
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise UserError(str(path), "", "sweep file not found", "check the path") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise UserError(str(path), "syntax", str(exc), "fix the TOML syntax there") from None
-    try:
-        model = SweepFile.model_validate(raw)
-    except ValidationError as exc:
-        err = exc.errors(include_url=False)[0]
-        where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in err["loc"])
-        message = str(err["msg"]).removeprefix("Value error, ")
-        raise UserError(str(path), where.lstrip("."), message,
-                        "see sweeps/noise.toml for a complete example") from None
+    model = read_toml_model(path, SweepFile, "sweep file", "check the path",
+                            "see sweeps/noise.toml for a complete example")
     return SweepSpec(
         scenarios=tuple(scenario_files([path.parent / s for s in model.scenarios])),
         parameters=tuple(entry.parameter() for entry in model.params),

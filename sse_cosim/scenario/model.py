@@ -9,7 +9,13 @@ from __future__ import annotations
 
 from typing import Any, Literal, TypeVar
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import (
+    Field,
+    SerializerFunctionWrapHandler,
+    field_validator,
+    model_serializer,
+    model_validator,
+)
 
 from sse_cosim.estimation.motion import MODELS
 from sse_cosim.regions import KINDS
@@ -21,7 +27,7 @@ from sse_cosim.sets.reduction import REDUCTION_METHODS
 __all__ = ["NonNegativeFloat", "PositiveFloat", "Sensor", "SensorMount", "StrictModel"]
 
 Assumption = Literal["pedestrian_speed", "walkable_ground", "sensor_bounds",
-                     "shared_estimates"]
+                     "shared_estimates", "reaction_time"]
 
 
 class Simulation(StrictModel):
@@ -91,6 +97,22 @@ class AutomatedVehicle(StrictModel):
     emergency_decel_mps2: PositiveFloat = Field(
         7.0, description="Deceleration of an emergency brake (m/s^2)."
     )
+    actuation_delay_s: NonNegativeFloat = Field(
+        0.0, description="How long the simulated vehicle takes to act on a command beyond "
+        "SUMO's own step (s, whole steps): each command, the emergency brake included, is "
+        "applied this much later. A4 (docs/controller.md) asks controller.reaction_time_s to "
+        "cover it; a longer delay (a controller deliberately mis-set) needs 'reaction_time' in "
+        "breaks_assumptions."
+    )
+
+    @model_serializer(mode="wrap")
+    def _no_zero_delay(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        """A vehicle that acts at SUMO's own step writes no ``actuation_delay_s`` (its
+        default), so every ``scenario.json`` written before the field reads the same."""
+        data = handler(self)
+        if self.actuation_delay_s == 0.0:
+            data.pop("actuation_delay_s", None)
+        return data
 
 
 class ParkedVehicle(StrictModel):
@@ -472,7 +494,9 @@ class Scenario(StrictModel):
         "'sensor_bounds': sensors whose measurements leave "
         "their noise bounds or report what is not there (bias beyond the bound, stuck, phantom); "
         "'shared_estimates': connected nodes send estimates that do not hold their bounds "
-        "(node shift and shrink faults).",
+        "(node shift and shrink faults); "
+        "'reaction_time': an automated vehicle acts on its commands later "
+        "(automated.<id>.actuation_delay_s) than controller.reaction_time_s allows for.",
     )
 
     @model_validator(mode="after")
@@ -545,6 +569,14 @@ class Scenario(StrictModel):
                      f"{speed:g} m/s is above estimator.max_pedestrian_speed_mps ({bound:g} m/s), "
                      f"the bound the estimator relies on; walk at most {bound:g} m/s or raise "
                      "the bound")
+        reaction = self.controller.reaction_time_s
+        for vid, vehicle in present(self.automated).items():
+            delay = vehicle.actuation_delay_s
+            if delay > reaction + 1e-9:
+                _require(declared, "reaction_time", f"automated.{vid}.actuation_delay_s",
+                         f"{delay:g} s is longer than controller.reaction_time_s ({reaction:g} "
+                         "s), the delay the controller's stops allow for; set the reaction "
+                         "time to at least the delay")
         for name, fault in self.faults.sensor.items():
             if fault.kind != "dropout" and not (fault.kind == "bias" and fault.within_bound):
                 _require(declared, "sensor_bounds", f"faults.sensor.{name}.kind",

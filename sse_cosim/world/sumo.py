@@ -51,6 +51,10 @@ control path as any command (speed mode, right of way and safe speed stay on) an
 exactly ``emergency_decel_mps2`` per second; ``slowDown`` would instead spread the change over
 a chosen duration, which is not what a brake is.
 
+Actuation delay. A vehicle with ``actuation_delay_s`` acts on each command (its emergency
+brake included) that many whole steps after it was given; until its first command acts it
+drives at its nominal speed. ``last_commanded_speed`` is the latest command, as given.
+
 One simulation per process. libsumo runs SUMO inside this process and holds one simulation at
 a time: a second ``SumoWorld`` entered while one is open raises :class:`SimulationError`. After
 ``close()`` a new simulation can be started in the same process (the tests do so), but sweeps
@@ -89,8 +93,9 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
+from collections import deque
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -162,15 +167,26 @@ def measure_walkers(net_path: Path, roadmap: RoadMap, extent: SceneExtent | None
 
 @dataclass
 class _Automated:
-    """What the world keeps of one automated vehicle: its latest command, its deceleration
-    now in SUMO, the distance it drove and whether it arrived."""
+    """What the world keeps of one automated vehicle: its latest command, the commands still
+    on their way (``actuation_delay_steps`` of them: ``pending``) and the one it acts on
+    (``acting``: speed, emergency), its deceleration now in SUMO, the distance it drove and
+    whether it arrived."""
 
     config: AutomatedVehicle
     decel: float
+    actuation_delay_steps: int = 0
     commanded: float | None = None
-    emergency: bool = False
+    pending: deque[tuple[float, bool]] = field(default_factory=deque)
+    acting: tuple[float, bool] | None = None
     distance: float = 0.0
     arrived: bool = False
+
+    def command(self, speed: float, emergency: bool) -> None:
+        """A new command: it is acted on once ``actuation_delay_steps`` later ones came."""
+        self.commanded = speed
+        self.pending.append((speed, emergency))
+        if len(self.pending) > self.actuation_delay_steps:
+            self.acting = self.pending.popleft()
 
 
 @dataclass(frozen=True)
@@ -199,7 +215,8 @@ class SumoWorld:
         self._entered = False
         self._time = -self._dt
         self._departed: set[str] = set()  # vehicles SUMO has inserted
-        self._automated = {vid: _Automated(av, av.comfortable_decel_mps2)
+        self._automated = {vid: _Automated(av, av.comfortable_decel_mps2,
+                                           round(av.actuation_delay_s / self._dt))
                            for vid, av in present(scenario.automated).items()}
         self._kinds = {
             **dict.fromkeys(present(scenario.parked), "parked"),
@@ -495,8 +512,7 @@ class SumoWorld:
             raise ValueError(f"commanded speed must be finite and >= 0, got {commanded_mps}")
         self._require_open()
         state = self._automated[vehicle_id]
-        state.commanded = float(commanded_mps)
-        state.emergency = bool(emergency)
+        state.command(float(commanded_mps), bool(emergency))
         if vehicle_id not in self._departed or state.arrived:
             return
         try:
@@ -507,14 +523,15 @@ class SumoWorld:
 
     def _apply_command(self, vehicle_id: str) -> None:
         state = self._automated[vehicle_id]
-        if state.commanded is None:
+        if state.acting is None:
             return
-        decel = state.config.emergency_decel_mps2 if state.emergency \
+        speed, emergency = state.acting
+        decel = state.config.emergency_decel_mps2 if emergency \
             else state.config.comfortable_decel_mps2
         if decel != state.decel:
             libsumo.vehicle.setDecel(vehicle_id, decel)
             state.decel = decel
-        libsumo.vehicle.setSpeed(vehicle_id, state.commanded)
+        libsumo.vehicle.setSpeed(vehicle_id, speed)
 
     # --- state ----------------------------------------------------------------------------
 

@@ -218,6 +218,17 @@ CASES = [
          named="sse-cosim: --set sensors.*.nope=1 ("),
     Case("option with a wrong value", None, ("--workers",),
          ("batch", "{s1}", "--workers", "0"), named="sse-cosim batch"),
+    Case("falsify file with an empty interval",
+         '[[dims]]\npath = "pedestrians.pedestrian.walking_speed_mps"\nname = "walk"\n'
+         'low = 2.0\nhigh = 1.0\n', ("dims[0].high", "must be above low"),
+         ("falsify", "{s1}", "-f", "{file}", "--out", "{tmp}/out")),
+    Case("falsify box beyond the speed bound",
+         '[[dims]]\npath = "pedestrians.pedestrian.walking_speed_mps"\nname = "walk"\n'
+         'low = 1.0\nhigh = 3.0\n[start_behind_truck]\nlow = 1.0\nhigh = 5.0\n',
+         ("corner of the search box", "walking_speed_mps", "narrow the interval"),
+         ("falsify", "{s1}", "-f", "{file}", "--out", "{tmp}/out")),
+    Case("falsify with an unknown objective", None, ("--objective",),
+         ("falsify", "{s1}", "--objective", "speed"), named="sse-cosim falsify"),
 ]
 
 

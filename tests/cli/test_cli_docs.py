@@ -16,7 +16,8 @@ def test_readme_field_table_is_generated_from_the_schema():
     assert fields_markdown() in (ROOT / "README.md").read_text(encoding="utf-8")
 
 
-@pytest.mark.parametrize("command", [[], ["run"], ["batch"], ["fields"], ["network"]])
+@pytest.mark.parametrize("command", [[], ["run"], ["batch"], ["fields"], ["network"],
+                                     ["falsify"]])
 def test_help_explains_every_command(command, capsys):
     main([*command, "--help"])
     text = capsys.readouterr().out
@@ -28,7 +29,7 @@ def test_help_explains_every_command(command, capsys):
     ("sensors.<sensor name>.noise", ["uniform", "worst-case"]),
     ("estimator.state_model", ["position", "constant-velocity", "bounded-acceleration"]),
     ("breaks_assumptions", ["pedestrian_speed", "walkable_ground", "sensor_bounds",
-                            "shared_estimates"]),
+                            "shared_estimates", "reaction_time"]),
 ])
 def test_field_table_names_the_accepted_values_of_enumerated_fields(path, values):
     """Read from the field's type: the README never goes stale on, e.g., `worst-case`."""

@@ -220,6 +220,35 @@ def test_bus_follows_commands(tmp_path: Path) -> None:
             world.set_speed("bus", -1.0)
 
 
+def test_a_bus_with_an_actuation_delay_acts_on_each_command_that_many_steps_later(
+        tmp_path: Path) -> None:
+    """A4's delay in the world: commanded at step k, the bus changes speed at step k + 3
+    (0.3 s), the emergency brake too; the latest command is reported as given."""
+    from sse_cosim.world.sumo import SumoWorld
+
+    sc = scenario("s1_no_pedestrian", **{"simulation.duration_s": 20.0,
+                                         "automated.bus.actuation_delay_s": 0.3,
+                                         "controller.reaction_time_s": 0.3})
+    dt = sc.simulation.step_length_s
+    with SumoWorld(sc, tmp_path, "delay") as world:
+        speeds = [world.step().vehicles["bus"].speed for _ in range(5)]
+        assert speeds == pytest.approx([20.0] * 5)
+        for command in (14.0, 14.0, 14.0):  # the first acts once three more have come
+            world.set_speed("bus", command)
+            speeds.append(world.step().vehicles["bus"].speed)
+        assert world.last_commanded_speed("bus") == 14.0
+        assert speeds[-3:] == pytest.approx([20.0] * 3)
+        world.set_speed("bus", 0.0, emergency=True)
+        speeds.append(world.step().vehicles["bus"].speed)  # the first 14 m/s acts now
+        assert speeds[-1] == pytest.approx(20.0 - 3.0 * dt)
+        for _ in range(3):
+            world.set_speed("bus", 0.0, emergency=True)
+            speeds.append(world.step().vehicles["bus"].speed)
+        # the emergency brake given 3 steps before the last one acts at the last
+        assert np.diff(speeds[-3:-1]) == pytest.approx([-3.0 * dt])
+        assert speeds[-1] - speeds[-2] == pytest.approx(-7.0 * dt)
+
+
 def test_bus_arrives(tmp_path: Path) -> None:
     sc = scenario("s1_no_pedestrian", **{"simulation.duration_s": 16.0})
     run = run_world(sc, tmp_path)

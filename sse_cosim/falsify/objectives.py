@@ -1,0 +1,140 @@
+"""What the falsifier drives down: one margin per run, read from its ``summary.json``.
+
+An objective is a small object with a name, a unit and two readings of a summary: its
+``margin`` (lower is worse; the search minimises it) and whether the run ``failed`` (the
+guarantee or the target it stands for is broken). A new objective is one class added to
+:data:`OBJECTIVES`.
+
+Whatever the objective, a run with a collision or a containment violation is a failure the
+report lists (:func:`broken`): the search for one margin still reports every broken promise
+it meets.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar, Protocol
+
+STANDSTILL_TARGET_S = 3.0
+"""The safety campaign's liveness target: the bus stands at most this long on a clear path."""
+
+
+class Objective(Protocol):
+    name: ClassVar[str]
+    unit: ClassVar[str]
+    help: ClassVar[str]
+
+    def margin(self, summary: Mapping[str, Any]) -> float:
+        """How far the run stayed from failing (lower is worse; <= 0 at a failure)."""
+
+    def failed(self, summary: Mapping[str, Any]) -> bool:
+        """Whether the run broke what this objective stands for."""
+
+    def failed_at(self, summary: Mapping[str, Any]) -> float | None:
+        """When the failure began (s), if the summary tells; None: not known."""
+
+
+def _emergency_s(summary: Mapping[str, Any]) -> float:
+    """Time the bus spent braking in emergency (s): its level share times its travel."""
+    share = summary["level_share"].get("emergency", 0.0)
+    return share * summary["steps"] * _step_s(summary)
+
+
+def _step_s(summary: Mapping[str, Any]) -> float:
+    return summary["travel_time_s"] / max(summary["steps"], 1)
+
+
+@dataclass(frozen=True)
+class LeastDistance:
+    """The least distance between the bus and any pedestrian (m); 0 at a collision."""
+
+    name: ClassVar[str] = "distance"
+    unit: ClassVar[str] = "m"
+    help: ClassVar[str] = "least bus-pedestrian distance (m); fails at a collision"
+
+    def margin(self, summary: Mapping[str, Any]) -> float:
+        if summary["collisions"]:
+            return 0.0
+        return float(summary["min_distance_bus_pedestrian_m"])
+
+    def failed(self, summary: Mapping[str, Any]) -> bool:
+        return bool(summary["collisions"])
+
+    def failed_at(self, summary: Mapping[str, Any]) -> float | None:
+        return summary.get("first_collision_t_s")
+
+
+@dataclass(frozen=True)
+class EmergencyBrake:
+    """The least distance while the bus never brakes in emergency; once it does, minus the
+    time it braked (s): the search first closes in, then prolongs the braking."""
+
+    name: ClassVar[str] = "emergency"
+    unit: ClassVar[str] = "m, or -s braking"
+    help: ClassVar[str] = ("least distance until an emergency brake; then minus its duration; "
+                           "fails at an emergency brake or a collision")
+
+    def margin(self, summary: Mapping[str, Any]) -> float:
+        braking = _emergency_s(summary)
+        if braking > 0:
+            return -braking
+        return LeastDistance().margin(summary)
+
+    def failed(self, summary: Mapping[str, Any]) -> bool:
+        return _emergency_s(summary) > 0 or bool(summary["collisions"])
+
+    def failed_at(self, summary: Mapping[str, Any]) -> float | None:
+        return None  # the summary gives the braking's length, not its start
+
+
+@dataclass(frozen=True)
+class Standstill:
+    """Liveness: the target (3 s) less the longest standstill on a clear path (s); a route
+    never finished fails."""
+
+    name: ClassVar[str] = "standstill"
+    unit: ClassVar[str] = "s"
+    help: ClassVar[str] = (f"{STANDSTILL_TARGET_S:g} s less the longest standstill after the "
+                           "path is clear; fails beyond it or on an unfinished route")
+
+    def margin(self, summary: Mapping[str, Any]) -> float:
+        if not summary["route_completed"]:
+            return -float(summary["travel_time_s"])
+        return STANDSTILL_TARGET_S - float(summary["longest_standstill_after_clear_s"])
+
+    def failed(self, summary: Mapping[str, Any]) -> bool:
+        return self.margin(summary) < 0
+
+    def failed_at(self, summary: Mapping[str, Any]) -> float | None:
+        return None
+
+
+OBJECTIVES: dict[str, Objective] = {o.name: o for o in (LeastDistance(), EmergencyBrake(),
+                                                         Standstill())}
+
+
+def first_break_t(summary: Mapping[str, Any]) -> float | None:
+    """When the simulated world first broke an assumption the run counted (s): a walker off
+    the model (``assumption_breaks``) or off the walkable ground (``ground_breaks``)."""
+    times = [entry["t"] for key in ("assumption_breaks", "ground_breaks")
+             for entry in (summary.get(key) or {}).get("first", [])[:1]]
+    return min(times, default=None)
+
+
+def broken(summary: Mapping[str, Any]) -> list[str]:
+    """The guarantee's broken promises in a run, within its assumptions: collisions and
+    containment violations that began before the world first broke an assumption (after it,
+    the estimator's sets owe nothing to a truth outside its model)."""
+    since = first_break_t(summary)
+
+    def before(t: float | None) -> bool:
+        return since is None or (t is not None and t < since)
+
+    out = []
+    if summary["collisions"] and before(summary.get("first_collision_t_s")):
+        out.append(f"{summary['collisions']} collision(s)")
+    violations = summary["violations"]
+    if summary["containment_violations"] and before(violations[0]["t"] if violations else None):
+        out.append(f"{summary['containment_violations']} containment violation(s)")
+    return out

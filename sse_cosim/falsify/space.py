@@ -1,0 +1,273 @@
+"""The falsifier's search space: what the assumptions A1-A4 (docs/controller.md) leave free.
+
+A falsify file (``sweeps/falsify.toml``) names the free choices; this module turns them, for
+one scenario, into a box of :class:`Dimension` s and decodes a point of the unit cube into
+scenario overrides:
+
+- ``[set]``: fixed overrides of every run (a longer horizon for liveness, as the safety
+  campaign's).
+- ``[[dims]]``: a dotted path pattern (as a sweep's) and the interval its fields range over
+  (when the pedestrian steps onto the zebra, how fast it walks); a pattern that selects
+  nothing in the scenario is not searched there.
+- ``[start_behind_truck]``: the pedestrian's start as an offset behind the parked truck's
+  front, as in the safety campaign (so it stays hidden wherever the truck stands).
+- ``[noise]``: each selected sensor's error held toward a chosen point of its noise bound
+  (A2 allows any error within it): a within-bound bias fault (``faults.sensor``) whose offset
+  along each measurement axis is ``2 f r`` with ``f`` in [-1, 1] and ``r`` the bound, clipped
+  to the bound. ``f = +-1`` puts every measurement on the bound, ``f = 0`` leaves the noise
+  as drawn.
+- ``[loss]``: for each node that sends to an automated vehicle, one burst of lost messages
+  (A3 allows any loss): its start and its length up to ``longest_s``.
+
+The box is validated at its corners with the scenario's own ``breaks_assumptions``, so an
+interval outside the assumptions (a walking speed above the estimator's bound) is refused
+before anything runs; the runs themselves list :data:`COUNTED_BREAKS`, so that the world's
+breaks are counted, not fatal.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
+
+from sse_cosim.errors import UserError
+from sse_cosim.files import read_toml_model
+from sse_cosim.runner.safety import START_PATH, TRUCK
+from sse_cosim.scenario.loader import apply_overrides, validate_scenario
+from sse_cosim.scenario.model import Scenario
+from sse_cosim.scenario.paths import expand_pattern
+
+COUNTED_BREAKS = ("pedestrian_speed", "walkable_ground")
+"""The world's breaks of A1 that every search run counts instead of stopping at: SUMO may
+move a walker off the model whatever the candidate (after a collision, a walker held on a
+walking area can jump), and a run stopped there would hide what came before it. The search
+reports every break and counts a failure only if it came before the first break."""
+BREAKS_PATH = "breaks_assumptions"
+FAULT_PREFIX = "falsify_"
+"""Faults the search adds are named ``falsify_<sensor or node>``."""
+DECIMALS = 6
+"""Decoded values are rounded to this many decimals (1 µs, 1 µm): run keys and the worst
+cases' scenario files stay readable and exact."""
+
+
+class _FileModel(BaseModel):
+    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+
+
+class DimEntry(_FileModel):
+    """``[[dims]]``: a path pattern and the interval [low, high] its fields range over."""
+
+    path: str = Field(min_length=1)
+    name: str = Field(min_length=1)
+    low: float
+    high: float
+
+    @field_validator("high")
+    @classmethod
+    def _above_low(cls, high: float, info: ValidationInfo) -> float:
+        low = info.data.get("low")
+        if low is not None and not low < high:
+            raise ValueError(f"must be above low ({low:g}); widen the interval")
+        return high
+
+
+class BehindTruck(_FileModel):
+    """``[start_behind_truck]``: the pedestrian's start, [low, high] m behind the truck's
+    front."""
+
+    name: str = Field("behind_m", min_length=1)
+    low: float = Field(ge=0)
+    high: float = Field(gt=0)
+
+
+class NoiseEntry(_FileModel):
+    """``[noise]``: the sensors (a name glob) whose error the search holds within the bound."""
+
+    sensors: str = Field("*", min_length=1)
+
+
+class LossEntry(_FileModel):
+    """``[loss]``: one burst of lost messages per sending node, at most ``longest_s`` long."""
+
+    longest_s: float = Field(gt=0)
+
+
+class FalsifyFile(_FileModel):
+    """A falsify file: the free choices the search steers."""
+
+    description: str = ""
+    overrides: dict[str, Any] = Field(default_factory=dict, alias="set")
+    dims: list[DimEntry] = Field(min_length=1)
+    start_behind_truck: BehindTruck | None = None
+    noise: NoiseEntry | None = None
+    loss: LossEntry | None = None
+
+
+def load_falsify_file(path: Path) -> FalsifyFile:
+    """The falsify file at ``path``; :class:`UserError` naming the field if it is wrong."""
+    return read_toml_model(path, FalsifyFile, "falsify file",
+                           "give a falsify file, e.g. sweeps/falsify.toml",
+                           "see sweeps/falsify.toml for a complete example")
+
+
+@dataclass(frozen=True)
+class Dimension:
+    """One searched value: ``name`` ranging over [low, high]."""
+
+    name: str
+    low: float
+    high: float
+
+    def value(self, unit: float) -> float:
+        """The value at ``unit`` in [0, 1] (clipped), rounded to :data:`DECIMALS`."""
+        u = min(max(float(unit), 0.0), 1.0)
+        return round(self.low + u * (self.high - self.low), DECIMALS)
+
+
+@dataclass(frozen=True)
+class _Noise:
+    sensor: str
+    bound_m: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class SearchSpace:
+    """One scenario's search box and how a point of it becomes scenario overrides.
+
+    ``dims`` in order: the ``[[dims]]`` that select something (``targets``: the concrete
+    paths each sets), the start behind the truck (if the scenario has the truck), two per
+    noisy sensor (forward, lateral fraction of the bound), two per sender (loss start and
+    length).
+    """
+
+    dims: tuple[Dimension, ...]
+    targets: tuple[tuple[str, ...], ...]
+    truck_front_m: float | None
+    noises: tuple[_Noise, ...]
+    senders: tuple[str, ...]
+    step_length_s: float
+    fixed: Mapping[str, Any]
+
+    @property
+    def size(self) -> int:
+        return len(self.dims)
+
+    def values(self, unit: Sequence[float]) -> dict[str, float]:
+        """The named values at ``unit``, shape (size,), in [0, 1]."""
+        if len(unit) != self.size:
+            raise ValueError(f"a point of this space has {self.size} coordinates, not {len(unit)}")
+        return {d.name: d.value(u) for d, u in zip(self.dims, unit, strict=True)}
+
+    def overrides(self, values: Mapping[str, float]) -> dict[str, Any]:
+        """The scenario overrides (dotted path -> value) that realise ``values``."""
+        names = iter(d.name for d in self.dims)
+        out: dict[str, Any] = dict(self.fixed)
+        for paths in self.targets:
+            out.update(dict.fromkeys(paths, values[next(names)]))
+        if self.truck_front_m is not None:
+            out[START_PATH] = round(self.truck_front_m - values[next(names)], DECIMALS)
+        for noise in self.noises:
+            f = (values[next(names)], values[next(names)])
+            bias = [round(2.0 * fi * r, DECIMALS) for fi, r in zip(f, noise.bound_m, strict=True)]
+            if any(bias):  # no bias: the noise as drawn (a zero bias fault is refused)
+                out[f"faults.sensor.{FAULT_PREFIX}{noise.sensor}"] = {
+                    "sensor": noise.sensor, "kind": "bias", "bias_m": bias,
+                    "within_bound": True}
+        for node in self.senders:
+            start, length = values[next(names)], values[next(names)]
+            if length >= self.step_length_s:  # shorter than a step: nothing is lost
+                out[f"faults.link.{FAULT_PREFIX}{node}"] = {
+                    "node": node, "kind": "loss", "start_s": start,
+                    "end_s": round(start + length, DECIMALS)}
+        return out
+
+
+def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
+                spec_source: str) -> SearchSpace:
+    """``spec`` for the scenario ``data`` (its file ``source``): the dims that select
+    something there. Raises :class:`UserError` if nothing is left to search, or if a corner
+    of the box does not validate (an interval outside what the schema allows)."""
+    fixed = {concrete: value for pattern, value in spec.overrides.items()
+             for concrete, _ in expand_pattern(pattern, validate_scenario(data, source)
+                                               .model_dump(mode="json"), spec_source)}
+    scenario = validate_scenario(apply_overrides(data, fixed, source), source)
+    counted = {**fixed, BREAKS_PATH: sorted({*scenario.breaks_assumptions, *COUNTED_BREAKS})}
+    fields = scenario.model_dump(mode="json")
+    dims: list[Dimension] = []
+    targets: list[tuple[str, ...]] = []
+    for entry in spec.dims:
+        paths = _selected(entry.path, fields, spec_source)
+        if paths:
+            dims.append(Dimension(entry.name, entry.low, entry.high))
+            targets.append(paths)
+    truck = scenario.parked.get(TRUCK)
+    truck_front = None
+    behind = spec.start_behind_truck
+    if behind is not None and truck is not None and START_PATH.split(".")[1] in (
+            scenario.pedestrians):
+        dims.append(Dimension(behind.name, behind.low, behind.high))
+        truck_front = truck.end_pos_m
+    noises = _noises(spec, scenario)
+    for noise in noises:
+        dims += [Dimension(f"noise_{noise.sensor}_fwd", -1.0, 1.0),
+                 Dimension(f"noise_{noise.sensor}_lat", -1.0, 1.0)]
+    senders = tuple(scenario.sender_ids()) if spec.loss is not None else ()
+    duration = scenario.simulation.duration_s
+    for node in senders:
+        dims += [Dimension(f"loss_{node}_start_s", 0.0, duration),
+                 Dimension(f"loss_{node}_length_s", 0.0, spec.loss.longest_s)]
+    if len(dims) < 2:
+        raise UserError(spec_source, "dims", f"selects {len(dims)} value(s) in {source}",
+                        "a search needs at least two: add dims that name this scenario's "
+                        "fields (`sse-cosim fields` lists them)")
+    space = SearchSpace(tuple(dims), tuple(targets), truck_front, noises, senders,
+                        scenario.simulation.step_length_s, counted)
+    _check_corners(space, data, source, spec_source)
+    return space
+
+
+def _selected(pattern: str, fields: Mapping[str, Any], source: str) -> tuple[str, ...]:
+    try:
+        return tuple(path for path, _ in expand_pattern(pattern, fields, source))
+    except UserError:
+        return ()
+
+
+def _noises(spec: FalsifyFile, scenario: Scenario) -> tuple[_Noise, ...]:
+    if spec.noise is None:
+        return ()
+    fields = scenario.model_dump(mode="json")
+    found = _selected(f"sensors.{spec.noise.sensors}.noise_bound_m", fields, "")
+    out = []
+    for path in found:
+        name = path.split(".")[1]
+        bound = tuple(float(r) for r in scenario.sensors[name].noise_bound_m)
+        out.append(_Noise(name, (bound[0], bound[1])))
+    return tuple(out)
+
+
+def _check_corners(space: SearchSpace, data: Mapping[str, Any], source: str,
+                   spec_source: str) -> None:
+    """The box's lowest and highest corners validate (the schema's bounds hold inside)."""
+    for unit in (np.zeros(space.size), np.ones(space.size)):
+        overrides = space.overrides(space.values(unit))
+        overrides.pop(BREAKS_PATH)  # the corners must keep the assumptions as the scenario does
+        try:
+            validate_scenario(apply_overrides(data, overrides, source), source)
+        except UserError as exc:
+            raise UserError(spec_source, exc.field, f"at a corner of the search box {source} "
+                            f"is refused: {exc.problem}",
+                            "narrow the interval to values the scenario allows") from None
+
+
+def scenario_of(space: SearchSpace, data: Mapping[str, Any], unit: Sequence[float],
+                source: str) -> tuple[dict[str, float], dict[str, Any], Scenario]:
+    """The values, overrides and validated scenario at ``unit``."""
+    values = space.values(unit)
+    overrides = space.overrides(values)
+    return values, overrides, validate_scenario(apply_overrides(data, overrides, source), source)

@@ -1,0 +1,167 @@
+"""The falsifier's parts without SUMO: the box, its decoding, the objectives, the searchers."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sse_cosim.errors import UserError
+from sse_cosim.falsify.objectives import OBJECTIVES, broken, first_break_t
+from sse_cosim.falsify.searchers import SEARCHERS, generation_size
+from sse_cosim.falsify.space import (
+    COUNTED_BREAKS,
+    FalsifyFile,
+    build_space,
+    load_falsify_file,
+    scenario_of,
+)
+from sse_cosim.scenario.loader import load_scenario_data
+
+ROOT = Path(__file__).resolve().parents[2]
+SPACE = ROOT / "sweeps" / "falsify.toml"
+S1 = ROOT / "scenarios" / "s1_pedestrian.toml"
+S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
+
+
+def _space(scenario: Path, spec: FalsifyFile | None = None):
+    return build_space(spec or load_falsify_file(SPACE), load_scenario_data(scenario),
+                       str(scenario), str(SPACE))
+
+
+def test_the_box_of_s3_holds_the_pedestrian_every_sensor_and_every_sender():
+    space = _space(S3)
+    names = [d.name for d in space.dims]
+    assert names[:3] == ["step_s", "walk_mps", "behind_m"]
+    sensors = {"bus_front", "bus_near", "rsu1_cam", "rsu2_cam"}
+    assert {n for n in names if n.startswith("noise_")} == {
+        f"noise_{s}_{axis}" for s in sensors for axis in ("fwd", "lat")}
+    assert {n for n in names if n.startswith("loss_")} == {
+        f"loss_{node}_{what}" for node in ("rsu1", "rsu2") for what in ("start_s", "length_s")}
+
+
+def test_a_point_decodes_into_overrides_that_keep_the_noise_within_its_bound():
+    space = _space(S3)
+    unit = np.linspace(0.0, 1.0, space.size)
+    values, overrides, scenario = scenario_of(space, load_scenario_data(S3), unit, str(S3))
+    truck_front = scenario.parked["truck"].end_pos_m
+    assert overrides["pedestrians.pedestrian.start_pos_m"] == pytest.approx(
+        truck_front - values["behind_m"])
+    for name, sensor in scenario.sensors.items():
+        fault = scenario.faults.sensor.get(f"falsify_{name}")
+        if fault is None:
+            continue
+        assert fault.within_bound  # clipped to the bound: A2 holds
+        np.testing.assert_allclose(
+            np.abs(fault.bias_m), 2 * np.abs([values[f"noise_{name}_fwd"],
+                                              values[f"noise_{name}_lat"]])
+            * np.asarray(sensor.noise_bound_m), atol=1e-6)
+    assert set(COUNTED_BREAKS) <= set(scenario.breaks_assumptions)
+
+
+def test_a_loss_shorter_than_a_step_adds_no_fault_and_a_longer_one_a_burst():
+    space = _space(S3)
+    values = space.values(np.full(space.size, 0.5))
+    values["loss_rsu1_length_s"] = 0.05
+    values["loss_rsu2_length_s"] = 2.0
+    overrides = space.overrides(values)
+    assert "faults.link.falsify_rsu1" not in overrides
+    burst = overrides["faults.link.falsify_rsu2"]
+    assert burst["kind"] == "loss"
+    assert burst["end_s"] - burst["start_s"] == pytest.approx(2.0)
+
+
+def test_s1_has_no_sender_to_lose_and_no_shared_sensor():
+    names = [d.name for d in _space(S1).dims]
+    assert not any(n.startswith("loss_") for n in names)
+    assert {n for n in names if n.startswith("noise_")} == {
+        "noise_bus_front_fwd", "noise_bus_front_lat", "noise_bus_near_fwd", "noise_bus_near_lat"}
+
+
+def test_a_box_beyond_the_speed_bound_is_refused_at_its_corner():
+    spec = load_falsify_file(SPACE).model_copy(deep=True)
+    spec.dims[1].high = 3.0  # above estimator.max_pedestrian_speed_mps = 2.5
+    with pytest.raises(UserError, match="corner of the search box"):
+        _space(S1, spec)
+
+
+def test_a_falsify_file_with_a_bad_field_is_one_line_naming_it(tmp_path: Path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[dims]]\npath = "x"\nname = "x"\nlow = 2.0\nhigh = 1.0\n')
+    with pytest.raises(UserError, match=r"dims\[0\]\.high: must be above low"):
+        load_falsify_file(bad)
+
+
+def _summary(**changes):
+    base = {"collisions": 0, "contact_steps": 0, "min_distance_bus_pedestrian_m": 2.5,
+            "containment_violations": 0, "violations": [], "route_completed": True,
+            "longest_standstill_after_clear_s": 0.5, "travel_time_s": 30.0, "steps": 300,
+            "level_share": {"emergency": 0.0}}
+    return {**base, **changes}
+
+
+def test_the_objectives_read_their_margins_and_failures():
+    distance, emergency, standstill = (OBJECTIVES[n] for n in
+                                       ("distance", "emergency", "standstill"))
+    assert distance.margin(_summary()) == 2.5
+    hit = _summary(collisions=1, min_distance_bus_pedestrian_m=0.1, first_collision_t_s=11.9)
+    assert distance.margin(hit) == 0.0 and distance.failed(hit)
+    assert distance.failed_at(hit) == 11.9
+    braking = _summary(level_share={"emergency": 0.01})
+    assert emergency.margin(braking) == pytest.approx(-0.3)
+    assert emergency.failed(braking) and not emergency.failed(_summary())
+    assert standstill.margin(_summary()) == pytest.approx(2.5)
+    assert standstill.failed(_summary(longest_standstill_after_clear_s=3.5))
+    assert standstill.failed(_summary(route_completed=False))
+
+
+def test_a_collision_after_the_world_broke_an_assumption_is_not_a_broken_promise():
+    breaks = {"count": 1, "first": [{"t": 17.2}]}
+    before = _summary(collisions=1, first_collision_t_s=11.9, assumption_breaks=breaks)
+    after = _summary(collisions=1, first_collision_t_s=18.0, assumption_breaks=breaks,
+                     containment_violations=3, violations=[{"t": 17.3}])
+    assert first_break_t(before) == 17.2
+    assert broken(before) == ["1 collision(s)"]
+    assert broken(after) == []
+    ground = {"count": 2, "first": [{"t": 5.0}, {"t": 5.1}]}
+    assert first_break_t(_summary(assumption_breaks=breaks, ground_breaks=ground)) == 5.0
+
+
+@pytest.mark.parametrize("method", sorted(SEARCHERS))
+def test_a_searcher_from_the_same_seed_told_the_same_margins_proposes_the_same_points(method):
+    size = generation_size(5)
+
+    def points(seed: int) -> list[np.ndarray]:
+        searcher = SEARCHERS[method](5, seed, size)
+        out = []
+        for _ in range(3):
+            batch = searcher.ask()
+            assert batch.shape == (size, 5)
+            assert np.all((batch >= 0.0) & (batch <= 1.0))
+            searcher.tell(batch, [float(np.sum((p - 0.2) ** 2)) for p in batch])
+            out.append(batch)
+        return out
+
+    first, again, other = points(7), points(7), points(8)
+    for a, b in zip(first, again, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(first[0], other[0])
+
+
+def test_cma_closes_in_on_a_minimum_that_random_search_only_stumbles_near():
+    """The search learns from its margins: on a smooth bowl, CMA-ES's best after 10
+    generations is far below random search's with the same budget and seed."""
+    dims, size = 6, generation_size(6)
+    target = np.full(dims, 0.3)
+    best = {}
+    for method in ("cma", "random"):
+        searcher = SEARCHERS[method](dims, 3, size)
+        values = []
+        for _ in range(10):
+            batch = searcher.ask()
+            margins = [float(np.linalg.norm(p - target)) for p in batch]
+            searcher.tell(batch, margins)
+            values += margins
+        best[method] = min(values)
+    assert best["cma"] < 0.5 * best["random"]
