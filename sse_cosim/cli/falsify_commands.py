@@ -9,6 +9,7 @@ import click
 
 from sse_cosim.cli.main import TargetsMissed, cli
 from sse_cosim.cli.options import check_scheduler, execution_options, writable_folder
+from sse_cosim.cli.sweep_commands import RunsFailed
 from sse_cosim.falsify.objectives import OBJECTIVES
 from sse_cosim.falsify.searchers import SEARCHERS
 
@@ -104,8 +105,6 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
                             f"{outcome.report}")
     failed = table[table["error"].notna()]
     if not failed.empty:
-        from sse_cosim.cli.sweep_commands import RunsFailed
-
         raise RunsFailed(f"{len(failed)} run(s) failed (first: {failed.iloc[0]['key']}: "
                          f"{failed.iloc[0]['error']}) -- see {outcome.report}")
 

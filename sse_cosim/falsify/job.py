@@ -59,8 +59,8 @@ def falsify(setup: SearchSetup, out_dir: Path, execution: Execution, command: st
     table = report.evaluations_table([_row(e) for e in evaluations])
     plan = plan_document(setup, command)
     report.write_outputs(out_dir, plan, table)
-    worst = tuple(_reproduce(setup, table, method, out_dir, execution)
-                  for method in setup.methods if report.worst_row(table, method) is not None)
+    worst = tuple(_reproduce(setup, case, out_dir, execution)
+                  for case in _worst(evaluations, setup.methods))
     return FalsifyOutcome(table, worst, report.write_report(out_dir, plan, table, worst))
 
 
@@ -83,29 +83,33 @@ def _row(e: Evaluation) -> dict[str, Any]:
             "broken": "; ".join(e.broken), "not_feasible": e.not_feasible, "error": e.error}
 
 
-def _reproduce(setup: SearchSetup, table: pd.DataFrame, method: str, out_dir: Path,
+def _worst(evaluations: Sequence[Evaluation], methods: Sequence[str]) -> list[Evaluation]:
+    """Each method's evaluation with the least margin (the first of equals); none for a
+    method none of whose points ran."""
+    out = []
+    for method in methods:
+        ran = [e for e in evaluations if e.method == method and e.margin is not None]
+        if ran:
+            out.append(min(ran, key=lambda e: e.margin))
+    return out
+
+
+def _reproduce(setup: SearchSetup, case: Evaluation, out_dir: Path,
                execution: Execution) -> report.WorstCase:
-    """The method's worst case as a scenario file, run again in full (plots, replay)."""
-    row = report.worst_row(table, method)
-    evaluation = int(row["evaluation"])
-    overrides = _overrides(setup, row)
+    """A method's worst case as a scenario file, run again in full (plots, replay)."""
+    method = case.method
     target = out_dir / f"worst_{method}.toml"
     description = (f"{setup.data.get('name', setup.scenario.stem)}: the worst case "
-                   f"({setup.objective.name} margin {row['margin']:.3f} {setup.objective.unit})"
-                   f" that {method} found at evaluation {evaluation + 1}")
-    write_text_atomic(target, report.worst_case_document(setup.scenario, target, overrides,
-                                                         description))
+                   f"({setup.objective.name} margin {case.margin:.3f} {setup.objective.unit})"
+                   f" that {method} found at evaluation {case.index + 1}")
+    write_text_atomic(target, report.worst_case_document(setup.scenario, target,
+                                                         case.overrides, description))
     folder = out_dir / f"worst_{method}"
     task = RunTask(key=f"worst_{method}", scenario=str(target.resolve()), out_dir=str(folder))
     (outcome,) = execute([task], Execution(1, execution.executor, execution.scheduler,
                                            progress=False))
     if not outcome.ok:
-        return report.WorstCase(method, evaluation, float(row["margin"]), target, folder, None,
+        return report.WorstCase(method, case.index, case.margin, target, folder, None,
                                 outcome.error)
-    return report.WorstCase(method, evaluation, float(row["margin"]), target, folder,
+    return report.WorstCase(method, case.index, case.margin, target, folder,
                             setup.objective.margin(outcome.summary))
-
-
-def _overrides(setup: SearchSetup, row: pd.Series) -> dict[str, Any]:
-    """The overrides of the evaluation in ``row``, decoded again from its values."""
-    return setup.space.overrides({d.name: float(row[d.name]) for d in setup.space.dims})

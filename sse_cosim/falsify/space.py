@@ -40,7 +40,7 @@ from sse_cosim.files import read_toml_model
 from sse_cosim.runner.safety import START_PATH, TRUCK
 from sse_cosim.scenario.loader import apply_overrides, validate_scenario
 from sse_cosim.scenario.model import Scenario
-from sse_cosim.scenario.paths import expand_pattern
+from sse_cosim.scenario.paths import expand_overrides, selected_paths
 
 COUNTED_BREAKS = ("pedestrian_speed", "walkable_ground")
 """The world's breaks of A1 that every search run counts instead of stopping at: SUMO may
@@ -192,19 +192,18 @@ def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
     """``spec`` for the scenario ``data`` (its file ``source``): the dims that select
     something there. Raises :class:`UserError` if nothing is left to search, or if a corner
     of the box does not validate (an interval outside what the schema allows)."""
-    fixed = {concrete: value for pattern, value in spec.overrides.items()
-             for concrete, _ in expand_pattern(pattern, validate_scenario(data, source)
-                                               .model_dump(mode="json"), spec_source)}
+    fixed = expand_overrides(spec.overrides,
+                             validate_scenario(data, source).model_dump(mode="json"), spec_source)
     scenario = validate_scenario(apply_overrides(data, fixed, source), source)
     counted = {**fixed, BREAKS_PATH: sorted({*scenario.breaks_assumptions, *COUNTED_BREAKS})}
     fields = scenario.model_dump(mode="json")
     dims: list[Dimension] = []
     targets: list[tuple[str, ...]] = []
     for entry in spec.dims:
-        paths = _selected(entry.path, fields, spec_source)
+        paths = selected_paths(entry.path, fields, spec_source)
         if paths:
             dims.append(Dimension(entry.name, entry.low, entry.high))
-            targets.append(paths)
+            targets.append(tuple(paths))
     truck = scenario.parked.get(TRUCK)
     truck_front = None
     behind = spec.start_behind_truck
@@ -212,7 +211,7 @@ def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
             scenario.pedestrians):
         dims.append(Dimension(behind.name, behind.low, behind.high))
         truck_front = truck.end_pos_m
-    noises = _noises(spec, scenario)
+    noises = _noises(spec, scenario, fields)
     for noise in noises:
         dims += [Dimension(f"noise_{noise.sensor}_fwd", -1.0, 1.0),
                  Dimension(f"noise_{noise.sensor}_lat", -1.0, 1.0)]
@@ -231,18 +230,13 @@ def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
     return space
 
 
-def _selected(pattern: str, fields: Mapping[str, Any], source: str) -> tuple[str, ...]:
-    try:
-        return tuple(path for path, _ in expand_pattern(pattern, fields, source))
-    except UserError:
-        return ()
-
-
-def _noises(spec: FalsifyFile, scenario: Scenario) -> tuple[_Noise, ...]:
+def _noises(spec: FalsifyFile, scenario: Scenario,
+            fields: Mapping[str, Any]) -> tuple[_Noise, ...]:
+    """The sensors ``[noise]`` selects in ``scenario`` (``fields``: its dump), with their
+    bounds."""
     if spec.noise is None:
         return ()
-    fields = scenario.model_dump(mode="json")
-    found = _selected(f"sensors.{spec.noise.sensors}.noise_bound_m", fields, "")
+    found = selected_paths(f"sensors.{spec.noise.sensors}.noise_bound_m", fields, "")
     out = []
     for path in found:
         name = path.split(".")[1]

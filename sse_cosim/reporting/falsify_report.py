@@ -79,15 +79,6 @@ def first_failure(table: pd.DataFrame, method: str) -> int | None:
     return int(hits[0]) + 1 if hits.size else None
 
 
-def worst_row(table: pd.DataFrame, method: str) -> pd.Series | None:
-    """The method's evaluation with the least margin (the first of equals), None if no run
-    has a margin."""
-    runs = table[(table["method"] == method) & table["margin"].notna()]
-    if runs.empty:
-        return None
-    return runs.loc[runs["margin"].idxmin()]
-
-
 def progress_figure(table: pd.DataFrame, methods: Sequence[str], objective: str,
                     unit: str, scenario: str) -> Figure:
     """Each method's least margin so far against the number of evaluations."""
@@ -121,7 +112,7 @@ def worst_case_document(scenario_file: Path, target: Path, overrides: Mapping[st
             + body)
 
 
-def write_outputs(folder: Path, plan: Mapping[str, Any], table: pd.DataFrame) -> list[Path]:
+def write_outputs(folder: Path, plan: Mapping[str, Any], table: pd.DataFrame) -> None:
     """``falsify.json``, ``evaluations.csv`` and the progress plot, written atomically."""
     write_json_atomic(folder / FALSIFY_PLAN, plan)
     with atomic_path(folder / EVALUATIONS) as tmp:
@@ -129,7 +120,6 @@ def write_outputs(folder: Path, plan: Mapping[str, Any], table: pd.DataFrame) ->
     fig = progress_figure(table, plan["methods"], plan["objective"], plan["unit"],
                           plan["scenario"])
     plots.save_figure(fig, folder / PROGRESS_PLOT)
-    return [folder / FALSIFY_PLAN, folder / EVALUATIONS, folder / PROGRESS_PLOT]
 
 
 def write_report(folder: Path, plan: Mapping[str, Any], table: pd.DataFrame,

@@ -50,7 +50,7 @@ from sse_cosim.runner.sweep import (
 )
 from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
 from sse_cosim.scenario.model import Network, Scenario
-from sse_cosim.scenario.paths import expand_pattern
+from sse_cosim.scenario.paths import expand_overrides, expand_pattern, selected_paths
 
 if TYPE_CHECKING:
     from sse_cosim.world.roadmap import RoadMap
@@ -327,7 +327,7 @@ def _parameter_targets(campaign: Campaign,
                        fields: Sequence[Mapping[str, Any]]) -> list[list[list[str]]]:
     """Per scenario, per parameter, the concrete paths it sets (none where its pattern selects
     nothing there)."""
-    return [[_selected(p.pattern, found, str(path)) for p in campaign.parameters]
+    return [[selected_paths(p.pattern, found, str(path)) for p in campaign.parameters]
             for found, path in zip(fields, campaign.scenarios, strict=True)]
 
 
@@ -342,20 +342,12 @@ def _check_every_parameter_selects(campaign: Campaign,
             expand_pattern(parameter.pattern, fields[0], campaign.source)  # raises: why
 
 
-def _selected(pattern: str, fields: Mapping[str, Any], source: str) -> list[str]:
-    try:
-        return [path for path, _ in expand_pattern(pattern, fields, source)]
-    except UserError:
-        return []
-
-
 def _scenario_runs(campaign: Campaign, path: Path, data: Mapping[str, Any],
                    fields: Mapping[str, Any],
                    targets: Sequence[list[str]]) -> Iterator[tuple[PlannedRun, Scenario]]:
     """The runs of one scenario file, each with its resolved scenario."""
     source = str(path)
-    fixed = {concrete: value for pattern, value in campaign.fixed.items()
-             for concrete, _ in expand_pattern(pattern, fields, source)}
+    fixed = expand_overrides(campaign.fixed, fields, source)
     active = [(p, paths) for p, paths in zip(campaign.parameters, targets, strict=True) if paths]
     _check_disjoint(fixed, active, source)
     behind = campaign.behind_truck

@@ -41,6 +41,23 @@ def expand_pattern(pattern: str, fields: Mapping[str, Any], source: str) -> list
     return [(".".join(path), value) for path, value in found]
 
 
+def selected_paths(pattern: str, fields: Mapping[str, Any], source: str) -> list[str]:
+    """The concrete paths ``pattern`` selects in ``fields``; none where it selects nothing (a
+    campaign's or a search's pattern need not apply to every scenario)."""
+    try:
+        return [path for path, _ in expand_pattern(pattern, fields, source)]
+    except UserError:
+        return []
+
+
+def expand_overrides(overrides: Mapping[str, Any], fields: Mapping[str, Any],
+                     source: str) -> dict[str, Any]:
+    """``overrides`` (pattern -> value) with each pattern replaced by the concrete paths it
+    selects in ``fields``; a pattern that selects nothing is a :class:`UserError`."""
+    return {path: value for pattern, value in overrides.items()
+            for path, _ in expand_pattern(pattern, fields, source)}
+
+
 def top_level_positions(text: str, separator: str) -> list[int]:
     """Where ``separator`` stands in ``text`` outside ``[...]`` (a filter may hold dots and
     ``=``)."""
