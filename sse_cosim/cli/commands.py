@@ -8,6 +8,7 @@ import click
 
 from sse_cosim.cli.main import TargetsMissed, cli
 from sse_cosim.cli.options import OUT_HELP, check_scheduler, execution_options, writable_folder
+from sse_cosim.reporting.margins import MARGINS
 
 
 @cli.command()
@@ -23,13 +24,17 @@ from sse_cosim.cli.options import OUT_HELP, check_scheduler, execution_options, 
                    "selects takes VALUE; a pattern that selects nothing is an error. "
                    "E.g. --set sensors.bus_front.range_m=40, "
                    "--set 'sensors.*[node!=bus].noise_bound_m=[1,1]'.")
+@click.option("--margin", "margins", multiple=True, type=click.Choice(list(MARGINS)),
+              help="Also report this margin under summary.json's `margins` (repeatable): "
+                   + "; ".join(f"{name}: {m.help}" for name, m in MARGINS.items()) + ".")
 def run(scenario: Path, out_dir: Path | None, scene_times: tuple[float, ...],
-        overrides: tuple[str, ...]) -> None:
+        overrides: tuple[str, ...], margins: tuple[str, ...]) -> None:
     """Run one SCENARIO file in SUMO and write its folder.
 
     The folder holds trace.csv (one row per step), sets.jsonl (every local and fused
-    position set), summary.json (speeds, detections, set sizes, violations), scenario.json
-    (the resolved scenario) and plots (speed, set areas, scenes).
+    position set), summary.json (speeds, detections, set sizes, violations, and the
+    margins asked for with --margin), scenario.json (the resolved scenario) and plots
+    (speed, set areas, scenes).
     """
     from sse_cosim.errors import UserError
     from sse_cosim.runner.parameters import blame_assignments, load_with_assignments
@@ -38,7 +43,8 @@ def run(scenario: Path, out_dir: Path | None, scene_times: tuple[float, ...],
     out_dir = writable_folder(out_dir or Path("runs") / scenario.stem, "--out")
     resolved, owners = load_with_assignments(scenario, overrides)
     try:
-        summary = run_scenario(resolved, str(scenario), out_dir, scene_times=scene_times)
+        summary = run_scenario(resolved, str(scenario), out_dir, scene_times=scene_times,
+                               margins=margins)
     except UserError as exc:  # a check on the road network: --set may have set the field
         raise blame_assignments(exc, owners, always=False) from None
     _echo_summary(summary, out_dir)

@@ -103,9 +103,11 @@ def _reproduce(setup: SearchSetup, case: Evaluation, out_dir: Path,
                    f"({setup.objective.name} margin {case.margin:.3f} {setup.objective.unit})"
                    f" that {method} found at evaluation {case.index + 1}")
     write_text_atomic(target, report.worst_case_document(setup.scenario, target,
-                                                         case.overrides, description))
+                                                         case.overrides, description,
+                                                         setup.objective.margins))
     folder = out_dir / f"worst_{method}"
-    task = RunTask(key=f"worst_{method}", scenario=str(target.resolve()), out_dir=str(folder))
+    task = RunTask(key=f"worst_{method}", scenario=str(target.resolve()), out_dir=str(folder),
+                   margins=setup.objective.margins)
     (outcome,) = execute([task], Execution(1, execution.executor, execution.scheduler,
                                            progress=False))
     if not outcome.ok:

@@ -2,8 +2,9 @@
 
 An objective is a small object with a name, a unit and two readings of a summary: its
 ``margin`` (lower is worse; the search minimises it) and whether the run ``failed`` (the
-guarantee or the target it stands for is broken). A new objective is one class added to
-:data:`OBJECTIVES`.
+guarantee or the target it stands for is broken). An objective that reads a margin the
+summary holds only on demand (:mod:`sse_cosim.reporting.margins`) names it in ``margins``, and
+the search asks its runs for it. A new objective is one class added to :data:`OBJECTIVES`.
 
 Whatever the objective, a run with a collision or a containment violation is a failure the
 report lists (:func:`broken`): the search for one margin still reports every broken promise
@@ -16,14 +17,21 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol
 
+from sse_cosim.reporting import margins as run_margins
+
 STANDSTILL_TARGET_S = 3.0
 """The safety campaign's liveness target: the bus stands at most this long on a clear path."""
+
+OPEN_TTC_S = 10.0
+"""A time to collision longer than this (or none: never on a collision course) counts as this
+long: a margin the search can no longer tell apart from safe."""
 
 
 class Objective(Protocol):
     name: ClassVar[str]
     unit: ClassVar[str]
     help: ClassVar[str]
+    margins: ClassVar[tuple[str, ...]]  # the on-demand margins its runs must report
 
     def margin(self, summary: Mapping[str, Any]) -> float:
         """How far the run stayed from failing (lower is worse; <= 0 at a failure)."""
@@ -52,6 +60,7 @@ class LeastDistance:
     name: ClassVar[str] = "distance"
     unit: ClassVar[str] = "m"
     help: ClassVar[str] = "least bus-pedestrian distance (m); fails at a collision"
+    margins: ClassVar[tuple[str, ...]] = ()
 
     def margin(self, summary: Mapping[str, Any]) -> float:
         if summary["collisions"]:
@@ -74,6 +83,7 @@ class EmergencyBrake:
     unit: ClassVar[str] = "m, or -s braking"
     help: ClassVar[str] = ("least distance until an emergency brake; then minus its duration; "
                            "fails at an emergency brake or a collision")
+    margins: ClassVar[tuple[str, ...]] = ()
 
     def margin(self, summary: Mapping[str, Any]) -> float:
         braking = _emergency_s(summary)
@@ -97,6 +107,7 @@ class Standstill:
     unit: ClassVar[str] = "s"
     help: ClassVar[str] = (f"{STANDSTILL_TARGET_S:g} s less the longest standstill after the "
                            "path is clear; fails beyond it or on an unfinished route")
+    margins: ClassVar[tuple[str, ...]] = ()
 
     def margin(self, summary: Mapping[str, Any]) -> float:
         if not summary["route_completed"]:
@@ -110,8 +121,32 @@ class Standstill:
         return None
 
 
+@dataclass(frozen=True)
+class TimeToCollision:
+    """The least time to collision of the run (s), capped at :data:`OPEN_TTC_S`; 0 at a
+    collision (:class:`~sse_cosim.reporting.margins.TimeToCollision` measures it)."""
+
+    name: ClassVar[str] = "ttc"
+    unit: ClassVar[str] = "s"
+    help: ClassVar[str] = (f"least time to collision at constant velocities (s, at most "
+                           f"{OPEN_TTC_S:g}); fails at a collision")
+    margins: ClassVar[tuple[str, ...]] = (run_margins.TimeToCollision.name,)
+
+    def margin(self, summary: Mapping[str, Any]) -> float:
+        if summary["collisions"]:
+            return 0.0
+        least = summary["margins"][run_margins.TimeToCollision.name]["least_s"]
+        return OPEN_TTC_S if least is None else min(float(least), OPEN_TTC_S)
+
+    def failed(self, summary: Mapping[str, Any]) -> bool:
+        return bool(summary["collisions"])
+
+    def failed_at(self, summary: Mapping[str, Any]) -> float | None:
+        return summary.get("first_collision_t_s")
+
+
 OBJECTIVES: dict[str, Objective] = {o.name: o for o in (LeastDistance(), EmergencyBrake(),
-                                                         Standstill())}
+                                                         Standstill(), TimeToCollision())}
 
 
 def first_break_t(summary: Mapping[str, Any]) -> float | None:

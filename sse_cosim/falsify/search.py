@@ -130,14 +130,15 @@ def _plan(setup: SearchSetup, method: str, generation: int, position: int, point
     index = generation * setup.generation + position
     source = str(setup.scenario)
     values, overrides, scenario = scenario_of(setup.space, setup.data, point, source)
-    key = run_key(f"{method}-{index:04d}", [], setup.seed, overrides)
+    asked = setup.objective.margins  # part of the run's identity: its summary differs
+    key = run_key("-".join([f"{method}-{index:04d}", *asked]), [], setup.seed, overrides)
     planned = Evaluation(method, index, generation, values, overrides, key, None, False)
     reason = planner(scenario, source)
     if reason is not None:
         return replace(planned, not_feasible=reason), None
     task = RunTask(key=key, scenario=str(setup.scenario.resolve()),
                    out_dir=str(out_dir / RUNS_FOLDER / key), overrides=overrides,
-                   plots=False, summary_only=True)
+                   plots=False, summary_only=True, margins=asked)
     return planned, task
 
 

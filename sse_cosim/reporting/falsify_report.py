@@ -96,9 +96,10 @@ def progress_figure(table: pd.DataFrame, methods: Sequence[str], objective: str,
 
 
 def worst_case_document(scenario_file: Path, target: Path, overrides: Mapping[str, Any],
-                        description: str) -> str:
+                        description: str, margins: Sequence[str] = ()) -> str:
     """A scenario file (TOML) at ``target`` that extends ``scenario_file`` with
-    ``overrides`` (dotted path -> value)."""
+    ``overrides`` (dotted path -> value); its first line says how to reproduce it (with the
+    ``margins`` the objective reads)."""
     nested: dict[str, Any] = {}
     for dotted, value in overrides.items():
         node = nested
@@ -108,8 +109,9 @@ def worst_case_document(scenario_file: Path, target: Path, overrides: Mapping[st
         node[last] = value
     extends = Path(os.path.relpath(scenario_file.resolve(), target.parent.resolve())).as_posix()
     body = tomli_w.dumps({"extends": extends, "description": description, **nested})
-    return ("# Written by `sse-cosim falsify`: reproduce it with `sse-cosim run` on this file.\n"
-            + body)
+    asked = "".join(f" --margin {name}" for name in margins)
+    how = "`sse-cosim run` on this file" if not asked else f"`sse-cosim run {target.name}{asked}`"
+    return f"# Written by `sse-cosim falsify`: reproduce it with {how}.\n" + body
 
 
 def write_outputs(folder: Path, plan: Mapping[str, Any], table: pd.DataFrame) -> None:

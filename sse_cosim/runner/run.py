@@ -7,6 +7,8 @@ from pathlib import Path
 from typing import Any
 
 from sse_cosim.files import portable_path
+from sse_cosim.pipeline.result import StepResult
+from sse_cosim.reporting.margins import MARGINS
 from sse_cosim.reporting.outputs import write_run
 from sse_cosim.reporting.recorder import RunRecorder
 from sse_cosim.reporting.replay import ReplayLog
@@ -22,10 +24,12 @@ def run_scenario_file(
     scene_times: Sequence[float] = (),
     plots: bool = True,
     summary_only: bool = False,
+    margins: Sequence[str] = (),
 ) -> dict:
     """Load ``path`` (with dotted ``overrides``), run it and write ``out_dir``; the summary."""
     scenario = load_scenario(path, overrides)
-    return run_scenario(scenario, str(path), out_dir, scene_times, plots, summary_only)
+    return run_scenario(scenario, str(path), out_dir, scene_times, plots, summary_only,
+                        margins)
 
 
 def run_scenario(
@@ -35,17 +39,29 @@ def run_scenario(
     scene_times: Sequence[float] = (),
     plots: bool = True,
     summary_only: bool = False,
+    margins: Sequence[str] = (),
 ) -> dict:
     """Simulate ``scenario`` (read from ``source``) and write its outputs to ``out_dir``.
 
     ``source`` is recorded (and named in messages) relative to the current folder where it
-    lies below it, so that a results folder holds no machine path."""
+    lies below it, so that a results folder holds no machine path. ``margins``: the names of
+    the margins (:data:`~sse_cosim.reporting.margins.MARGINS`) the summary gets under
+    ``margins``; none, no such key."""
     source = portable_path(source)
     recorder = RunRecorder(scenario, tuple(scene_times),
                            replay=None if summary_only else ReplayLog())
-    info = simulate(scenario, out_dir / "sumo", source, recorder, on_start=recorder.start)
+    watchers = [MARGINS[name](scenario) for name in margins]
+
+    def on_step(result: StepResult) -> None:
+        recorder(result)
+        for watch in watchers:
+            watch(result)
+
+    info = simulate(scenario, out_dir / "sumo", source, on_step, on_start=recorder.start)
     extra = {key: breaks for key, breaks in (("assumption_breaks", info.motion_breaks),
                                              ("ground_breaks", info.ground_breaks))
-             if breaks is not None} or None
+             if breaks is not None}
+    if watchers:
+        extra["margins"] = {watch.name: watch.value() for watch in watchers}
     return write_run(out_dir, info.scenario, recorder, info.roadmap, source, info.arrived,
-                     plots, summary_only, extra)
+                     plots, summary_only, extra or None)

@@ -49,6 +49,7 @@ class RunTask:
     plots: bool = True
     scene_times: tuple[float, ...] = ()
     summary_only: bool = False  # write summary.json and scenario.json only (large sweeps)
+    margins: tuple[str, ...] = ()  # margins (reporting.margins) the summary gets besides
 
     def to_json(self) -> str:
         return json.dumps(asdict(self))
@@ -57,6 +58,7 @@ class RunTask:
     def from_json(cls, text: str) -> RunTask:
         data = json.loads(text)
         data["scene_times"] = tuple(data.get("scene_times", ()))
+        data["margins"] = tuple(data.get("margins", ()))
         return cls(**data)
 
 

@@ -29,6 +29,7 @@ def run_task(task: RunTask) -> int:
         run_scenario_file(
             Path(task.scenario), Path(task.out_dir), task.overrides,
             scene_times=task.scene_times, plots=task.plots, summary_only=task.summary_only,
+            margins=task.margins,
         )
     except (UserError, SimulationError) as exc:
         record = {"key": task.key, "error": str(exc)}

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sse_cosim.errors import UserError
-from sse_cosim.falsify.objectives import OBJECTIVES, broken, first_break_t
+from sse_cosim.falsify.objectives import OBJECTIVES, OPEN_TTC_S, broken, first_break_t
 from sse_cosim.falsify.searchers import SEARCHERS, generation_size
 from sse_cosim.falsify.space import (
     COUNTED_BREAKS,
@@ -114,6 +114,20 @@ def test_the_objectives_read_their_margins_and_failures():
     assert standstill.margin(_summary()) == pytest.approx(2.5)
     assert standstill.failed(_summary(longest_standstill_after_clear_s=3.5))
     assert standstill.failed(_summary(route_completed=False))
+
+
+def test_the_time_to_collision_objective_asks_for_its_margin_and_caps_it():
+    ttc = OBJECTIVES["ttc"]
+    assert ttc.margins == ("time_to_collision",)
+    assert all(OBJECTIVES[n].margins == () for n in ("distance", "emergency", "standstill"))
+
+    def timed(least, **changes):
+        return _summary(margins={"time_to_collision": {"least_s": least}}, **changes)
+
+    assert ttc.margin(timed(2.3)) == 2.3 and not ttc.failed(timed(2.3))
+    assert ttc.margin(timed(None)) == OPEN_TTC_S == ttc.margin(timed(40.0))
+    hit = timed(0.0, collisions=1, first_collision_t_s=11.9)
+    assert ttc.margin(hit) == 0.0 and ttc.failed(hit) and ttc.failed_at(hit) == 11.9
 
 
 def test_a_collision_after_the_world_broke_an_assumption_is_not_a_broken_promise():

@@ -1,0 +1,147 @@
+"""Margins a run reports when asked: figures of how near it came to failing, beyond the
+summary's own.
+
+A margin watches every step beside the recorder and gives one JSON value at the end, which
+the run writes under ``summary.json``'s ``margins`` (only for the margins its task names: a
+run asked for none writes the summary it always did). The falsifier's objectives name the
+margins they read. A new margin is one class added to :data:`MARGINS`.
+
+:class:`TimeToCollision` is the classic surrogate safety measure: at every step, for every
+automated vehicle and pedestrian, how long until they touch if both keep their velocity
+(the vehicle along its heading at its speed; the pedestrian at SUMO's speed along its last
+displacement). Touching is the recorder's collision: the pedestrian's centre within its body
+radius of the vehicle's footprint, so a time of 0 is a collision.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+
+import numpy as np
+
+if TYPE_CHECKING:  # annotations only: the CLI lists the margins without the pipeline
+    from sse_cosim.pipeline.result import StepResult
+    from sse_cosim.scenario.model import Scenario
+
+
+class Margin(Protocol):
+    """Watches a run step by step; :meth:`value` is what ``summary.json`` gets."""
+
+    name: ClassVar[str]
+    help: ClassVar[str]
+
+    def __call__(self, result: StepResult) -> None: ...
+
+    def value(self) -> dict[str, Any]: ...
+
+
+def ray_box_entry(p: np.ndarray, w: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """First time ``tau >= 0`` at which ``p + w tau`` lies in the box ``|x_k| <= half_k``
+    (0 if it starts inside; inf if never): the slab method.
+
+    ``p``, ``w``, ``half``: shape (n, 2), one box per point. Returns shape (n,).
+    """
+    enter = np.zeros(len(p))
+    leave = np.full(len(p), np.inf)
+    for k in range(2):
+        moving = w[:, k] != 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t1 = np.where(moving, (-half[:, k] - p[:, k]) / w[:, k], -np.inf)
+            t2 = np.where(moving, (half[:, k] - p[:, k]) / w[:, k], np.inf)
+        still_outside = ~moving & (np.abs(p[:, k]) > half[:, k])
+        enter = np.maximum(enter, np.where(still_outside, np.inf, np.minimum(t1, t2)))
+        leave = np.minimum(leave, np.where(still_outside, -np.inf, np.maximum(t1, t2)))
+    return np.where(enter <= leave, enter, np.inf)
+
+
+def ray_disc_entry(p: np.ndarray, w: np.ndarray, centre: np.ndarray,
+                   radius: np.ndarray) -> np.ndarray:
+    """First time ``tau >= 0`` at which ``p + w tau`` lies within ``radius`` of ``centre``
+    (0 if it starts there; inf if never).
+
+    ``p``, ``w``: shape (n, 2); ``centre``: shape (2,); ``radius``: shape (n,).
+    """
+    d = p - centre
+    a = np.einsum("ij,ij->i", w, w)
+    b = np.einsum("ij,ij->i", d, w)
+    c = np.einsum("ij,ij->i", d, d) - radius**2
+    disc = b * b - a * c
+    with np.errstate(divide="ignore", invalid="ignore"):
+        root = (-b - np.sqrt(np.maximum(disc, 0.0))) / a
+    hits = (a > 0) & (disc >= 0) & (root >= 0)
+    return np.where(c <= 0, 0.0, np.where(hits, root, np.inf))
+
+
+def time_to_contact(p: np.ndarray, w: np.ndarray, half: np.ndarray,
+                    radius: np.ndarray) -> np.ndarray:
+    """First time ``tau >= 0`` at which a point ``p + w tau`` comes within ``radius`` of the
+    box ``|x_k| <= half_k`` (inf if never), exactly: the box grown by a disc is the union of
+    the box grown along each axis and four discs on its corners.
+
+    ``p``, ``w``: the point and its velocity in the box's frame, shape (n, 2); ``half``:
+    shape (2,); ``radius``: shape (n,). Returns shape (n,).
+    """
+    along_x = np.stack([radius, np.zeros_like(radius)], axis=1)
+    times = [ray_box_entry(p, w, half + along_x), ray_box_entry(p, w, half + along_x[:, ::-1])]
+    corners = np.array([[sx * half[0], sy * half[1]] for sx in (-1, 1) for sy in (-1, 1)])
+    times += [ray_disc_entry(p, w, corner, radius) for corner in corners]
+    return np.min(times, axis=0)
+
+
+@dataclass
+class TimeToCollision:
+    """The least time to collision over the run (s), with when and between whom it came.
+
+    ``least_s`` is None when no automated vehicle and pedestrian were ever on a collision
+    course (every step's time infinite).
+    """
+
+    name: ClassVar[str] = "time_to_collision"
+    help: ClassVar[str] = ("least time until an automated vehicle and a pedestrian touch if both "
+                           "keep their velocity (s); 0 at a collision")
+
+    scenario: Scenario
+    least_s: float = np.inf
+    at: dict[str, Any] = field(default_factory=dict)  # t, vehicle, pedestrian of the least
+    last: dict[str, np.ndarray] = field(default_factory=dict)  # pedestrian -> last position
+
+    def __call__(self, result: StepResult) -> None:
+        persons = result.snapshot.persons
+        ids = sorted(persons)
+        xy = np.array([persons[pid].position for pid in ids]).reshape(-1, 2)
+        velocity = self._velocities(ids, xy, np.array([persons[pid].speed for pid in ids]))
+        radius = np.array([self.scenario.person_radius_m(pid) for pid in ids])
+        for vehicle in result.vehicles if ids else ():
+            state = result.snapshot.vehicles[vehicle]
+            footprint = state.footprint
+            frame = np.stack([footprint.front.forward, footprint.front.left])  # rows: axes
+            p = (xy - footprint.center) @ frame.T
+            w = (velocity - state.speed * footprint.front.forward) @ frame.T
+            tau = time_to_contact(p, w, 0.5 * np.array([footprint.length, footprint.width]),
+                                  radius)
+            k = int(np.argmin(tau))
+            if tau[k] < self.least_s:
+                self.least_s = float(tau[k])
+                self.at = {"t": round(result.snapshot.time, 6), "vehicle": vehicle,
+                           "pedestrian": ids[k]}
+        self.last = dict(zip(ids, xy, strict=True))
+
+    def _velocities(self, ids: list[str], xy: np.ndarray, speeds: np.ndarray) -> np.ndarray:
+        """Each pedestrian's velocity: its speed along its last displacement (none on its
+        first step or when it did not move), shape (n, 2)."""
+        moved = xy - np.array([self.last.get(pid, p) for pid, p in zip(ids, xy, strict=True)
+                               ]).reshape(-1, 2)
+        length = np.hypot(moved[:, 0], moved[:, 1])
+        unit = np.divide(moved, length[:, None], out=np.zeros_like(moved),
+                         where=length[:, None] > 0)
+        return unit * speeds[:, None]
+
+    def value(self) -> dict[str, Any]:
+        least = None if np.isinf(self.least_s) else self.least_s
+        return {"least_s": least, **self.at}
+
+
+MARGINS: dict[str, Callable[[Scenario], Margin]] = {TimeToCollision.name: TimeToCollision}
+"""Every margin a run can be asked for, by name."""

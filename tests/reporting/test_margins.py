@@ -1,0 +1,91 @@
+"""Time to collision (reporting.margins): the exact ray test against a brute-force march, and
+a real S3 run's least time checked again from the files it wrote."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import shapely
+
+from sse_cosim.reporting.margins import time_to_contact
+from sse_cosim.runner.run import run_scenario_file
+
+ROOT = Path(__file__).resolve().parents[2]
+S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
+MARCH_STEP_S = 1e-3
+
+
+def _marched(p: np.ndarray, w: np.ndarray, half: np.ndarray, radius: float,
+             horizon_s: float) -> float:
+    """The first time on a fine grid at which the point is within ``radius`` of the box."""
+    box = shapely.box(-half[0], -half[1], half[0], half[1])
+    times = np.arange(0.0, horizon_s, MARCH_STEP_S)
+    distance = shapely.distance(box, shapely.points(p + np.outer(times, w)))
+    touching = np.flatnonzero(distance <= radius)
+    return float(times[touching[0]]) if touching.size else np.inf
+
+
+def test_the_exact_time_agrees_with_a_fine_march_on_random_approaches():
+    rng = np.random.default_rng(7)
+    half = np.array([6.0, 1.275])
+    p = rng.uniform(-25.0, 25.0, size=(300, 2))
+    w = rng.uniform(-8.0, 8.0, size=(300, 2))
+    radius = rng.uniform(0.1, 0.5, size=300)
+    exact = time_to_contact(p, w, half, radius)
+    marched = np.array([_marched(p[i], w[i], half, radius[i], 12.0) for i in range(300)])
+    finite = np.isfinite(marched)
+    assert finite.sum() > 30 and (~finite).sum() > 30  # both kinds of approach occur
+    # the march finds contact at most one of its steps after the exact time (and never before)
+    assert np.all(marched[finite] - exact[finite] >= -1e-9)
+    assert np.all(marched[finite] - exact[finite] <= MARCH_STEP_S + 1e-9)
+    assert np.all(exact[~finite] > 12.0 - MARCH_STEP_S)
+
+
+def test_the_edge_cases_of_the_ray():
+    half = np.array([6.0, 1.275])
+    r = np.array([0.3])
+    # already touching, at a corner's rounding
+    assert time_to_contact(np.array([[6.2, 1.4]]), np.zeros((1, 2)), half, r)[0] == 0.0
+    # standing beside the box, or moving along it: never
+    assert time_to_contact(np.array([[10.0, 3.0]]), np.array([[-5.0, 0.0]]), half, r)[0] == np.inf
+    # moving away: never
+    assert time_to_contact(np.array([[10.0, 0.0]]), np.array([[1.0, 0.0]]), half, r)[0] == np.inf
+    # head on: the gap (10 - 6 - 0.3 m) at 2 m/s
+    assert time_to_contact(np.array([[10.0, 0.0]]), np.array([[-2.0, 0.0]]), half, r)[0] == (
+        pytest.approx(1.85))
+    # a corner's disc: the point passes the corner diagonally
+    hit = time_to_contact(np.array([[8.0, 3.275]]), np.array([[-1.0, -1.0]]), half, r)[0]
+    assert hit == pytest.approx(2.0 - 0.3 / np.sqrt(2.0))
+
+
+@pytest.mark.sumo
+def test_a_run_reports_the_least_time_only_when_asked_and_the_files_agree(tmp_path: Path):
+    plain = run_scenario_file(S3, tmp_path / "plain", plots=False, summary_only=True)
+    assert "margins" not in plain
+
+    out = tmp_path / "asked"
+    summary = run_scenario_file(S3, out, plots=False, margins=("time_to_collision",))
+    least = summary["margins"]["time_to_collision"]
+    assert 0.0 < least["least_s"] < 10.0 and least["vehicle"] == "bus"
+    # again from what the run wrote: the bus along the road (S3's is straight, heading east)
+    # at its speed, the pedestrian along its last step at that step's pace
+    trace = pd.read_csv(out / "trace.csv").set_index("t")
+    truth = pd.read_csv(out / "truth.csv")
+    truth = truth[truth["pedestrian"] == least["pedestrian"]].set_index("t")
+    scenario = json.loads((out / "scenario.json").read_text())
+    bus = scenario["automated"]["bus"]
+    dt = scenario["simulation"]["step_length_s"]
+    t = least["t"]
+    row = trace.loc[t]
+    centre = np.array([row["bus_x"] - bus["length_m"] / 2, row["bus_y"]])
+    now = truth.loc[t, ["x", "y"]].to_numpy(float)
+    before = truth.loc[round(t - dt, 6), ["x", "y"]].to_numpy(float)
+    relative = (now - before) / dt - np.array([row["bus_speed"], 0.0])
+    radius = scenario["pedestrians"][least["pedestrian"]]["radius_m"]
+    half = np.array([bus["length_m"], bus["width_m"]]) / 2
+    assert _marched(now - centre, relative, half, radius, 10.0) == pytest.approx(
+        least["least_s"], abs=MARCH_STEP_S + 1e-9)
