@@ -38,6 +38,8 @@ $(BENCHSTAMP): pyproject.toml $(LOCK) | $(BIN)/python
 	touch $@ $(STAMP)
 
 # The browser tests drive Debian's chromium (playwright never downloads a browser).
+# The first pytest spreads the test files over every core (pytest-xdist; a file's tests stay
+# in one process, so its module fixtures run once).
 # The second pytest runs the compiled kernels against their NumPy references again with
 # NumPy's AVX-512 code (SIMD sin, cos, arctan2 that may differ from libm in the last bit) and
 # numba's host CPU features switched off, as on a machine with neither (the `kernels` marker;
@@ -45,7 +47,7 @@ $(BENCHSTAMP): pyproject.toml $(LOCK) | $(BIN)/python
 test: $(DEVSTAMP)
 	command -v chromium >/dev/null || (apt-get update && apt-get install -y chromium chromium-driver)
 	$(BIN)/ruff check .
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --dist loadfile
 	NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR" NUMBA_CPU_NAME=generic $(BIN)/python -m pytest -q -m kernels
 
 bench: $(BENCHSTAMP)

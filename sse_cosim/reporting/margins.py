@@ -64,14 +64,26 @@ def ray_disc_entry(p: np.ndarray, w: np.ndarray, centre: np.ndarray,
     ``p``, ``w``: shape (n, 2); ``centre``: shape (2,); ``radius``: shape (n,).
     """
     d = p - centre
-    a = np.einsum("ij,ij->i", w, w)
-    b = np.einsum("ij,ij->i", d, w)
-    c = np.einsum("ij,ij->i", d, d) - radius**2
+    a = _dot(w, w)
+    b = _dot(d, w)
+    c = _dot(d, d) - radius**2
     disc = b * b - a * c
     with np.errstate(divide="ignore", invalid="ignore"):
         root = (-b - np.sqrt(np.maximum(disc, 0.0))) / a
     hits = (a > 0) & (disc >= 0) & (root >= 0)
     return np.where(c <= 0, 0.0, np.where(hits, root, np.inf))
+
+
+def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Row-wise dot products of shape (n, 2) arrays, shape (n,), in plain float operations
+    (the same bits on every CPU, unlike ``einsum``)."""
+    return u[:, 0] * v[:, 0] + u[:, 1] * v[:, 1]
+
+
+def _in_frame(v: np.ndarray, forward: np.ndarray, left: np.ndarray) -> np.ndarray:
+    """Vectors ``v`` (n, 2) in the frame of unit axes ``forward`` and ``left`` (2,), (n, 2)."""
+    return np.stack([v[:, 0] * forward[0] + v[:, 1] * forward[1],
+                     v[:, 0] * left[0] + v[:, 1] * left[1]], axis=1)
 
 
 def time_to_contact(p: np.ndarray, w: np.ndarray, half: np.ndarray,
@@ -116,9 +128,9 @@ class TimeToCollision:
         for vehicle in result.vehicles if ids else ():
             state = result.snapshot.vehicles[vehicle]
             footprint = state.footprint
-            frame = np.stack([footprint.front.forward, footprint.front.left])  # rows: axes
-            p = (xy - footprint.center) @ frame.T
-            w = (velocity - state.speed * footprint.front.forward) @ frame.T
+            forward, left = footprint.front.forward, footprint.front.left
+            p = _in_frame(xy - footprint.center, forward, left)
+            w = _in_frame(velocity - state.speed * forward, forward, left)
             tau = time_to_contact(p, w, 0.5 * np.array([footprint.length, footprint.width]),
                                   radius)
             k = int(np.argmin(tau))
@@ -133,7 +145,7 @@ class TimeToCollision:
         first step or when it did not move), shape (n, 2)."""
         moved = xy - np.array([self.last.get(pid, p) for pid, p in zip(ids, xy, strict=True)
                                ]).reshape(-1, 2)
-        length = np.hypot(moved[:, 0], moved[:, 1])
+        length = np.sqrt(_dot(moved, moved))
         unit = np.divide(moved, length[:, None], out=np.zeros_like(moved),
                          where=length[:, None] > 0)
         return unit * speeds[:, None]
