@@ -47,12 +47,14 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
     """Search for the world that breaks the guarantee, within its assumptions.
 
     Instead of a grid, a search steers every free choice of the scenario (the
-    pedestrian's step-out time, walking speed and start behind the truck, each sensor's
-    error within its bound, a burst of lost V2X messages per sender: see the falsify
-    file) toward the smallest margin of the objective. CMA-ES (the cmaes package) is the
-    search; uniform random search runs beside it on the same budget and seed, so the
-    report shows what the search buys. Candidates the demand planner rules out (the
-    pedestrian cannot reach the zebra in time) are not run.
+    pedestrian's wait before it steps out, walking speed and start behind the truck, each
+    sensor's error within its bound, a burst of lost V2X messages per sender: see the
+    falsify file) toward the smallest margin of the objective. CMA-ES (the cmaes package)
+    is the search; uniform random search runs beside it on the same budget and seed, so
+    the report shows what the search buys. The step-out comes after the walk the demand
+    planner times plus the wait, so every candidate can happen; a file that searches the
+    step-out time directly may propose one the planner rules out (the pedestrian cannot
+    reach the zebra in time): it is not run.
 
     \b
     OUT (results/falsify/<scenario>/ by default) gets:

@@ -2,9 +2,10 @@
 
 Each method (:mod:`sse_cosim.falsify.searchers`) spends the same budget, generation by
 generation, from the same seed. A point becomes a scenario (:mod:`sse_cosim.falsify.space`);
-the project's demand planner rules out the ones that cannot happen (the pedestrian cannot
-reach the zebra by its step-out time): they are not run and score :data:`NOT_RUN_MARGIN`, so
-the search moves away from them. The others run through the sweeps' executors (local pool or
+the project's demand planner times the walk before a ``[step_out]`` wait and rules out the
+points that cannot happen (with a step-out time searched directly, the pedestrian may not
+reach the zebra by then): they are not run and score :data:`NOT_RUN_MARGIN`, so the search
+moves away from them. The others run through the sweeps' executors (local pool or
 Dask), into ``runs/<key>`` under the search's folder, the key a hash of the method, the
 evaluation and the overrides.
 
@@ -129,7 +130,8 @@ def _plan(setup: SearchSetup, method: str, generation: int, position: int, point
     the point is not feasible)."""
     index = generation * setup.generation + position
     source = str(setup.scenario)
-    values, overrides, scenario = scenario_of(setup.space, setup.data, point, source)
+    values, overrides, scenario = scenario_of(setup.space, setup.data, point, source,
+                                              planner.walk_times)
     asked = setup.objective.margins  # part of the run's identity: its summary differs
     key = run_key("-".join([f"{method}-{index:04d}", *asked]), [], setup.seed, overrides)
     planned = Evaluation(method, index, generation, values, overrides, key, None, False)

@@ -9,6 +9,10 @@ scenario overrides:
 - ``[[dims]]``: a dotted path pattern (as a sweep's) and the interval its fields range over
   (when the pedestrian steps onto the zebra, how fast it walks); a pattern that selects
   nothing in the scenario is not searched there.
+- ``[step_out]``: when a pedestrian steps onto the zebra, as the time it waits at its start
+  beyond the earliest its walk allows: it steps out at its walk time (from its start at its
+  walking speed, timed by the project's planner) plus the wait, so every candidate can
+  happen (a step-out time searched directly leaves part of the box unreachable).
 - ``[start_behind_truck]``: the pedestrian's start as an offset behind the parked truck's
   front, as in the safety campaign (so it stays hidden wherever the truck stands).
 - ``[noise]``: each selected sensor's error held toward a chosen point of its noise bound
@@ -27,7 +31,7 @@ breaks are counted, not fatal.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -76,6 +80,16 @@ class DimEntry(_FileModel):
         return high
 
 
+class StepOut(_FileModel):
+    """``[step_out]``: pedestrian ``pedestrian`` waits [low, high] s at its start beyond the
+    earliest step-out its walk allows."""
+
+    name: str = Field("wait_s", min_length=1)
+    pedestrian: str = Field("pedestrian", min_length=1)
+    low: float = Field(0.0, ge=0)
+    high: float = Field(gt=0)
+
+
 class BehindTruck(_FileModel):
     """``[start_behind_truck]``: the pedestrian's start, [low, high] m behind the truck's
     front."""
@@ -102,7 +116,8 @@ class FalsifyFile(_FileModel):
 
     description: str = ""
     overrides: dict[str, Any] = Field(default_factory=dict, alias="set")
-    dims: list[DimEntry] = Field(min_length=1)
+    dims: list[DimEntry] = Field(default_factory=list)
+    step_out: StepOut | None = None
     start_behind_truck: BehindTruck | None = None
     noise: NoiseEntry | None = None
     loss: LossEntry | None = None
@@ -130,6 +145,12 @@ class Dimension:
 
 
 @dataclass(frozen=True)
+class _Wait:
+    pedestrian: str
+    name: str  # its dimension's
+
+
+@dataclass(frozen=True)
 class _Noise:
     sensor: str
     bound_m: tuple[float, float]
@@ -140,13 +161,15 @@ class SearchSpace:
     """One scenario's search box and how a point of it becomes scenario overrides.
 
     ``dims`` in order: the ``[[dims]]`` that select something (``targets``: the concrete
-    paths each sets), the start behind the truck (if the scenario has the truck), two per
+    paths each sets), the wait before the step-out (``step_out``: its pedestrian, if the
+    scenario has it), the start behind the truck (if the scenario has the truck), two per
     noisy sensor (forward, lateral fraction of the bound), two per sender (loss start and
     length).
     """
 
     dims: tuple[Dimension, ...]
     targets: tuple[tuple[str, ...], ...]
+    step_out: _Wait | None
     truck_front_m: float | None
     noises: tuple[_Noise, ...]
     senders: tuple[str, ...]
@@ -164,11 +187,14 @@ class SearchSpace:
         return {d.name: d.value(u) for d, u in zip(self.dims, unit, strict=True)}
 
     def overrides(self, values: Mapping[str, float]) -> dict[str, Any]:
-        """The scenario overrides (dotted path -> value) that realise ``values``."""
+        """The scenario overrides (dotted path -> value) that realise ``values``, but for the
+        step-out time (:meth:`step_out_override`: it needs the walk they make)."""
         names = iter(d.name for d in self.dims)
         out: dict[str, Any] = dict(self.fixed)
         for paths in self.targets:
             out.update(dict.fromkeys(paths, values[next(names)]))
+        if self.step_out is not None:
+            next(names)
         if self.truck_front_m is not None:
             out[START_PATH] = round(self.truck_front_m - values[next(names)], DECIMALS)
         for noise in self.noises:
@@ -185,6 +211,21 @@ class SearchSpace:
                     "node": node, "kind": "loss", "start_s": start,
                     "end_s": round(start + length, DECIMALS)}
         return out
+
+
+    def step_out_override(self, values: Mapping[str, float],
+                          walk_s: Mapping[str, float]) -> dict[str, float]:
+        """The step-out time of the ``[step_out]`` pedestrian: its walk (``walk_s``: pedestrian
+        -> s, as the planner times the scenario of :meth:`overrides`) plus its wait; empty
+        without a ``[step_out]``."""
+        if self.step_out is None:
+            return {}
+        who = self.step_out.pedestrian
+        return {step_out_path(who): round(walk_s[who] + values[self.step_out.name], DECIMALS)}
+
+
+def step_out_path(pedestrian: str) -> str:
+    return f"pedestrians.{pedestrian}.steps_onto_crossing_s"
 
 
 def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
@@ -204,6 +245,14 @@ def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
         if paths:
             dims.append(Dimension(entry.name, entry.low, entry.high))
             targets.append(tuple(paths))
+    step_out = spec.step_out
+    waiting = None
+    if step_out is not None and step_out.pedestrian in scenario.pedestrians:
+        if any(step_out_path(step_out.pedestrian) in paths for paths in targets):
+            raise UserError(spec_source, "step_out", f"{step_out_path(step_out.pedestrian)} "
+                            "is searched by [[dims]] too", "search it in one place")
+        dims.append(Dimension(step_out.name, step_out.low, step_out.high))
+        waiting = _Wait(step_out.pedestrian, step_out.name)
     truck = scenario.parked.get(TRUCK)
     truck_front = None
     behind = spec.start_behind_truck
@@ -224,7 +273,7 @@ def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
         raise UserError(spec_source, "dims", f"selects {len(dims)} value(s) in {source}",
                         "a search needs at least two: add dims that name this scenario's "
                         "fields (`sse-cosim fields` lists them)")
-    space = SearchSpace(tuple(dims), tuple(targets), truck_front, noises, senders,
+    space = SearchSpace(tuple(dims), tuple(targets), waiting, truck_front, noises, senders,
                         scenario.simulation.step_length_s, counted)
     _check_corners(space, data, source, spec_source)
     return space
@@ -259,9 +308,23 @@ def _check_corners(space: SearchSpace, data: Mapping[str, Any], source: str,
                             "narrow the interval to values the scenario allows") from None
 
 
+WalkTimes = Callable[[Scenario, str], Mapping[str, float]]
+"""The planner's walk of each pedestrian of a scenario (read from a source), in s."""
+
+
 def scenario_of(space: SearchSpace, data: Mapping[str, Any], unit: Sequence[float],
-                source: str) -> tuple[dict[str, float], dict[str, Any], Scenario]:
-    """The values, overrides and validated scenario at ``unit``."""
+                source: str, walk_times: WalkTimes) -> tuple[dict[str, float], dict[str, Any],
+                                                             Scenario]:
+    """The values (with the step-out time they make, under its path's last name), overrides
+    and validated scenario at ``unit``; ``walk_times`` times the walk before the step-out."""
     values = space.values(unit)
     overrides = space.overrides(values)
-    return values, overrides, validate_scenario(apply_overrides(data, overrides, source), source)
+    scenario = validate_scenario(apply_overrides(data, overrides, source), source)
+    step_out = space.step_out_override(values, walk_times(scenario, source)
+                                       if space.step_out is not None else {})
+    if not step_out:
+        return values, overrides, scenario
+    overrides.update(step_out)
+    derived = {path.rsplit(".", 1)[1]: value for path, value in step_out.items()}
+    return ({**values, **derived}, overrides,
+            validate_scenario(apply_overrides(data, overrides, source), source))

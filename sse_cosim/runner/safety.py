@@ -274,6 +274,14 @@ class ActorPlanner:
             return exc.problem
         return None
 
+    def walk_times(self, scenario: Scenario, source: str) -> dict[str, float]:
+        """Each pedestrian's walk from its start to its crossing (s): the earliest step-out
+        time the planner accepts."""
+        from sse_cosim.world import demand
+
+        net_path, roadmap = self._network(scenario.network, source)
+        return demand.walk_times(scenario, net_path, roadmap, source)
+
     def _network(self, network: Network, source: str) -> tuple[Path, RoadMap]:
         key = f"{network.sources_dir}|{network.net_file}"
         if key not in self._networks:

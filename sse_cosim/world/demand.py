@@ -156,22 +156,40 @@ def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: st
         _check_vehicle(net, vid, vehicle, source)
     dt = scenario.simulation.step_length_s
     pedestrians = present(scenario.pedestrians)
-    graph = WalkGraph(net) if pedestrians else None  # built once, for every pedestrian
+    walks, times = _timed_walks(scenario, net, net_path, source, timer)
+    plans = {pid: _time_pedestrian(net, pid, pedestrians[pid], walk, times[pid], dt, source)
+             for pid, walk in walks.items()}
+    return ActorPlan(automated_lanes=lanes, pedestrians=plans)
+
+
+def walk_times(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: str,
+               timer: WalkTimer | None = None) -> dict[str, float]:
+    """How long each pedestrian's walk takes from its start to its first step on its crossing
+    (s, whole steps), as :func:`plan_actors` times it: the earliest ``steps_onto_crossing_s``
+    it can make. UserError (naming ``source``) for a walk the network does not have."""
+    net = _read_net(net_path) if roadmap.net is None else roadmap.net
+    return _timed_walks(scenario, net, net_path, source, timer)[1]
+
+
+def _timed_walks(scenario: Scenario, net: sumolib.net.Net, net_path: Path, source: str,
+                 timer: WalkTimer | None) -> tuple[dict[str, WalkToCrossing], dict[str, float]]:
+    """Every present pedestrian's walk to its crossing (checked to cross an automated
+    vehicle's route) and its time by ``timer`` (default: the network's probe walker)."""
+    dt = scenario.simulation.step_length_s
+    pedestrians = present(scenario.pedestrians)
+    if not pedestrians:
+        return {}, {}
+    graph = WalkGraph(net)  # built once, for every pedestrian
     walks = {pid: _pedestrian_walk(net, pid, ped, source, graph)
              for pid, ped in pedestrians.items()}
     routes = {vid: av.route_edges for vid, av in present(scenario.automated).items()}
     for pid, walk in walks.items():
         _check_crossing_on_route(net, pid, scenario.pedestrians[pid], walk.path, routes, source)
-    plans: dict[str, PedestrianPlan] = {}
-    if walks:
-        if timer is None:
-            from sse_cosim.world.walk_probe import ProbeTimer  # imported here: it imports demand
+    if timer is None:
+        from sse_cosim.world.walk_probe import ProbeTimer  # imported here: it imports demand
 
-            timer = ProbeTimer(net_path, accel_mps2=acceleration_bound(scenario.estimator, dt))
-        times = timer(walks, dt)
-        plans = {pid: _time_pedestrian(net, pid, pedestrians[pid], walk, times[pid], dt, source)
-                 for pid, walk in walks.items()}
-    return ActorPlan(automated_lanes=lanes, pedestrians=plans)
+        timer = ProbeTimer(net_path, accel_mps2=acceleration_bound(scenario.estimator, dt))
+    return walks, timer(walks, dt)
 
 
 def write_route_file(scenario: Scenario, plan: ActorPlan, path: Path) -> Path:

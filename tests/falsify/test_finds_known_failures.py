@@ -1,9 +1,12 @@
 """The falsifier against controllers known to fail (issue: item 5), in real SUMO.
 
-- The paper's rules in S3: a pedestrian stepping out at the right moment is hit. CMA-ES finds
-  the collision within 72 evaluations; random search with the same budget and seed finds none
-  (measured: at evaluation 60 of 120, against none in 120). The search is stopped after 36
-  evaluations and resumed: what ran is read back, not run again.
+- The paper's rules in S3: a pedestrian stepping out at the right moment is hit. Over seeds 1
+  to 5 (`sse-cosim falsify scenarios/paper_policy/paper_s3_pedestrian.toml --budget 72
+  --seed N`; seed 1 with --budget 120), CMA-ES found the collision in four (at evaluations 37,
+  20, 16, 16; in the fifth it came to 0.40 m), random search with the same budget and seed in
+  two (at 25 and 14; elsewhere no closer than 1.94 m). The test takes seed 3, where CMA-ES
+  finds it at evaluation 16 and random search not in 36: the search is stopped after 24
+  evaluations and resumed, so what ran is read back, not run again.
 - The safe policy with its reaction time mis-set (the bus acts 0.6 s late, its stops allow for
   0.3 s): the first generation finds an emergency brake. Nearly every candidate brakes in
   emergency there (random search finds one at its first evaluation too), so this case shows
@@ -36,11 +39,11 @@ def _summaries(folder: Path) -> dict[str, int]:
 
 def test_cma_finds_the_paper_policys_collision_before_random_search(tmp_path: Path):
     execution = Execution(workers=2, progress=False)
-    killed = prepare(PAPER_S3, SPACE, "distance", ("cma", "random"), budget=36, seed=1)
+    killed = prepare(PAPER_S3, SPACE, "distance", ("cma", "random"), budget=24, seed=3)
     falsify(killed, tmp_path, execution, "test")
     before = _summaries(tmp_path)
 
-    setup = prepare(PAPER_S3, SPACE, "distance", ("cma", "random"), budget=72, seed=1)
+    setup = prepare(PAPER_S3, SPACE, "distance", ("cma", "random"), budget=36, seed=3)
     outcome = falsify(setup, tmp_path, Execution(workers=2, resume=True, progress=False),
                       "test")
     after = _summaries(tmp_path)
@@ -48,7 +51,7 @@ def test_cma_finds_the_paper_policys_collision_before_random_search(tmp_path: Pa
     assert len(after) > len(before)
 
     found = first_failure(outcome.table, "cma")
-    assert found is not None and found <= 72
+    assert found is not None and found <= 36
     baseline = first_failure(outcome.table, "random")
     assert baseline is None or baseline > found
     collided = outcome.table[outcome.table["failed"] & (outcome.table["method"] == "cma")]

@@ -12,11 +12,13 @@ from sse_cosim.falsify.objectives import OBJECTIVES, OPEN_TTC_S, broken, first_b
 from sse_cosim.falsify.searchers import SEARCHERS, generation_size
 from sse_cosim.falsify.space import (
     COUNTED_BREAKS,
+    DimEntry,
     FalsifyFile,
     build_space,
     load_falsify_file,
     scenario_of,
 )
+from sse_cosim.runner.safety import ActorPlanner
 from sse_cosim.scenario.loader import load_scenario_data
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -33,7 +35,7 @@ def _space(scenario: Path, spec: FalsifyFile | None = None):
 def test_the_box_of_s3_holds_the_pedestrian_every_sensor_and_every_sender():
     space = _space(S3)
     names = [d.name for d in space.dims]
-    assert names[:3] == ["step_s", "walk_mps", "behind_m"]
+    assert names[:3] == ["walk_mps", "wait_s", "behind_m"]
     sensors = {"bus_front", "bus_near", "rsu1_cam", "rsu2_cam"}
     assert {n for n in names if n.startswith("noise_")} == {
         f"noise_{s}_{axis}" for s in sensors for axis in ("fwd", "lat")}
@@ -41,13 +43,23 @@ def test_the_box_of_s3_holds_the_pedestrian_every_sensor_and_every_sender():
         f"loss_{node}_{what}" for node in ("rsu1", "rsu2") for what in ("start_s", "length_s")}
 
 
+def _walk_7_3_s(scenario, source):
+    return {"pedestrian": 7.3}
+
+
 def test_a_point_decodes_into_overrides_that_keep_the_noise_within_its_bound():
     space = _space(S3)
     unit = np.linspace(0.0, 1.0, space.size)
-    values, overrides, scenario = scenario_of(space, load_scenario_data(S3), unit, str(S3))
+    values, overrides, scenario = scenario_of(space, load_scenario_data(S3), unit, str(S3),
+                                              _walk_7_3_s)
     truck_front = scenario.parked["truck"].end_pos_m
     assert overrides["pedestrians.pedestrian.start_pos_m"] == pytest.approx(
         truck_front - values["behind_m"])
+    # it steps out after its walk and its wait
+    step_out = 7.3 + values["wait_s"]
+    assert overrides["pedestrians.pedestrian.steps_onto_crossing_s"] == pytest.approx(step_out)
+    assert values["steps_onto_crossing_s"] == pytest.approx(step_out)
+    assert scenario.pedestrians["pedestrian"].steps_onto_crossing_s == pytest.approx(step_out)
     for name, sensor in scenario.sensors.items():
         fault = scenario.faults.sensor.get(f"falsify_{name}")
         if fault is None:
@@ -81,9 +93,28 @@ def test_s1_has_no_sender_to_lose_and_no_shared_sensor():
 
 def test_a_box_beyond_the_speed_bound_is_refused_at_its_corner():
     spec = load_falsify_file(SPACE).model_copy(deep=True)
-    spec.dims[1].high = 3.0  # above estimator.max_pedestrian_speed_mps = 2.5
+    spec.dims[0].high = 3.0  # above estimator.max_pedestrian_speed_mps = 2.5
     with pytest.raises(UserError, match="corner of the search box"):
         _space(S1, spec)
+
+
+def test_a_step_out_searched_twice_is_refused():
+    spec = load_falsify_file(SPACE).model_copy(deep=True)
+    spec.dims.append(DimEntry(path="pedestrians.*.steps_onto_crossing_s", name="step_s",
+                              low=7.0, high=16.0))
+    with pytest.raises(UserError, match="searched by \\[\\[dims\\]\\] too"):
+        _space(S3, spec)
+
+
+@pytest.mark.sumo
+def test_every_point_of_the_box_can_happen():
+    """The planner times the walk, so no candidate steps out before its walk allows."""
+    planner = ActorPlanner()
+    space, data = _space(S3), load_scenario_data(S3)
+    for unit in np.random.default_rng(3).uniform(size=(12, space.size)):
+        values, _, scenario = scenario_of(space, data, unit, str(S3), planner.walk_times)
+        assert planner(scenario, str(S3)) is None
+        assert values["steps_onto_crossing_s"] >= values["wait_s"]
 
 
 def test_a_falsify_file_with_a_bad_field_is_one_line_naming_it(tmp_path: Path):
