@@ -22,6 +22,10 @@ scenario overrides:
   as drawn.
 - ``[loss]``: for each node that sends to an automated vehicle, one burst of lost messages
   (A3 allows any loss): its start and its length up to ``longest_s``.
+- ``[latency]``: for each such node, one window of late messages (a latency fault: the bus
+  predicts each message by its true age, and late views are not used as negative
+  information, so A3 holds): its start, its length up to ``longest_s`` and the steps added
+  to the link's latency, up to ``most_steps`` (rounded to whole steps; 0: none).
 
 The box is validated at its corners with the scenario's own ``breaks_assumptions``, so an
 interval outside the assumptions (a walking speed above the estimator's bound) is refused
@@ -111,6 +115,14 @@ class LossEntry(_FileModel):
     longest_s: float = Field(gt=0)
 
 
+class LatencyEntry(_FileModel):
+    """``[latency]``: one window of late messages per sending node, at most ``longest_s``
+    long and ``most_steps`` steps late."""
+
+    longest_s: float = Field(gt=0)
+    most_steps: int = Field(ge=1, le=100)
+
+
 class FalsifyFile(_FileModel):
     """A falsify file: the free choices the search steers."""
 
@@ -121,6 +133,7 @@ class FalsifyFile(_FileModel):
     start_behind_truck: BehindTruck | None = None
     noise: NoiseEntry | None = None
     loss: LossEntry | None = None
+    latency: LatencyEntry | None = None
 
 
 def load_falsify_file(path: Path) -> FalsifyFile:
@@ -164,7 +177,7 @@ class SearchSpace:
     paths each sets), the wait before the step-out (``step_out``: its pedestrian, if the
     scenario has it), the start behind the truck (if the scenario has the truck), two per
     noisy sensor (forward, lateral fraction of the bound), two per sender (loss start and
-    length).
+    length), three per late sender (start, length, steps late).
     """
 
     dims: tuple[Dimension, ...]
@@ -173,6 +186,7 @@ class SearchSpace:
     truck_front_m: float | None
     noises: tuple[_Noise, ...]
     senders: tuple[str, ...]
+    late_senders: tuple[str, ...]
     step_length_s: float
     fixed: Mapping[str, Any]
 
@@ -210,6 +224,13 @@ class SearchSpace:
                 out[f"faults.link.{FAULT_PREFIX}{node}"] = {
                     "node": node, "kind": "loss", "start_s": start,
                     "end_s": round(start + length, DECIMALS)}
+        for node in self.late_senders:
+            start, length = values[next(names)], values[next(names)]
+            steps = round(values[next(names)])
+            if steps >= 1 and length >= self.step_length_s:
+                out[f"faults.link.{FAULT_PREFIX}late_{node}"] = {
+                    "node": node, "kind": "latency", "start_s": start,
+                    "end_s": round(start + length, DECIMALS), "extra_latency_steps": steps}
         return out
 
 
@@ -269,12 +290,17 @@ def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
     for node in senders:
         dims += [Dimension(f"loss_{node}_start_s", 0.0, duration),
                  Dimension(f"loss_{node}_length_s", 0.0, spec.loss.longest_s)]
+    late = tuple(scenario.sender_ids()) if spec.latency is not None else ()
+    for node in late:
+        dims += [Dimension(f"late_{node}_start_s", 0.0, duration),
+                 Dimension(f"late_{node}_length_s", 0.0, spec.latency.longest_s),
+                 Dimension(f"late_{node}_steps", 0.0, float(spec.latency.most_steps))]
     if len(dims) < 2:
         raise UserError(spec_source, "dims", f"selects {len(dims)} value(s) in {source}",
                         "a search needs at least two: add dims that name this scenario's "
                         "fields (`sse-cosim fields` lists them)")
     space = SearchSpace(tuple(dims), tuple(targets), waiting, truck_front, noises, senders,
-                        scenario.simulation.step_length_s, counted)
+                        late, scenario.simulation.step_length_s, counted)
     _check_corners(space, data, source, spec_source)
     return space
 

@@ -14,6 +14,7 @@ from sse_cosim.falsify.space import (
     COUNTED_BREAKS,
     DimEntry,
     FalsifyFile,
+    LatencyEntry,
     build_space,
     load_falsify_file,
     scenario_of,
@@ -82,6 +83,26 @@ def test_a_loss_shorter_than_a_step_adds_no_fault_and_a_longer_one_a_burst():
     burst = overrides["faults.link.falsify_rsu2"]
     assert burst["kind"] == "loss"
     assert burst["end_s"] - burst["start_s"] == pytest.approx(2.0)
+
+
+def test_a_latency_window_decodes_into_a_latency_fault_in_whole_steps():
+    spec = load_falsify_file(SPACE).model_copy(deep=True)
+    spec.latency = LatencyEntry(longest_s=5.0, most_steps=8)
+    space = _space(S3, spec)
+    names = [d.name for d in space.dims]
+    assert names[-6:] == [f"late_{node}_{what}" for node in ("rsu1", "rsu2")
+                          for what in ("start_s", "length_s", "steps")]
+    values = space.values(np.full(space.size, 0.5))
+    values.update(late_rsu1_steps=0.4, late_rsu2_steps=2.6, late_rsu2_length_s=3.0)
+    overrides = space.overrides(values)
+    assert "faults.link.falsify_late_rsu1" not in overrides  # rounds to no added step
+    late = overrides["faults.link.falsify_late_rsu2"]
+    assert late["kind"] == "latency" and late["extra_latency_steps"] == 3
+    assert late["end_s"] - late["start_s"] == pytest.approx(3.0)
+    _, _, scenario = scenario_of(space, load_scenario_data(S3), np.full(space.size, 0.5),
+                                 str(S3), _walk_7_3_s)
+    assert scenario.faults.link["falsify_late_rsu2"].extra_latency_steps == 4
+    assert set(scenario.breaks_assumptions) == set(COUNTED_BREAKS)  # nothing more declared
 
 
 def test_s1_has_no_sender_to_lose_and_no_shared_sensor():
