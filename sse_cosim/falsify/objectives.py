@@ -27,6 +27,10 @@ OPEN_TTC_S = 10.0
 long: a margin the search can no longer tell apart from safe."""
 
 
+OPEN_DEPTH_M = 5.0
+"""A containment depth beyond this (or none: no set held a pedestrian) counts as this deep."""
+
+
 class Objective(Protocol):
     name: ClassVar[str]
     unit: ClassVar[str]
@@ -145,8 +149,36 @@ class TimeToCollision:
         return summary.get("first_collision_t_s")
 
 
+@dataclass(frozen=True)
+class ContainmentDepth:
+    """How deep the truth lies in the sets and refined regions written for it (m, the least
+    of both; :class:`~sse_cosim.reporting.margins.ContainmentDepth` measures it); fails at a
+    containment violation (the recorder's own check). Labelled runs only (the search refuses
+    an anonymous scenario before it starts); a run whose sets and regions never held a
+    pedestrian made no claim to miss and counts as :data:`OPEN_DEPTH_M`."""
+
+    name: ClassVar[str] = "depth"
+    unit: ClassVar[str] = "m"
+    help: ClassVar[str] = ("least depth of a pedestrian's true position inside its sets and "
+                           "refined regions (m); fails at a containment violation")
+    margins: ClassVar[tuple[str, ...]] = (run_margins.ContainmentDepth.name,)
+
+    def margin(self, summary: Mapping[str, Any]) -> float:
+        depth = summary["margins"][run_margins.ContainmentDepth.name]
+        found = [part["least_m"] for part in depth.values() if part["least_m"] is not None]
+        return min(float(min(found, default=OPEN_DEPTH_M)), OPEN_DEPTH_M)
+
+    def failed(self, summary: Mapping[str, Any]) -> bool:
+        return bool(summary["containment_violations"])
+
+    def failed_at(self, summary: Mapping[str, Any]) -> float | None:
+        violations = summary["violations"]
+        return violations[0]["t"] if violations else None
+
+
 OBJECTIVES: dict[str, Objective] = {o.name: o for o in (LeastDistance(), EmergencyBrake(),
-                                                         Standstill(), TimeToCollision())}
+                                                         Standstill(), TimeToCollision(),
+                                                         ContainmentDepth())}
 
 
 def first_break_t(summary: Mapping[str, Any]) -> float | None:

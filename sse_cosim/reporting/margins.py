@@ -1,21 +1,26 @@
 """Margins a run reports when asked: figures of how near it came to failing, beyond the
 summary's own.
 
-A margin watches every step beside the recorder and gives one JSON value at the end, which
-the run writes under ``summary.json``'s ``margins`` (only for the margins its task names: a
-run asked for none writes the summary it always did). The falsifier's objectives name the
-margins they read. A new margin is one class added to :data:`MARGINS`.
+A margin watches every step beside the recorder and, at the end, gives one JSON value from
+what it saw or from what the recorder kept; the run writes it under ``summary.json``'s
+``margins`` (only for the margins its task names: a run asked for none writes the summary it
+always did). The falsifier's objectives name the margins they read. A new margin is one class
+added to :data:`MARGINS`.
 
 :class:`TimeToCollision` is the classic surrogate safety measure: at every step, for every
 automated vehicle and pedestrian, how long until they touch if both keep their velocity
 (the vehicle along its heading at its speed; the pedestrian at SUMO's speed along its last
 displacement). Touching is the recorder's collision: the pedestrian's centre within its body
 radius of the vehicle's footprint, so a time of 0 is a collision.
+
+:class:`ContainmentDepth` grades the recorder's containment checks: how deep each pedestrian's
+true position lies inside every position set and refined region written for it (the
+distance to the set's boundary; negative: outside, a containment violation).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
@@ -23,18 +28,21 @@ import numpy as np
 
 if TYPE_CHECKING:  # annotations only: the CLI lists the margins without the pipeline
     from sse_cosim.pipeline.result import StepResult
+    from sse_cosim.reporting.recorder import RunRecorder
     from sse_cosim.scenario.model import Scenario
 
 
 class Margin(Protocol):
-    """Watches a run step by step; :meth:`value` is what ``summary.json`` gets."""
+    """Watches a run step by step; :meth:`value` (from what it saw, or what the run's
+    recorder kept) is what ``summary.json`` gets."""
 
     name: ClassVar[str]
     help: ClassVar[str]
+    labelled_only: ClassVar[bool]  # needs sets that name their pedestrian
 
     def __call__(self, result: StepResult) -> None: ...
 
-    def value(self) -> dict[str, Any]: ...
+    def value(self, recorder: RunRecorder) -> dict[str, Any]: ...
 
 
 def ray_box_entry(p: np.ndarray, w: np.ndarray, half: np.ndarray) -> np.ndarray:
@@ -113,6 +121,7 @@ class TimeToCollision:
     name: ClassVar[str] = "time_to_collision"
     help: ClassVar[str] = ("least time until an automated vehicle and a pedestrian touch if both "
                            "keep their velocity (s); 0 at a collision")
+    labelled_only: ClassVar[bool] = False
 
     scenario: Scenario
     least_s: float = np.inf
@@ -150,10 +159,94 @@ class TimeToCollision:
                          where=length[:, None] > 0)
         return unit * speeds[:, None]
 
-    def value(self) -> dict[str, Any]:
+    def value(self, recorder: RunRecorder) -> dict[str, Any]:
         least = None if np.isinf(self.least_s) else self.least_s
         return {"least_s": least, **self.at}
 
 
-MARGINS: dict[str, Callable[[Scenario], Margin]] = {TimeToCollision.name: TimeToCollision}
+@dataclass
+class ContainmentDepth:
+    """The least depth of a pedestrian's true position in the sets and regions written for it
+    (m; negative outside), with where it came: ``sets`` over every local and fused position
+    set (``sets.jsonl``), ``regions`` over every refined region (``regions.jsonl``).
+
+    The sets are the recorder's own arrays and half-spaces (the depth is the least slack of
+    :func:`~sse_cosim.reporting.recorder.zonotope_2d_halfspaces_reference`, exact for a set
+    whose generators span the plane, as the jitter box makes every written set). Labelled
+    runs only (an anonymous run's sets name tracks, not pedestrians). ``least_m`` is None
+    where no set or region held a pedestrian.
+    """
+
+    name: ClassVar[str] = "containment_depth"
+    help: ClassVar[str] = ("least depth of a pedestrian's true position inside its position "
+                           "sets and refined regions (m); negative outside")
+    labelled_only: ClassVar[bool] = True
+
+    scenario: Scenario
+
+    def __call__(self, result: StepResult) -> None:
+        """Nothing to watch: the recorder keeps every set and region."""
+
+    def value(self, recorder: RunRecorder) -> dict[str, Any]:
+        from sse_cosim.reporting.recorder import REFINED, zonotope_2d_halfspaces_reference
+
+        truths = {(row["t"], row["pedestrian"]): (row["x"], row["y"])
+                  for row in recorder.truth_rows}
+        sets = _Least()
+        for t, vehicle, node, track, kind, center, generators in recorder.set_records:
+            truth = truths.get((t, track))
+            if truth is not None:
+                x, y = truth[0] - float(center[0]), truth[1] - float(center[1])
+                depth = min(b - abs(dx * x + dy * y) for dx, dy, b in
+                            zonotope_2d_halfspaces_reference(generators, 0.0))
+                sets.note(depth, t=t, vehicle=vehicle, node=node, pedestrian=track, kind=kind)
+        regions = _Least()
+        for record in recorder.regions:
+            truth = truths.get((record.time, record.track))
+            if record.kind == REFINED and truth is not None:
+                regions.note(_signed_depth(record.region, truth), t=record.time,
+                             vehicle=record.vehicle, pedestrian=record.track)
+        return {"sets": sets.value(), "regions": regions.value()}
+
+
+@dataclass
+class _Least:
+    """The least of some depths and where it came."""
+
+    least_m: float = np.inf
+    at: dict[str, Any] = field(default_factory=dict)
+
+    def note(self, depth: float, **where: Any) -> None:
+        if depth < self.least_m:
+            self.least_m, self.at = float(depth), where
+
+    def value(self) -> dict[str, Any]:
+        return {"least_m": None if np.isinf(self.least_m) else self.least_m, **self.at}
+
+
+def _signed_depth(region: Any, point: tuple[float, float]) -> float:
+    """The distance from ``point`` to the boundary of the shapely ``region``: positive
+    inside, negative outside."""
+    import shapely
+
+    p = shapely.Point(point)
+    distance = float(shapely.distance(region.boundary, p))
+    return distance if region.covers(p) else -distance
+
+
+MARGINS: dict[str, Callable[[Scenario], Margin]] = {
+    margin.name: margin for margin in (TimeToCollision, ContainmentDepth)}
+
+
+def check_margins(names: Sequence[str], scenario: Scenario, source: str) -> None:
+    """:class:`UserError` (naming ``source``) if ``scenario`` cannot give a margin of
+    ``names``: one that reads labelled sets, in a run with anonymous detections."""
+    from sse_cosim.errors import UserError
+
+    for name in names:
+        if MARGINS[name].labelled_only and scenario.estimator.association != "labelled":
+            raise UserError(source, "estimator.association",
+                            f"the {name} margin needs sets that name their pedestrian, and "
+                            f"this run's detections are {scenario.estimator.association}",
+                            'set estimator.association = "labelled", or ask for another margin')
 """Every margin a run can be asked for, by name."""

@@ -8,7 +8,7 @@ from typing import Any
 
 from sse_cosim.files import portable_path
 from sse_cosim.pipeline.result import StepResult
-from sse_cosim.reporting.margins import MARGINS
+from sse_cosim.reporting.margins import MARGINS, check_margins
 from sse_cosim.reporting.outputs import write_run
 from sse_cosim.reporting.recorder import RunRecorder
 from sse_cosim.reporting.replay import ReplayLog
@@ -48,6 +48,7 @@ def run_scenario(
     the margins (:data:`~sse_cosim.reporting.margins.MARGINS`) the summary gets under
     ``margins``; none, no such key."""
     source = portable_path(source)
+    check_margins(margins, scenario, source)
     recorder = RunRecorder(scenario, tuple(scene_times),
                            replay=None if summary_only else ReplayLog())
     watchers = [MARGINS[name](scenario) for name in margins]
@@ -62,6 +63,6 @@ def run_scenario(
                                              ("ground_breaks", info.ground_breaks))
              if breaks is not None}
     if watchers:
-        extra["margins"] = {watch.name: watch.value() for watch in watchers}
+        extra["margins"] = {watch.name: watch.value(recorder) for watch in watchers}
     return write_run(out_dir, info.scenario, recorder, info.roadmap, source, info.arrived,
                      plots, summary_only, extra or None)

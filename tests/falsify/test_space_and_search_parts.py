@@ -8,7 +8,14 @@ import numpy as np
 import pytest
 
 from sse_cosim.errors import UserError
-from sse_cosim.falsify.objectives import OBJECTIVES, OPEN_TTC_S, broken, first_break_t
+from sse_cosim.falsify.job import prepare
+from sse_cosim.falsify.objectives import (
+    OBJECTIVES,
+    OPEN_DEPTH_M,
+    OPEN_TTC_S,
+    broken,
+    first_break_t,
+)
 from sse_cosim.falsify.searchers import SEARCHERS, generation_size
 from sse_cosim.falsify.space import (
     COUNTED_BREAKS,
@@ -180,6 +187,32 @@ def test_the_time_to_collision_objective_asks_for_its_margin_and_caps_it():
     assert ttc.margin(timed(None)) == OPEN_TTC_S == ttc.margin(timed(40.0))
     hit = timed(0.0, collisions=1, first_collision_t_s=11.9)
     assert ttc.margin(hit) == 0.0 and ttc.failed(hit) and ttc.failed_at(hit) == 11.9
+
+
+def test_the_depth_objective_takes_the_shallower_of_sets_and_regions():
+    depth = OBJECTIVES["depth"]
+    assert depth.margins == ("containment_depth",)
+
+    def deep(sets, regions, **changes):
+        return _summary(margins={"containment_depth": {"sets": {"least_m": sets},
+                                                       "regions": {"least_m": regions}}},
+                        **changes)
+
+    assert depth.margin(deep(1.2, 0.04)) == 0.04 and not depth.failed(deep(1.2, 0.04))
+    assert depth.margin(deep(None, None)) == OPEN_DEPTH_M  # no set held anyone
+    missed = deep(-0.1, 0.3, containment_violations=1, violations=[{"t": 4.2}])
+    assert depth.margin(missed) == -0.1 and depth.failed(missed)
+    assert depth.failed_at(missed) == 4.2
+
+
+def test_the_depth_objective_refuses_anonymous_detections(tmp_path: Path):
+    anonymous = tmp_path / "anonymous.toml"
+    anonymous.write_text(f'extends = "{S3.as_posix()}"\n[estimator]\nassociation = "anonymous"\n')
+    walk_only = tmp_path / "walk.toml"  # no sensor faults: an anonymous run refuses them
+    walk_only.write_text('[step_out]\nhigh = 5.0\n[start_behind_truck]\nlow = 1.0\nhigh = 9.0\n')
+    with pytest.raises(UserError, match="containment_depth margin needs sets that name"):
+        prepare(anonymous, walk_only, "depth", ("cma",), budget=4, seed=1)
+    prepare(anonymous, walk_only, "distance", ("cma",), budget=4, seed=1)  # needs no margin
 
 
 def test_a_collision_after_the_world_broke_an_assumption_is_not_a_broken_promise():

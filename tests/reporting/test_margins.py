@@ -1,18 +1,23 @@
-"""Time to collision (reporting.margins): the exact ray test against a brute-force march, and
-a real S3 run's least time checked again from the files it wrote."""
+"""Margins on demand (reporting.margins): the time to collision's exact ray test against a
+brute-force march; the containment depth on known sets; a real S3 run's margins checked again
+from the files it wrote (shapely polygons of the written sets, a march for the time)."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
 import pytest
 import shapely
 
-from sse_cosim.reporting.margins import time_to_contact
+from sse_cosim.reporting.margins import ContainmentDepth, time_to_contact
+from sse_cosim.reporting.recorder import REFINED, RegionRecord
 from sse_cosim.runner.run import run_scenario_file
+from sse_cosim.scenario.loader import load_scenario
+from sse_cosim.sets.zonotope import Zonotope
 
 ROOT = Path(__file__).resolve().parents[2]
 S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
@@ -62,13 +67,36 @@ def test_the_edge_cases_of_the_ray():
     assert hit == pytest.approx(2.0 - 0.3 / np.sqrt(2.0))
 
 
+def test_the_depth_is_the_distance_to_the_boundary_inside_and_minus_it_outside():
+    square = (np.zeros(2), np.array([[1.0, 0.0, 0.5], [0.0, 1.0, 0.5]]))  # 3 x 3, a hexagon
+    recorder = SimpleNamespace(
+        truth_rows=[{"t": 0.0, "pedestrian": "p", "x": 0.2, "y": -0.1},
+                    {"t": 0.1, "pedestrian": "p", "x": 2.0, "y": 0.0}],
+        set_records=[(0.0, "bus", "rsu1", "p", "local", *square),
+                     (0.1, "bus", "rsu1", "p", "local", *square),
+                     (0.1, "bus", "bus", "someone else", "fused", *square)],
+        regions=[RegionRecord(0.0, REFINED, "p", shapely.box(-1, -1, 1, 1), "bus")])
+    depth = ContainmentDepth(load_scenario(S3)).value(recorder)
+    hexagon = shapely.Polygon(Zonotope.unchecked(*square).vertices())
+    expected = -hexagon.boundary.distance(shapely.Point(2.0, 0.0))
+    assert depth["sets"]["least_m"] == pytest.approx(expected)
+    assert depth["sets"]["t"] == 0.1 and depth["sets"]["node"] == "rsu1"
+    assert depth["regions"]["least_m"] == pytest.approx(0.8)  # 1 - 0.2 to the right side
+
+
 @pytest.mark.sumo
-def test_a_run_reports_the_least_time_only_when_asked_and_the_files_agree(tmp_path: Path):
+def test_a_run_reports_its_margins_only_when_asked_and_the_files_agree(tmp_path: Path):
     plain = run_scenario_file(S3, tmp_path / "plain", plots=False, summary_only=True)
     assert "margins" not in plain
 
     out = tmp_path / "asked"
-    summary = run_scenario_file(S3, out, plots=False, margins=("time_to_collision",))
+    summary = run_scenario_file(S3, out, plots=False,
+                                margins=("time_to_collision", "containment_depth"))
+    _the_time_agrees_with_the_files(summary, out)
+    _the_depth_agrees_with_the_files(summary, out)
+
+
+def _the_time_agrees_with_the_files(summary: dict, out: Path) -> None:
     least = summary["margins"]["time_to_collision"]
     assert 0.0 < least["least_s"] < 10.0 and least["vehicle"] == "bus"
     # again from what the run wrote: the bus along the road (S3's is straight, heading east)
@@ -89,3 +117,33 @@ def test_a_run_reports_the_least_time_only_when_asked_and_the_files_agree(tmp_pa
     half = np.array([bus["length_m"], bus["width_m"]]) / 2
     assert _marched(now - centre, relative, half, radius, 10.0) == pytest.approx(
         least["least_s"], abs=MARCH_STEP_S + 1e-9)
+
+
+def _the_depth_agrees_with_the_files(summary: dict, out: Path) -> None:
+    """Every written set and refined region again as a shapely polygon: the least distance
+    from the truth to its boundary (inside) is the summary's."""
+    depth = summary["margins"]["containment_depth"]
+    truth = {(row.t, row.pedestrian): shapely.Point(row.x, row.y)
+             for row in pd.read_csv(out / "truth.csv").itertuples()}
+    least = np.inf
+    for line in (out / "sets.jsonl").read_text().splitlines():
+        record = json.loads(line)
+        z = Zonotope.unchecked(np.array(record["center"]), np.array(record["generators"]))
+        point = truth.get((record["t"], record["track"]))
+        if point is None:  # a set held after the pedestrian left the scene: nothing to hold
+            continue
+        polygon = shapely.Polygon(z.vertices())
+        assert polygon.covers(point)
+        least = min(least, polygon.boundary.distance(point))
+    assert depth["sets"]["least_m"] == pytest.approx(least, abs=1e-6)
+    least = np.inf
+    for line in (out / "regions.jsonl").read_text().splitlines():
+        record = json.loads(line)
+        if record["kind"] != REFINED:
+            continue
+        region = shapely.MultiPolygon([shapely.Polygon(p[0], p[1:])
+                                       for p in record["polygons"]])
+        point = truth.get((record["t"], record["track"]))
+        if point is not None:
+            least = min(least, region.boundary.distance(point))
+    assert depth["regions"]["least_m"] == pytest.approx(least, abs=1e-5)
