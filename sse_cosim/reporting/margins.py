@@ -168,7 +168,9 @@ class TimeToCollision:
 class ContainmentDepth:
     """The least depth of a pedestrian's true position in the sets and regions written for it
     (m; negative outside), with where it came: ``sets`` over every local and fused position
-    set (``sets.jsonl``), ``regions`` over every refined region (``regions.jsonl``).
+    set (``sets.jsonl``), ``regions`` over every refined region (``regions.jsonl``) at the
+    steps its pedestrian stood inside the window where regions are kept (the recorder's
+    claim: outside it, every walkable place counts as occupied).
 
     The sets are the recorder's own arrays and half-spaces (the depth is the least slack of
     :func:`~sse_cosim.reporting.recorder.zonotope_2d_halfspaces_reference`, exact for a set
@@ -203,7 +205,7 @@ class ContainmentDepth:
         regions = _Least()
         for record in recorder.regions:
             truth = truths.get((record.time, record.track))
-            if record.kind == REFINED and truth is not None:
+            if record.kind == REFINED and truth is not None and not record.outside_window:
                 regions.note(_signed_depth(record.region, truth), t=record.time,
                              vehicle=record.vehicle, pedestrian=record.track)
         return {"sets": sets.value(), "regions": regions.value()}
