@@ -57,8 +57,18 @@ def _step_s(summary: Mapping[str, Any]) -> float:
     return summary["travel_time_s"] / max(summary["steps"], 1)
 
 
+class _FailsAtCollision:
+    """An objective whose failure is a collision, from the first contact on."""
+
+    def failed(self, summary: Mapping[str, Any]) -> bool:
+        return bool(summary["collisions"])
+
+    def failed_at(self, summary: Mapping[str, Any]) -> float | None:
+        return summary.get("first_collision_t_s")
+
+
 @dataclass(frozen=True)
-class LeastDistance:
+class LeastDistance(_FailsAtCollision):
     """The least distance between the bus and any pedestrian (m); 0 at a collision."""
 
     name: ClassVar[str] = "distance"
@@ -70,12 +80,6 @@ class LeastDistance:
         if summary["collisions"]:
             return 0.0
         return float(summary["min_distance_bus_pedestrian_m"])
-
-    def failed(self, summary: Mapping[str, Any]) -> bool:
-        return bool(summary["collisions"])
-
-    def failed_at(self, summary: Mapping[str, Any]) -> float | None:
-        return summary.get("first_collision_t_s")
 
 
 @dataclass(frozen=True)
@@ -126,7 +130,7 @@ class Standstill:
 
 
 @dataclass(frozen=True)
-class TimeToCollision:
+class TimeToCollision(_FailsAtCollision):
     """The least time to collision of the run (s), capped at :data:`OPEN_TTC_S`; 0 at a
     collision (:class:`~sse_cosim.reporting.margins.TimeToCollision` measures it)."""
 
@@ -141,12 +145,6 @@ class TimeToCollision:
             return 0.0
         least = summary["margins"][run_margins.TimeToCollision.name]["least_s"]
         return OPEN_TTC_S if least is None else min(float(least), OPEN_TTC_S)
-
-    def failed(self, summary: Mapping[str, Any]) -> bool:
-        return bool(summary["collisions"])
-
-    def failed_at(self, summary: Mapping[str, Any]) -> float | None:
-        return summary.get("first_collision_t_s")
 
 
 @dataclass(frozen=True)
