@@ -233,7 +233,6 @@ class SearchSpace:
                     "end_s": round(start + length, DECIMALS), "extra_latency_steps": steps}
         return out
 
-
     def step_out_override(self, values: Mapping[str, float],
                           walk_s: Mapping[str, float]) -> dict[str, float]:
         """The step-out time of the ``[step_out]`` pedestrian: its walk (``walk_s``: pedestrian
