@@ -9,9 +9,11 @@ added to :data:`MARGINS`.
 
 :class:`TimeToCollision` is the classic surrogate safety measure: at every step, for every
 automated vehicle and pedestrian, how long until they touch if both keep their velocity
-(the vehicle along its heading at its speed; the pedestrian at SUMO's speed along its last
-displacement). Touching is the recorder's collision: the pedestrian's centre within its body
-radius of the vehicle's footprint, so a time of 0 is a collision.
+(the vehicle along its heading at its speed; the pedestrian at SUMO's speed along the
+direction SUMO walks it, :attr:`~sse_cosim.world.snapshot.PersonState.heading`: a sideways step
+SUMO takes between the lanes of its walking areas does not turn it). Touching is the
+recorder's collision: the pedestrian's centre within its body radius of the vehicle's
+footprint, so a time of 0 is a collision.
 
 :class:`ContainmentDepth` grades the recorder's containment checks: how deep each pedestrian's
 true position lies inside every position set and refined region written for it (the
@@ -20,6 +22,7 @@ distance to the set's boundary; negative: outside, a containment violation).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol
@@ -30,6 +33,7 @@ if TYPE_CHECKING:  # annotations only: the CLI lists the margins without the pip
     from sse_cosim.pipeline.result import StepResult
     from sse_cosim.reporting.recorder import RunRecorder
     from sse_cosim.scenario.model import Scenario
+    from sse_cosim.world.snapshot import PersonState
 
 
 class Margin(Protocol):
@@ -126,13 +130,12 @@ class TimeToCollision:
     scenario: Scenario
     least_s: float = np.inf
     at: dict[str, Any] = field(default_factory=dict)  # t, vehicle, pedestrian of the least
-    last: dict[str, np.ndarray] = field(default_factory=dict)  # pedestrian -> last position
 
     def __call__(self, result: StepResult) -> None:
         persons = result.snapshot.persons
         ids = sorted(persons)
         xy = np.array([persons[pid].position for pid in ids]).reshape(-1, 2)
-        velocity = self._velocities(ids, xy, np.array([persons[pid].speed for pid in ids]))
+        velocity = _walking_velocities([persons[pid] for pid in ids])
         radius = np.array([self.scenario.person_radius_m(pid) for pid in ids])
         for vehicle in result.vehicles if ids else ():
             state = result.snapshot.vehicles[vehicle]
@@ -147,17 +150,6 @@ class TimeToCollision:
                 self.least_s = float(tau[k])
                 self.at = {"t": round(result.snapshot.time, 6), "vehicle": vehicle,
                            "pedestrian": ids[k]}
-        self.last = dict(zip(ids, xy, strict=True))
-
-    def _velocities(self, ids: list[str], xy: np.ndarray, speeds: np.ndarray) -> np.ndarray:
-        """Each pedestrian's velocity: its speed along its last displacement (none on its
-        first step or when it did not move), shape (n, 2)."""
-        moved = xy - np.array([self.last.get(pid, p) for pid, p in zip(ids, xy, strict=True)
-                               ]).reshape(-1, 2)
-        length = np.sqrt(_dot(moved, moved))
-        unit = np.divide(moved, length[:, None], out=np.zeros_like(moved),
-                         where=length[:, None] > 0)
-        return unit * speeds[:, None]
 
     def value(self, recorder: RunRecorder) -> dict[str, Any]:
         least = None if np.isinf(self.least_s) else self.least_s
@@ -238,6 +230,13 @@ def _signed_depth(region: Any, point: tuple[float, float]) -> float:
 
 MARGINS: dict[str, Callable[[Scenario], Margin]] = {
     margin.name: margin for margin in (TimeToCollision, ContainmentDepth)}
+
+
+def _walking_velocities(persons: Sequence[PersonState]) -> np.ndarray:
+    """Each pedestrian's velocity (m/s): its speed along its heading (none while it waits),
+    shape (n, 2). The C library's cos and sin (``math``), the same on every CPU."""
+    return np.array([(p.speed * math.cos(p.heading), p.speed * math.sin(p.heading))
+                     if p.heading is not None else (0.0, 0.0) for p in persons]).reshape(-1, 2)
 
 
 def check_margins(names: Sequence[str], scenario: Scenario, source: str) -> None:

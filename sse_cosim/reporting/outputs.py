@@ -30,7 +30,8 @@ if TYPE_CHECKING:
     import pandas as pd
 
 TRACE = "trace.csv"
-TRUTH = "truth.csv"  # t, pedestrian, x, y: every pedestrian in the scene at every step
+TRUTH = "truth.csv"  # every pedestrian in the scene at every step
+TRUTH_COLUMNS = ["t", "pedestrian", "x", "y", "speed", "heading"]  # m, m/s, rad (or empty)
 PEDESTRIANS = "pedestrians.csv"  # per step, vehicle and pedestrian: its checks and distance
 SETS = "sets.jsonl"
 REGIONS = "regions.jsonl"
@@ -91,7 +92,7 @@ def write_run(
         trace = pd.DataFrame(recorder.rows)
         _write_trace(out_dir / TRACE, trace)
         _write_trace(out_dir / TRUTH,
-                     pd.DataFrame(recorder.truth_rows, columns=["t", "pedestrian", "x", "y"]))
+                     pd.DataFrame(recorder.truth_rows, columns=TRUTH_COLUMNS))
         _write_trace(out_dir / PEDESTRIANS, pd.DataFrame(recorder.pedestrian_rows, columns=[
             "t", "vehicle", "pedestrian", "contained_fused", "contained_refined",
             "accounted_for", "distance"]))

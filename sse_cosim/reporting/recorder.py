@@ -256,7 +256,7 @@ class RunRecorder:
     scene_times: tuple[float, ...] = ()
     replay: ReplayLog | None = None
     rows: list[dict[str, Any]] = field(default_factory=list)
-    truth_rows: list[dict[str, Any]] = field(default_factory=list)  # t, pedestrian, x, y
+    truth_rows: list[dict[str, Any]] = field(default_factory=list)  # truth.csv's rows
     pedestrian_rows: list[dict[str, Any]] = field(default_factory=list)  # per vehicle and person
     # the sets to write, each (t, vehicle, node, track, kind, center, generators) with its
     # position set's own read-only arrays: nothing for the garbage collector to walk while the
@@ -304,7 +304,9 @@ class RunRecorder:
         self.step_positions = {}
         if self.anonymous:  # (by id, every set names its pedestrian: nothing to remember)
             self._note_detected(result)
-        self.truth_rows += [{"t": t, "pedestrian": pid, "x": xy[0], "y": xy[1]}
+        persons = result.snapshot.persons
+        self.truth_rows += [{"t": t, "pedestrian": pid, "x": xy[0], "y": xy[1],
+                             "speed": persons[pid].speed, "heading": persons[pid].heading}
                             for pid, xy in truths.items()]
         local = self._check_local_sets(t, result, truths)
         if self.replay is not None:

@@ -82,12 +82,15 @@ class VehicleState:
 
 @dataclass(frozen=True)
 class PersonState:
-    """One pedestrian at one step; ``position`` is its centre, shape (2,)."""
+    """One pedestrian at one step; ``position`` is its centre, shape (2,); ``heading`` the
+    direction it walks (rad, CCW from east) as SUMO gives it, None while it waits beside the
+    sidewalk before its walk (on no lane)."""
 
     id: str
     position: tuple[float, float]
     speed: float  # m/s
     on_crossing: bool = False  # on any of the network's crossings
+    heading: float | None = None
 
 
 @dataclass(frozen=True)

@@ -725,11 +725,13 @@ class SumoWorld:
         for pid, values in libsumo.person.getAllSubscriptionResults().items():
             self._person_lanes[pid] = str(values[libsumo.VAR_LANE_ID])
             self._person_speeds[pid] = float(values[libsumo.VAR_SPEED])
+            walking = bool(values[libsumo.VAR_LANE_ID])
             persons[pid] = PersonState(
                 id=pid,
                 position=self._person_position(pid, values),
                 speed=float(values[libsumo.VAR_SPEED]),
-                on_crossing=values[libsumo.VAR_ROAD_ID] in self.roadmap.crossing_ids)
+                on_crossing=values[libsumo.VAR_ROAD_ID] in self.roadmap.crossing_ids,
+                heading=heading(values[libsumo.VAR_ANGLE]) if walking else None)
         return Snapshot(time=self._time, vehicles=vehicles, persons=persons)
 
     def _person_position(self, pid: str, values: dict[int, Any]) -> tuple[float, float]:

@@ -13,11 +13,17 @@ import pandas as pd
 import pytest
 import shapely
 
-from sse_cosim.reporting.margins import ContainmentDepth, time_to_contact
+from sse_cosim.pipeline.result import StepResult
+from sse_cosim.reporting.margins import (
+    ContainmentDepth,
+    TimeToCollision,
+    time_to_contact,
+)
 from sse_cosim.reporting.recorder import REFINED, RegionRecord
 from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.sets.zonotope import Zonotope
+from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
 
 ROOT = Path(__file__).resolve().parents[2]
 S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
@@ -102,19 +108,19 @@ def _the_time_agrees_with_the_files(summary: dict, out: Path) -> None:
     least = summary["margins"]["time_to_collision"]
     assert 0.0 < least["least_s"] < 10.0 and least["vehicle"] == "bus"
     # again from what the run wrote: the bus along the road (S3's is straight, heading east)
-    # at its speed, the pedestrian along its last step at that step's pace
+    # at its speed, the pedestrian along its heading at its speed
     trace = pd.read_csv(out / "trace.csv").set_index("t")
     truth = pd.read_csv(out / "truth.csv")
     truth = truth[truth["pedestrian"] == least["pedestrian"]].set_index("t")
     scenario = json.loads((out / "scenario.json").read_text())
     bus = scenario["automated"]["bus"]
-    dt = scenario["simulation"]["step_length_s"]
     t = least["t"]
     row = trace.loc[t]
     centre = np.array([row["bus_x"] - bus["length_m"] / 2, row["bus_y"]])
     now = truth.loc[t, ["x", "y"]].to_numpy(float)
-    before = truth.loc[round(t - dt, 6), ["x", "y"]].to_numpy(float)
-    relative = (now - before) / dt - np.array([row["bus_speed"], 0.0])
+    speed, heading = truth.loc[t, ["speed", "heading"]].to_numpy(float)
+    relative = speed * np.array([np.cos(heading), np.sin(heading)]) - np.array(
+        [row["bus_speed"], 0.0])
     radius = scenario["pedestrians"][least["pedestrian"]]["radius_m"]
     half = np.array([bus["length_m"], bus["width_m"]]) / 2
     assert _marched(now - centre, relative, half, radius, 10.0) == pytest.approx(
@@ -150,3 +156,31 @@ def _the_depth_agrees_with_the_files(summary: dict, out: Path) -> None:
         if point is not None:
             least = min(least, region.boundary.distance(point))
     assert depth["regions"]["least_m"] == pytest.approx(least, abs=1e-5)
+
+
+def test_the_pedestrian_keeps_the_heading_sumo_walks_it_through_a_sideways_step():
+    """SUMO moves a walker sideways between the lanes of a walking area in one step (0.36 m
+    in the S3 falsification's worst cases) while it walks on along the sidewalk: the time to
+    collision follows its heading, not that step's displacement, which would read as a turn
+    toward the road."""
+    scenario = load_scenario(S3)
+    bus = Footprint(Pose(200.0, -1.6, 0.0), 12.0, 2.5)  # front at the zebra, heading east
+    margin = TimeToCollision(scenario)
+    for step, (x, y) in enumerate([(196.0, -7.6), (196.2, -7.24)]):  # the sideways step
+        walker = PersonState("pedestrian", (x, y), speed=2.0, heading=0.0)
+        margin(_step(step, bus, walker))
+    assert margin.least_s == np.inf  # walking east beside a bus standing still: never touch
+    waiting = PersonState("pedestrian", (196.4, -7.24), 2.0, heading=None)  # (on no lane)
+    margin(_step(2, bus, waiting))
+    assert margin.least_s == np.inf
+    margin(_step(3, bus, PersonState("pedestrian", (196.4, -7.24), 2.0, heading=np.pi / 2)))
+    radius = scenario.person_radius_m("pedestrian")
+    bus_right_m = -1.6 - 2.5 / 2  # now walking north, toward the bus's right side
+    assert margin.least_s == pytest.approx((bus_right_m - radius + 7.24) / 2.0)
+    assert margin.at == {"t": pytest.approx(0.3), "vehicle": "bus", "pedestrian": "pedestrian"}
+
+
+def _step(step: int, bus: Footprint, walker: PersonState) -> StepResult:
+    snapshot = Snapshot(0.1 * step, {"bus": VehicleState("bus", "automated", bus, 0.0)},
+                        {walker.id: walker})
+    return StepResult(step, snapshot, {}, {}, None, {}, {"bus": None})  # type: ignore[arg-type]

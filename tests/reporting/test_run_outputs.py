@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 import shapely
@@ -34,7 +35,8 @@ def recorder_with(speeds: list[float], contact: list[bool], clear: list[bool] | 
         for i, (v, c, p, u) in steps
     ]
     recorder.truth_rows = [{"t": round(0.1 * i, 6), "pedestrian": "pedestrian",
-                            "x": 183.123456789, "y": -7.6} for i, _ in steps if i]
+                            "x": 183.123456789, "y": -7.6, "speed": 1.3,
+                            "heading": 0.0 if i > 1 else None} for i, _ in steps if i]
     recorder.pedestrian_rows = [
         {"t": round(0.1 * i, 6), "vehicle": "bus", "pedestrian": "pedestrian",
          "contained_fused": None, "contained_refined": None, "accounted_for": True,
@@ -107,12 +109,13 @@ def test_run_folder_holds_regions_and_the_summary_figures(tmp_path):
 
 
 def test_trace_positions_keep_a_micrometre(tmp_path):
-    recorder = recorder_with([20.0, 20.0], [False, False])
+    recorder = recorder_with([20.0, 20.0, 20.0], [False, False, False])
     write_run(tmp_path, recorder.scenario, recorder, None, "test", DONE, plots_wanted=False)
     trace = pd.read_csv(tmp_path / TRACE)
     truth = pd.read_csv(tmp_path / TRUTH)
-    assert list(truth.columns) == ["t", "pedestrian", "x", "y"]
+    assert list(truth.columns) == ["t", "pedestrian", "x", "y", "speed", "heading"]
     assert (truth["t"][0], truth["x"][0]) == (0.1, 183.123457)
+    assert np.isnan(truth["heading"][0]) and truth["heading"][1] == 0.0  # empty: waiting
     assert trace["bus_x"][1] == 2.0
 
 
