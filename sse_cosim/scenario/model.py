@@ -175,6 +175,16 @@ class Pedestrian(StrictModel):
         "has a choice; left out: the crossing of the shortest walk."
     )
     radius_m: PositiveFloat = Field(0.3, description="Body radius used for collisions (m).")
+    pause_after_s: NonNegativeFloat = Field(
+        0.0, description="How long after stepping onto its crossing it stops (s), when "
+        "pause_for_s is set: a pedestrian who hesitates on the zebra (or beyond it, if it has "
+        "crossed by then). It stops and walks on within one step, or within "
+        "estimator.max_pedestrian_accel_mps2 under the bounded-acceleration model."
+    )
+    pause_for_s: NonNegativeFloat = Field(
+        0.0, description="How long it stands still there (s), then walks on at its walking "
+        "speed; 0: it does not stop."
+    )
 
 
 class RoadSideUnit(StrictModel):

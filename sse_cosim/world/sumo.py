@@ -71,6 +71,10 @@ check is :mod:`sse_cosim.world.acceleration_assumption`'s: one path keeping the 
 the acceleration bound and the jitter at once (it implies the speed check, which then does
 not run). Its breaks are ``pedestrian_speed``'s, as the speed check's are.
 
+Pauses. A scenario pedestrian with ``pause_for_s`` stops ``pause_after_s`` after it stepped
+onto its crossing and walks on after ``pause_for_s`` (:mod:`sse_cosim.world.walker_pause`):
+``person.setSpeed`` before each step, ramped as above under the bounded-acceleration model.
+
 Walkable ground. The estimator assumes every pedestrian's centre lies on the road map's
 walkable ground (:attr:`sse_cosim.world.roadmap.RoadMap.walkable`): sidewalks, walking areas and
 crossings, and the patches where SUMO's lone walkers were measured to leave them
@@ -128,6 +132,7 @@ from sse_cosim.world.sumo_setup import (
     write_config,
 )
 from sse_cosim.world.walk_probe import PROBE, ProbeTimer
+from sse_cosim.world.walker_pause import Pause
 
 log = logging.getLogger(__name__)
 
@@ -241,7 +246,9 @@ class SumoWorld:
         self._ground_break_count = 0
         self._person_lanes: dict[str, str] = {}  # each person's lane at the latest snapshot
         self._previous_lanes: dict[str, str] = {}
-        self._stepped_on: set[str] = set()  # pedestrians that stepped onto their crossing
+        self._stepped_on: dict[str, float] = {}  # pedestrian -> when it stepped onto its crossing
+        self._pauses = {pid: pause for pid, ped in present(scenario.pedestrians).items()
+                        if (pause := Pause.of(ped)) is not None}
 
     # --- context manager ------------------------------------------------------------------
 
@@ -319,9 +326,7 @@ class SumoWorld:
         """
         self._require_open()
         try:
-            if self._ramp is not None:
-                self._ramp.apply({pid: (self._walking_speeds[pid], speed)
-                                  for pid, speed in self._person_speeds.items()})
+            self._set_walking_speeds()
             libsumo.simulationStep()
             snapshot = self._snapshot()
         except LIBSUMO_ERRORS as exc:
@@ -333,6 +338,24 @@ class SumoWorld:
         self._check_motion(snapshot)
         self._check_ground(snapshot)
         return snapshot
+
+    def _set_walking_speeds(self) -> None:
+        """Each walker's speed for the next step: its own, or a pausing pedestrian's
+        (:class:`~sse_cosim.world.walker_pause.Pause`), ramped within the acceleration bound
+        where the motion model has one (then every walker's, every step)."""
+        wanted = {pid: self._pauses[pid].speed(self._since_on(pid))
+                  for pid in self._pauses.keys() & self._person_speeds.keys()}
+        if self._ramp is not None:
+            self._ramp.apply({pid: (wanted.get(pid, self._walking_speeds[pid]), speed)
+                              for pid, speed in self._person_speeds.items()})
+            return
+        for pid, speed in sorted(wanted.items()):
+            libsumo.person.setSpeed(pid, speed)
+
+    def _since_on(self, pid: str) -> float | None:
+        """How long ago (s) pedestrian ``pid`` stepped onto its crossing; None: not yet."""
+        on = self._stepped_on.get(pid)
+        return None if on is None else self._time - on
 
     @contextlib.contextmanager
     def _walking_alone(self) -> Iterator[None]:
@@ -629,7 +652,7 @@ class SumoWorld:
             wanted = plan.crossing_time_s
             on = self._person_lanes.get(pid, "").rpartition("_")[0] == plan.crossing
             if on:
-                self._stepped_on.add(pid)
+                self._stepped_on[pid] = time
             tolerance = self.scenario.pedestrians[pid].crossing_tolerance_s
             allowed = self._dt if tolerance is None else max(self._dt, tolerance)
             if abs(time - wanted) <= allowed + _TIME_EPS or (not on and time < wanted):

@@ -81,7 +81,7 @@ def relative(path: Path, folder: Path) -> str:
 
 @dataclass(frozen=True)
 class SpeedRamp:
-    """Keeps SUMO's walkers within an acceleration bound where they speed up.
+    """Keeps SUMO's walkers within an acceleration bound where they speed up or slow down.
 
     SUMO's striping model walks a person at its full speed from its first step (15 m/s² at
     1.5 m/s and 0.1 s steps). Its speed in a step is at most the one ``person.setSpeed`` set
@@ -90,18 +90,20 @@ class SpeedRamp:
     ``step_s``), and no walker speeds up faster than that. (SUMO's speed is along its lane;
     where it turns or changes its stripe, and where something stops it, the jitter and the
     world's check cover the rest.) A walker that has not walked yet has speed 0: its first
-    step is ``accel_mps2`` x ``step_s``.
+    step is ``accel_mps2`` x ``step_s``. A walker told to slow down (a scenario pedestrian's
+    pause, :class:`~sse_cosim.world.walker_pause.Pause`) slows by at most as much a step.
     """
 
     accel_mps2: float
     step_s: float
 
     def apply(self, walkers: Mapping[str, tuple[float, float]]) -> None:
-        """Set the speed of every person of ``walkers`` (id -> (its walking speed, its
-        speed now), m/s) for the next step."""
+        """Set the speed of every person of ``walkers`` (id -> (the speed it is to walk at,
+        its speed now), m/s) for the next step: that speed, within ``accel_mps2`` x ``step_s``
+        of its speed now."""
         rise = self.accel_mps2 * self.step_s
-        for pid, (walking, now) in walkers.items():
-            libsumo.person.setSpeed(pid, min(walking, now + rise))
+        for pid, (wanted, now) in walkers.items():
+            libsumo.person.setSpeed(pid, max(min(wanted, now + rise), now - rise, 0.0))
 
 
 def heading(nav_angle_deg: float) -> float:
