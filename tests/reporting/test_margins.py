@@ -27,6 +27,7 @@ from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, Veh
 
 ROOT = Path(__file__).resolve().parents[2]
 S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
+SIDEWAYS_STEP = Path(__file__).with_name("s3_ttc_sideways_step.toml")
 MARCH_STEP_S = 1e-3
 
 
@@ -178,6 +179,17 @@ def test_the_pedestrian_keeps_the_heading_sumo_walks_it_through_a_sideways_step(
     bus_right_m = -1.6 - 2.5 / 2  # now walking north, toward the bus's right side
     assert margin.least_s == pytest.approx((bus_right_m - radius + 7.24) / 2.0)
     assert margin.at == {"t": pytest.approx(0.3), "vehicle": "bus", "pedestrian": "pedestrian"}
+
+
+@pytest.mark.sumo
+def test_the_searched_sideways_step_no_longer_reads_as_a_course_toward_the_bus(tmp_path: Path):
+    """The falsifier's first least time to collision in S3 (2.254 s, with the heading taken
+    from the walker's last step) came from SUMO's 0.36 m sideways step onto the walking area
+    at 12.9 s; with the heading SUMO walks it the walker heads along the sidewalk there."""
+    summary = run_scenario_file(SIDEWAYS_STEP, tmp_path, plots=False, summary_only=True,
+                                margins=("time_to_collision",))
+    least = summary["margins"]["time_to_collision"]
+    assert least["least_s"] > 5.0 and least["t"] not in (12.9, 13.0)
 
 
 def _step(step: int, bus: Footprint, walker: PersonState) -> StepResult:
