@@ -161,9 +161,12 @@ class ContainmentDepth:
                            "refined regions (m); fails at a containment violation")
     margins: ClassVar[tuple[str, ...]] = (run_margins.ContainmentDepth.name,)
 
+    parts: ClassVar[tuple[str, ...]] = ("sets", "regions")  # of the margin's value
+
     def margin(self, summary: Mapping[str, Any]) -> float:
         depth = summary["margins"][run_margins.ContainmentDepth.name]
-        found = [part["least_m"] for part in depth.values() if part["least_m"] is not None]
+        found = [depth[part]["least_m"] for part in self.parts
+                 if depth[part]["least_m"] is not None]
         return min(float(min(found, default=OPEN_DEPTH_M)), OPEN_DEPTH_M)
 
     def failed(self, summary: Mapping[str, Any]) -> bool:
@@ -174,9 +177,23 @@ class ContainmentDepth:
         return violations[0]["t"] if violations else None
 
 
+@dataclass(frozen=True)
+class AccountedDepth(ContainmentDepth):
+    """How deep every pedestrian lies in the area the controller accounts for pedestrians,
+    its refined regions and the unobserved area together (m; the ``accounted`` part of
+    :class:`~sse_cosim.reporting.margins.ContainmentDepth`): the margin of a pedestrian
+    nobody has detected yet. Fails at a containment violation, as ``depth``."""
+
+    name: ClassVar[str] = "accounted"
+    help: ClassVar[str] = ("least depth of a pedestrian inside the refined regions and the "
+                           "unobserved area together (m), within the window where they are "
+                           "kept; fails at a containment violation")
+    parts: ClassVar[tuple[str, ...]] = ("accounted",)
+
+
 OBJECTIVES: dict[str, Objective] = {o.name: o for o in (LeastDistance(), EmergencyBrake(),
                                                          Standstill(), TimeToCollision(),
-                                                         ContainmentDepth())}
+                                                         ContainmentDepth(), AccountedDepth())}
 
 
 def first_break_t(summary: Mapping[str, Any]) -> float | None:

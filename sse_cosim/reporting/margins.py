@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from itertools import groupby
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
@@ -162,7 +163,10 @@ class ContainmentDepth:
     (m; negative outside), with where it came: ``sets`` over every local and fused position
     set (``sets.jsonl``), ``regions`` over every refined region (``regions.jsonl``) at the
     steps its pedestrian stood inside the window where regions are kept (the recorder's
-    claim: outside it, every walkable place counts as occupied).
+    claim: outside it, every walkable place counts as occupied), and ``accounted`` over the
+    area where the controller accounts for pedestrians, each automated vehicle's refined
+    regions and unobserved area together (the recorder's ``unaccounted`` check), for every
+    pedestrian inside that window: an undetected pedestrian's margin.
 
     The sets are the recorder's own arrays and half-spaces (the depth is the least slack of
     :func:`~sse_cosim.reporting.recorder.zonotope_2d_halfspaces_reference`, exact for a set
@@ -173,7 +177,8 @@ class ContainmentDepth:
 
     name: ClassVar[str] = "containment_depth"
     help: ClassVar[str] = ("least depth of a pedestrian's true position inside its position "
-                           "sets and refined regions (m); negative outside")
+                           "sets and refined regions, and inside the area the controller "
+                           "accounts for (m); negative outside")
     labelled_only: ClassVar[bool] = True
 
     scenario: Scenario
@@ -200,7 +205,30 @@ class ContainmentDepth:
             if record.kind == REFINED and truth is not None and not record.outside_window:
                 regions.note(_signed_depth(record.region, truth), t=record.time,
                              vehicle=record.vehicle, pedestrian=record.track)
-        return {"sets": sets.value(), "regions": regions.value()}
+        return {"sets": sets.value(), "regions": regions.value(),
+                "accounted": _accounted(recorder).value()}
+
+
+def _accounted(recorder: RunRecorder) -> _Least:
+    """The least depth of a pedestrian inside the window in the union of an automated
+    vehicle's regions at one step (its refined regions, then its unobserved area)."""
+    import shapely
+
+    from sse_cosim.reporting.recorder import UNOBSERVED
+
+    truths: dict[float, list[tuple[str, tuple[float, float]]]] = {}
+    for row in recorder.truth_rows:
+        truths.setdefault(row["t"], []).append((row["pedestrian"], (row["x"], row["y"])))
+    least = _Least()
+    for (t, vehicle), group in groupby(recorder.regions, key=lambda r: (r.time, r.vehicle)):
+        records = list(group)
+        unobserved = next(r for r in records if r.kind == UNOBSERVED)
+        inside = [(pid, xy) for pid, xy in truths.get(t, []) if pid not in unobserved.outside]
+        if inside:
+            union = shapely.union_all([r.region for r in records])
+            for pid, xy in inside:
+                least.note(_signed_depth(union, xy), t=t, vehicle=vehicle, pedestrian=pid)
+    return least
 
 
 @dataclass

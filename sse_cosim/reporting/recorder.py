@@ -177,7 +177,8 @@ class RegionRecord:
     refined region (``track`` its id) or the unobserved area (``track`` None).
     ``outside_window``: the pedestrian of a refined region's track stood outside the window
     in which regions are kept, where the region claims nothing (every walkable place counts
-    as occupied there); not written to ``regions.jsonl``."""
+    as occupied there); ``outside``: on the unobserved area's record, every pedestrian who
+    stood outside it then. Neither is written to ``regions.jsonl``."""
 
     time: float
     kind: str  # REFINED or UNOBSERVED
@@ -185,6 +186,7 @@ class RegionRecord:
     region: shapely.Geometry
     vehicle: str  # the automated vehicle's id
     outside_window: bool = False
+    outside: frozenset[str] = frozenset()
 
 
 @dataclass(frozen=True)
@@ -551,7 +553,9 @@ class RunRecorder:
         self.regions.extend(RegionRecord(t, REFINED, pid, region, vehicle,
                                          held.outside.get(pid, False))
                             for pid, region in sorted(held.refined.items()))
-        self.regions.append(RegionRecord(t, UNOBSERVED, None, held.unobserved, vehicle))
+        self.regions.append(RegionRecord(
+            t, UNOBSERVED, None, held.unobserved, vehicle,
+            outside=frozenset(pid for pid, out in held.outside.items() if out)))
 
     def _set_line(self, t: float, vehicle: str, node: str, track: str, kind: str,
                   position: PositionSet) -> None:

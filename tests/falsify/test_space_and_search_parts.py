@@ -189,20 +189,32 @@ def test_the_time_to_collision_objective_asks_for_its_margin_and_caps_it():
     assert ttc.margin(hit) == 0.0 and ttc.failed(hit) and ttc.failed_at(hit) == 11.9
 
 
+def _deep(sets, regions, accounted=0.01, **changes):
+    return _summary(margins={"containment_depth": {"sets": {"least_m": sets},
+                                                   "regions": {"least_m": regions},
+                                                   "accounted": {"least_m": accounted}}},
+                    **changes)
+
+
 def test_the_depth_objective_takes_the_shallower_of_sets_and_regions():
     depth = OBJECTIVES["depth"]
     assert depth.margins == ("containment_depth",)
-
-    def deep(sets, regions, **changes):
-        return _summary(margins={"containment_depth": {"sets": {"least_m": sets},
-                                                       "regions": {"least_m": regions}}},
-                        **changes)
-
-    assert depth.margin(deep(1.2, 0.04)) == 0.04 and not depth.failed(deep(1.2, 0.04))
-    assert depth.margin(deep(None, None)) == OPEN_DEPTH_M  # no set held anyone
-    missed = deep(-0.1, 0.3, containment_violations=1, violations=[{"t": 4.2}])
+    # (the accounted area's 0.01 m is the accounted objective's, not this one's)
+    assert depth.margin(_deep(1.2, 0.04)) == 0.04 and not depth.failed(_deep(1.2, 0.04))
+    assert depth.margin(_deep(None, None)) == OPEN_DEPTH_M  # no set held anyone
+    missed = _deep(-0.1, 0.3, containment_violations=1, violations=[{"t": 4.2}])
     assert depth.margin(missed) == -0.1 and depth.failed(missed)
     assert depth.failed_at(missed) == 4.2
+
+
+def test_the_accounted_objective_takes_the_area_the_controller_accounts_for():
+    accounted = OBJECTIVES["accounted"]
+    assert accounted.margins == ("containment_depth",)
+    assert accounted.margin(_deep(1.2, 0.04, 0.3)) == 0.3
+    assert accounted.margin(_deep(1.2, 0.04, None)) == OPEN_DEPTH_M  # nobody in the window
+    lost = _deep(0.5, 0.3, -0.2, containment_violations=1, violations=[{"t": 3.0}])
+    assert accounted.margin(lost) == -0.2 and accounted.failed(lost)
+    assert accounted.failed_at(lost) == 3.0
 
 
 def test_the_depth_objective_refuses_anonymous_detections(tmp_path: Path):

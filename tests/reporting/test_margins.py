@@ -19,7 +19,7 @@ from sse_cosim.reporting.margins import (
     TimeToCollision,
     time_to_contact,
 )
-from sse_cosim.reporting.recorder import REFINED, RegionRecord
+from sse_cosim.reporting.recorder import REFINED, UNOBSERVED, RegionRecord
 from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.sets.zonotope import Zonotope
@@ -83,14 +83,20 @@ def test_the_depth_is_the_distance_to_the_boundary_inside_and_minus_it_outside()
                      (0.1, "bus", "rsu1", "p", "local", *square),
                      (0.1, "bus", "bus", "someone else", "fused", *square)],
         regions=[RegionRecord(0.0, REFINED, "p", shapely.box(-1, -1, 1, 1), "bus"),
-                 # outside the window the region claims nothing: not a depth
-                 RegionRecord(0.1, REFINED, "p", shapely.box(-1, -1, 1, 1), "bus", True)])
+                 RegionRecord(0.0, UNOBSERVED, None, shapely.box(0.5, -3, 3, 3), "bus"),
+                 # outside the window the regions claim nothing: not a depth
+                 RegionRecord(0.1, REFINED, "p", shapely.box(-1, -1, 1, 1), "bus", True),
+                 RegionRecord(0.1, UNOBSERVED, None, shapely.box(0.5, -3, 3, 3), "bus",
+                              outside=frozenset({"p"}))])
     depth = ContainmentDepth(load_scenario(S3)).value(recorder)
     hexagon = shapely.Polygon(Zonotope.unchecked(*square).vertices())
     expected = -hexagon.boundary.distance(shapely.Point(2.0, 0.0))
     assert depth["sets"]["least_m"] == pytest.approx(expected)
     assert depth["sets"]["t"] == 0.1 and depth["sets"]["node"] == "rsu1"
     assert depth["regions"]["least_m"] == pytest.approx(0.8)  # 1 - 0.2 to the right side
+    # in both boxes together, nearest the refined box's bottom left of the unobserved one
+    assert depth["accounted"] == {"least_m": pytest.approx(0.9), "t": 0.0, "vehicle": "bus",
+                                  "pedestrian": "p"}
 
 
 @pytest.mark.sumo
@@ -157,6 +163,15 @@ def _the_depth_agrees_with_the_files(summary: dict, out: Path) -> None:
         if point is not None:
             least = min(least, region.boundary.distance(point))
     assert depth["regions"]["least_m"] == pytest.approx(least, abs=1e-5)
+    # the area accounted for at the step of its least: every region of that step, together
+    accounted = depth["accounted"]
+    union = shapely.union_all([
+        shapely.Polygon(p[0], p[1:])
+        for line in (out / "regions.jsonl").read_text().splitlines()
+        if (record := json.loads(line))["t"] == accounted["t"] for p in record["polygons"]])
+    point = truth[(accounted["t"], accounted["pedestrian"])]
+    assert union.covers(point) and accounted["least_m"] >= 0.0
+    assert accounted["least_m"] == pytest.approx(union.boundary.distance(point), abs=1e-5)
 
 
 def test_the_pedestrian_keeps_the_heading_sumo_walks_it_through_a_sideways_step():
