@@ -58,6 +58,8 @@ reports every break and counts a failure only if it came before the first break.
 BREAKS_PATH = "breaks_assumptions"
 FAULT_PREFIX = "falsify_"
 """Faults the search adds are named ``falsify_<sensor or node>``."""
+PRESENT_FROM = 0.5
+"""A ``[present]`` pedestrian is in the scene where its value is at least this."""
 DECIMALS = 6
 """Decoded values are rounded to this many decimals (1 µs, 1 µm): run keys and the worst
 cases' scenario files stay readable and exact."""
@@ -123,6 +125,13 @@ class LatencyEntry(_FileModel):
     most_steps: int = Field(ge=1, le=100)
 
 
+class PresentEntry(_FileModel):
+    """``[present]``: the pedestrians (a name glob) of whom the search chooses who is in the
+    scene: one value in [0, 1] each, in the scene from 0.5."""
+
+    pedestrians: str = Field("*", min_length=1)
+
+
 class FalsifyFile(_FileModel):
     """A falsify file: the free choices the search steers."""
 
@@ -134,6 +143,7 @@ class FalsifyFile(_FileModel):
     noise: NoiseEntry | None = None
     loss: LossEntry | None = None
     latency: LatencyEntry | None = None
+    present: PresentEntry | None = None
 
 
 def load_falsify_file(path: Path) -> FalsifyFile:
@@ -177,7 +187,8 @@ class SearchSpace:
     paths each sets), the wait before the step-out (``step_out``: its pedestrian, if the
     scenario has it), the start behind the truck (if the scenario has the truck), two per
     noisy sensor (forward, lateral fraction of the bound), two per sender (loss start and
-    length), three per late sender (start, length, steps late).
+    length), three per late sender (start, length, steps late), one per pedestrian of
+    ``[present]`` (in the scene from 0.5).
     """
 
     dims: tuple[Dimension, ...]
@@ -189,6 +200,7 @@ class SearchSpace:
     late_senders: tuple[str, ...]
     step_length_s: float
     fixed: Mapping[str, Any]
+    present: tuple[str, ...] = ()
 
     @property
     def size(self) -> int:
@@ -231,14 +243,16 @@ class SearchSpace:
                 out[f"faults.link.{FAULT_PREFIX}late_{node}"] = {
                     "node": node, "kind": "latency", "start_s": start,
                     "end_s": round(start + length, DECIMALS), "extra_latency_steps": steps}
+        for pid in self.present:
+            out[f"pedestrians.{pid}.present"] = values[next(names)] >= PRESENT_FROM
         return out
 
     def step_out_override(self, values: Mapping[str, float],
                           walk_s: Mapping[str, float]) -> dict[str, float]:
         """The step-out time of the ``[step_out]`` pedestrian: its walk (``walk_s``: pedestrian
         -> s, as the planner times the scenario of :meth:`overrides`) plus its wait; empty
-        without a ``[step_out]``."""
-        if self.step_out is None:
+        without a ``[step_out]`` or when ``[present]`` left its pedestrian out."""
+        if self.step_out is None or self.step_out.pedestrian not in walk_s:
             return {}
         who = self.step_out.pedestrian
         return {step_out_path(who): round(walk_s[who] + values[self.step_out.name], DECIMALS)}
@@ -294,12 +308,14 @@ def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
         dims += [Dimension(f"late_{node}_start_s", 0.0, duration),
                  Dimension(f"late_{node}_length_s", 0.0, spec.latency.longest_s),
                  Dimension(f"late_{node}_steps", 0.0, float(spec.latency.most_steps))]
+    present = _present(spec, scenario, fields)
+    dims += [Dimension(f"present_{pid}", 0.0, 1.0) for pid in present]
     if len(dims) < 2:
         raise UserError(spec_source, "dims", f"selects {len(dims)} value(s) in {source}",
                         "a search needs at least two: add dims that name this scenario's "
                         "fields (`sse-cosim fields` lists them)")
     space = SearchSpace(tuple(dims), tuple(targets), waiting, truck_front, noises, senders,
-                        late, scenario.simulation.step_length_s, counted)
+                        late, scenario.simulation.step_length_s, counted, present)
     _check_corners(space, data, source, spec_source)
     return space
 
@@ -317,6 +333,17 @@ def _noises(spec: FalsifyFile, scenario: Scenario,
         bound = tuple(float(r) for r in scenario.sensors[name].noise_bound_m)
         out.append(_Noise(name, (bound[0], bound[1])))
     return tuple(out)
+
+
+def _present(spec: FalsifyFile, scenario: Scenario,
+             fields: Mapping[str, Any]) -> tuple[str, ...]:
+    """The pedestrians ``[present]`` selects in ``scenario`` (``fields``: its dump) that are in
+    its scene."""
+    if spec.present is None:
+        return ()
+    found = selected_paths(f"pedestrians.{spec.present.pedestrians}.present", fields, "")
+    return tuple(pid for pid in (path.split(".")[1] for path in found)
+                 if scenario.pedestrians[pid].present)
 
 
 def _check_corners(space: SearchSpace, data: Mapping[str, Any], source: str,

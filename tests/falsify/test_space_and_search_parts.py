@@ -22,6 +22,7 @@ from sse_cosim.falsify.space import (
     DimEntry,
     FalsifyFile,
     LatencyEntry,
+    PresentEntry,
     build_space,
     load_falsify_file,
     scenario_of,
@@ -33,6 +34,7 @@ ROOT = Path(__file__).resolve().parents[2]
 SPACE = ROOT / "sweeps" / "falsify.toml"
 S1 = ROOT / "scenarios" / "s1_pedestrian.toml"
 S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
+CROWD = ROOT / "scenarios" / "crowd.toml"
 
 
 def _space(scenario: Path, spec: FalsifyFile | None = None):
@@ -110,6 +112,34 @@ def test_a_latency_window_decodes_into_a_latency_fault_in_whole_steps():
                                  str(S3), _walk_7_3_s)
     assert scenario.faults.link["falsify_late_rsu2"].extra_latency_steps == 4
     assert set(scenario.breaks_assumptions) == set(COUNTED_BREAKS)  # nothing more declared
+
+
+def test_the_crowd_box_chooses_who_of_its_pedestrians_steps_out():
+    spec = FalsifyFile(present=PresentEntry(pedestrians="*"),
+                       dims=[DimEntry(path="pedestrians.*.walking_speed_mps", name="walk_mps",
+                                      low=1.0, high=1.5)])
+    space = _space(CROWD, spec)
+    pedestrians = [d.name.removeprefix("present_") for d in space.dims[1:]]
+    assert len(pedestrians) == 21 and "pedestrian" in pedestrians
+    unit = np.full(space.size, 0.8)
+    unit[1::2] = 0.3  # every other one stays at home
+    _, overrides, scenario = scenario_of(space, load_scenario_data(CROWD), unit, str(CROWD),
+                                         _walk_7_3_s)
+    kept = [pid for pid, ped in scenario.pedestrians.items() if ped.present]
+    assert kept == pedestrians[1::2] and overrides["pedestrians.pedestrian.present"] is False
+
+
+def test_a_step_out_pedestrian_left_out_of_the_scene_gets_no_step_out():
+    spec = load_falsify_file(SPACE).model_copy(deep=True)
+    spec.present = PresentEntry(pedestrians="pedestrian")
+    space = _space(S3, spec)
+    assert space.dims[-1].name == "present_pedestrian"
+    unit = np.full(space.size, 0.5)
+    unit[-1] = 0.2
+    values, _, scenario = scenario_of(space, load_scenario_data(S3), unit, str(S3),
+                                      lambda sc, source: {})  # nobody walks
+    assert not scenario.pedestrians["pedestrian"].present
+    assert "steps_onto_crossing_s" not in values
 
 
 def test_s1_has_no_sender_to_lose_and_no_shared_sensor():
