@@ -15,7 +15,7 @@ the disc.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -52,13 +52,13 @@ class PolygonRegion:
         return NO_BOUNDS if self.shape.is_empty else tuple(self.shape.bounds)
 
     def union(self, other: PolygonRegion) -> PolygonRegion:
-        return PolygonRegion(shapely.union(self.shape, other.shape))
+        return PolygonRegion(_overlay(shapely.union, self.shape, other.shape))
 
     def intersection(self, other: PolygonRegion) -> PolygonRegion:
-        return PolygonRegion(shapely.intersection(self.shape, other.shape))
+        return PolygonRegion(_overlay(shapely.intersection, self.shape, other.shape))
 
     def difference(self, other: PolygonRegion) -> PolygonRegion:
-        return PolygonRegion(shapely.difference(self.shape, other.shape))
+        return PolygonRegion(_overlay(shapely.difference, self.shape, other.shape))
 
     def dilate(self, distance: float) -> PolygonRegion:
         if distance <= 0 or self.shape.is_empty:
@@ -119,6 +119,34 @@ class PolygonRegion:
         if not shapely.is_prepared(self.shape):
             shapely.prepare(self.shape)
         return self.shape
+
+
+def _overlay(operation: Callable[[shapely.Geometry, shapely.Geometry], shapely.Geometry],
+             a: shapely.Geometry, b: shapely.Geometry) -> shapely.Geometry:
+    """``operation`` (shapely's union, intersection or difference) of ``a`` and ``b``, exactly.
+
+    A region can become a collection of polygons and the lines where two shapes touch (an
+    intersection along a shared edge), and GEOS refuses to overlay such a collection ("Unable
+    to determine overlay result geometry dimension"). Then the operation is done part by part,
+    which gives the same set: A ∩ B is the union of the parts' intersections, A ∪ B the union
+    of all parts, A minus B each part of A less every part of B.
+    """
+    try:
+        return operation(a, b)
+    except shapely.errors.GEOSException:
+        if shapely.get_num_geometries(a) <= 1 and shapely.get_num_geometries(b) <= 1:
+            raise
+    first, second = shapely.get_parts(a), shapely.get_parts(b)
+    if operation is shapely.union:
+        return shapely.union_all(np.concatenate([first, second]))
+    if operation is shapely.intersection:
+        return shapely.union_all(shapely.intersection(first[:, None], second[None, :]))
+    pieces = []
+    for part in first:
+        for cut in second:
+            part = shapely.difference(part, cut)
+        pieces.append(part)
+    return shapely.union_all(pieces)
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from sse_cosim.regions import KINDS, PolygonKind, Region
+from sse_cosim.regions.polygon import PolygonRegion
 
 SETTINGS = settings(
     derandomize=True,
@@ -321,3 +322,22 @@ def test_a_dilation_reaches_no_farther_than_its_kind_says(name, shape, distance)
     dilated = region.dilate(distance).geometry()
     far = shapely.distance(region.geometry(), shapely.points(shapely.get_coordinates(dilated)))
     assert (far <= kind.reach_of(distance) + ROUNDING_M).all()
+
+
+def test_a_region_with_lines_where_shapes_touch_overlays_with_an_empty_one():
+    """A crowd run's unobserved area came out as polygons and the lines along the zebra's edge
+    where two shapes touched; GEOS then refused to intersect an empty region with it ("Unable
+    to determine overlay result geometry dimension"). Part by part gives the same sets."""
+    touching = PolygonRegion(shapely.from_wkt(
+        "GEOMETRYCOLLECTION (LINESTRING (198 -3.5, 198 -6), "
+        "POLYGON ((198 -6, 198 -8, 180.6 -8, 180.6 -6, 198 -6)))"))
+    empty = PolygonRegion(shapely.Polygon())
+    with pytest.raises(shapely.errors.GEOSException):
+        shapely.intersection(empty.shape, touching.shape)  # what GEOS does on its own
+    assert empty.intersection(touching).is_empty
+    assert empty.difference(touching).is_empty
+    assert touching.difference(empty).shape.equals(touching.shape)
+    assert empty.union(touching).shape.equals(touching.shape)
+    box = PolygonRegion(shapely.box(190.0, -7.0, 199.0, -4.0))  # meets the line and the polygon
+    assert box.intersection(touching).shape.equals(
+        shapely.intersection(box.shape, touching.shape))
