@@ -27,6 +27,7 @@ from sse_cosim.reporting.recorder import (
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.scenario.model import Estimator, Scenario
 from sse_cosim.sets import Zonotope
+from sse_cosim.world.snapshot import PersonState
 
 K = kind("polygon")
 
@@ -41,7 +42,7 @@ def scripted_step(step: int, truth: tuple[float, float], estimate: Zonotope,
     footprint = SimpleNamespace(front=SimpleNamespace(x=100.0, y=-1.75),
                                 polygon=lambda: shapely.box(88.0, -3.0, 100.0, -0.5))
     bus = SimpleNamespace(id="bus", kind="bus", speed=10.0, footprint=footprint)
-    person = SimpleNamespace(id=PEDESTRIAN, position=truth, speed=1.0)
+    person = PersonState(PEDESTRIAN, tuple(truth), speed=1.0, heading=0.0)
     snapshot = SimpleNamespace(time=0.1 * step, persons={PEDESTRIAN: person},
                                vehicles={"bus": bus})
     flags = SimpleNamespace(sensors={}, nodes={}, inconsistent=False)
