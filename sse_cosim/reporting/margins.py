@@ -187,7 +187,7 @@ class ContainmentDepth:
         """Nothing to watch: the recorder keeps every set and region."""
 
     def value(self, recorder: RunRecorder) -> dict[str, Any]:
-        from sse_cosim.reporting.recorder import REFINED, zonotope_2d_halfspaces_reference
+        from sse_cosim.reporting.recorder import zonotope_2d_halfspaces_reference
 
         truths = {(row["t"], row["pedestrian"]): (row["x"], row["y"])
                   for row in recorder.truth_rows}
@@ -199,36 +199,38 @@ class ContainmentDepth:
                 depth = min(b - abs(dx * x + dy * y) for dx, dy, b in
                             zonotope_2d_halfspaces_reference(generators, 0.0))
                 sets.note(depth, t=t, vehicle=vehicle, node=node, pedestrian=track, kind=kind)
-        regions = _Least()
-        for record in recorder.regions:
-            truth = truths.get((record.time, record.track))
-            if record.kind == REFINED and truth is not None and not record.outside_window:
-                regions.note(_signed_depth(record.region, truth), t=record.time,
-                             vehicle=record.vehicle, pedestrian=record.track)
+        regions, accounted = _regions_depths(recorder, truths)
         return {"sets": sets.value(), "regions": regions.value(),
-                "accounted": _accounted(recorder).value()}
+                "accounted": accounted.value()}
 
 
-def _accounted(recorder: RunRecorder) -> _Least:
-    """The least depth of a pedestrian inside the window in the union of an automated
-    vehicle's regions at one step (its refined regions, then its unobserved area)."""
+def _regions_depths(recorder: RunRecorder, truths: dict[tuple[float, str], tuple[float, float]]
+                    ) -> tuple[_Least, _Least]:
+    """The least depth of a pedestrian inside the window in its refined region, and in the
+    union of an automated vehicle's regions at one step (its refined regions, then its
+    unobserved area, whose record names who stood outside the window)."""
     import shapely
 
-    from sse_cosim.reporting.recorder import UNOBSERVED
+    from sse_cosim.reporting.recorder import REFINED, UNOBSERVED
 
-    truths: dict[float, list[tuple[str, tuple[float, float]]]] = {}
-    for row in recorder.truth_rows:
-        truths.setdefault(row["t"], []).append((row["pedestrian"], (row["x"], row["y"])))
-    least = _Least()
+    present: dict[float, list[str]] = {}
+    for t, pid in truths:
+        present.setdefault(t, []).append(pid)
+    regions, accounted = _Least(), _Least()
     for (t, vehicle), group in groupby(recorder.regions, key=lambda r: (r.time, r.vehicle)):
         records = list(group)
-        unobserved = next(r for r in records if r.kind == UNOBSERVED)
-        inside = [(pid, xy) for pid, xy in truths.get(t, []) if pid not in unobserved.outside]
+        outside = next(r for r in records if r.kind == UNOBSERVED).outside
+        inside = [pid for pid in present.get(t, []) if pid not in outside]
+        for record in records:
+            if record.kind == REFINED and record.track in inside:
+                regions.note(_signed_depth(record.region, truths[(t, record.track)]), t=t,
+                             vehicle=vehicle, pedestrian=record.track)
         if inside:
             union = shapely.union_all([r.region for r in records])
-            for pid, xy in inside:
-                least.note(_signed_depth(union, xy), t=t, vehicle=vehicle, pedestrian=pid)
-    return least
+            for pid in inside:
+                accounted.note(_signed_depth(union, truths[(t, pid)]), t=t, vehicle=vehicle,
+                               pedestrian=pid)
+    return regions, accounted
 
 
 @dataclass

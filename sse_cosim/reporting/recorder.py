@@ -175,17 +175,15 @@ def _left_sum(values: Iterable[float]) -> float:
 class RegionRecord:
     """One region an automated vehicle's controller used at one step: a known pedestrian's
     refined region (``track`` its id) or the unobserved area (``track`` None).
-    ``outside_window``: the pedestrian of a refined region's track stood outside the window
-    in which regions are kept, where the region claims nothing (every walkable place counts
-    as occupied there); ``outside``: on the unobserved area's record, every pedestrian who
-    stood outside it then. Neither is written to ``regions.jsonl``."""
+    ``outside``: on the unobserved area's record, every pedestrian who stood outside the
+    window in which regions are kept, where that step's regions claim nothing about them
+    (every walkable place counts as occupied there); not written to ``regions.jsonl``."""
 
     time: float
     kind: str  # REFINED or UNOBSERVED
     track: str | None
     region: shapely.Geometry
     vehicle: str  # the automated vehicle's id
-    outside_window: bool = False
     outside: frozenset[str] = frozenset()
 
 
@@ -550,8 +548,7 @@ class RunRecorder:
     def _note_regions(self, t: float, vehicle: str, held: _HeldRegions) -> None:
         """Keep the regions ``vehicle``'s controller used this step: every known pedestrian's
         refined region (by id) and the unobserved area, so that anyone can re-check them."""
-        self.regions.extend(RegionRecord(t, REFINED, pid, region, vehicle,
-                                         held.outside.get(pid, False))
+        self.regions.extend(RegionRecord(t, REFINED, pid, region, vehicle)
                             for pid, region in sorted(held.refined.items()))
         self.regions.append(RegionRecord(
             t, UNOBSERVED, None, held.unobserved, vehicle,

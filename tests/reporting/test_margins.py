@@ -85,7 +85,7 @@ def test_the_depth_is_the_distance_to_the_boundary_inside_and_minus_it_outside()
         regions=[RegionRecord(0.0, REFINED, "p", shapely.box(-1, -1, 1, 1), "bus"),
                  RegionRecord(0.0, UNOBSERVED, None, shapely.box(0.5, -3, 3, 3), "bus"),
                  # outside the window the regions claim nothing: not a depth
-                 RegionRecord(0.1, REFINED, "p", shapely.box(-1, -1, 1, 1), "bus", True),
+                 RegionRecord(0.1, REFINED, "p", shapely.box(-1, -1, 1, 1), "bus"),
                  RegionRecord(0.1, UNOBSERVED, None, shapely.box(0.5, -3, 3, 3), "bus",
                               outside=frozenset({"p"}))])
     depth = ContainmentDepth(load_scenario(S3)).value(recorder)
