@@ -132,7 +132,7 @@ from sse_cosim.world.sumo_setup import (
     write_config,
 )
 from sse_cosim.world.walk_probe import PROBE, ProbeTimer
-from sse_cosim.world.walker_pause import Pause
+from sse_cosim.world.walker_pause import TIME_EPS_S, Pause
 
 log = logging.getLogger(__name__)
 
@@ -145,7 +145,6 @@ _PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libs
 MOTION_ASSUMPTION = "pedestrian_speed"  # what breaks_assumptions lists for a motion break
 GROUND_ASSUMPTION = "walkable_ground"  # ... for a pedestrian off the walkable ground
 KEPT_BREAKS = 5  # the first breaks a study that lists an assumption keeps (all counted)
-_TIME_EPS = 1e-6  # tolerance of time comparisons (s)
 
 _open_world: SumoWorld | None = None
 
@@ -655,7 +654,7 @@ class SumoWorld:
                 self._stepped_on[pid] = time
             tolerance = self.scenario.pedestrians[pid].crossing_tolerance_s
             allowed = self._dt if tolerance is None else max(self._dt, tolerance)
-            if abs(time - wanted) <= allowed + _TIME_EPS or (not on and time < wanted):
+            if abs(time - wanted) <= allowed + TIME_EPS_S or (not on and time < wanted):
                 continue
             when = f"stepped onto it at {time:.2f} s" if on else \
                 f"had not stepped onto it by {time:.2f} s"

@@ -14,7 +14,9 @@ from dataclasses import dataclass
 
 from sse_cosim.scenario.model import Pedestrian
 
-_TIME_EPS = 1e-6  # far below a step, far above the rounding of a sum of step lengths
+TIME_EPS_S = 1e-6
+"""Tolerance of the world's time comparisons (s): far below a step, far above the rounding of
+a sum of step lengths."""
 
 
 @dataclass(frozen=True)
@@ -39,5 +41,5 @@ class Pause:
         crossing (None: it has not yet)."""
         if since_on_s is None:
             return self.walking_mps
-        stopped = self.after_s - _TIME_EPS <= since_on_s < self.after_s + self.for_s - _TIME_EPS
+        stopped = self.after_s - TIME_EPS_S <= since_on_s < self.after_s + self.for_s - TIME_EPS_S
         return 0.0 if stopped else self.walking_mps
