@@ -42,6 +42,12 @@ PARKED_VCLASS = "custom1"
 """vClass of parked vehicles; the parking strips admit it only."""
 DRIVING_VCLASSES = ("passenger", "bus")
 PROGRESS_ABOVE_BYTES = 5_000_000
+WALKABLE_TOL_M = 1e-9
+"""How far (m) a pedestrian's centre may lie off :attr:`RoadMap.walkable` and still count as on
+it: the rounding of SUMO's positions along the edge of a walking area (a walker on the town
+cut's ``:1384946487_w1`` followed its edge 6.9e-14 m outside it), far above the rounding of a
+coordinate of a network of kilometres (about 1e-13 m) and far below the tolerance to which the
+recorder checks that every set holds its pedestrian (1e-7 m)."""
 """A network file larger than this (a town) reports its reading on stderr."""
 
 

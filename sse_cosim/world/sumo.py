@@ -115,7 +115,12 @@ from sse_cosim.world.assumptions import MotionBounds, MotionBreak, PedestrianMot
 from sse_cosim.world.demand import ActorPlan, PedestrianPlan
 from sse_cosim.world.extent import MAX_MEASURED_JITTER_M, SceneExtent, scene_extent
 from sse_cosim.world.network import NetworkBuildError, scenario_net_path
-from sse_cosim.world.roadmap import RoadMap, load_scene_roadmap, require_pedestrian_ground
+from sse_cosim.world.roadmap import (
+    WALKABLE_TOL_M,
+    RoadMap,
+    load_scene_roadmap,
+    require_pedestrian_ground,
+)
 from sse_cosim.world.route_files import RouteFiles, read_route_files
 from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
 from sse_cosim.world.sumo_setup import (
@@ -473,7 +478,8 @@ class SumoWorld:
 
     def _check_ground(self, snapshot: Snapshot) -> None:
         """Every pedestrian's true centre lies on the walkable ground (the road map's
-        :attr:`~sse_cosim.world.roadmap.RoadMap.walkable`, measured patches included). One off
+        :attr:`~sse_cosim.world.roadmap.RoadMap.walkable`, measured patches included), to
+        :data:`~sse_cosim.world.roadmap.WALKABLE_TOL_M`. One off
         it stops the run, naming the pedestrian, the time, its lane, how far off it is and the
         fix -- unless the study lists ``walkable_ground``: then it is counted
         (:attr:`ground_breaks`) and the run goes on."""
@@ -483,6 +489,8 @@ class SumoWorld:
             if shapely.intersects_xy(walkable, x, y):
                 continue
             off_m = float(shapely.distance(walkable, shapely.Point(x, y)))
+            if off_m <= WALKABLE_TOL_M:
+                continue  # on its edge, to the rounding of SUMO's positions
             lane = self._person_lanes.get(pid, "")
             if self._ground_declared:
                 self._ground_break_count += 1

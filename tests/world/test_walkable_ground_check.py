@@ -7,6 +7,11 @@ areas, crossing rectangles) by up to 0.21 m at 15.8 to 16.1 s. The lone walkers'
 (sse_cosim/world/walker_jitter.py) gives that junction a ground patch and the walkable ground
 holds them; on a copy of the network whose cached measurement gives every junction an empty
 patch the run stops there -- or, in a study that lists ``walkable_ground``, counts.
+
+A walker exactly on the ground's edge is on it: with the safety campaign's start 37 m along its
+sidewalk, SUMO walks the pedestrian along an edge of ``:1384946487_w1`` at 4.4 s, 6.9e-14 m
+outside it by the rounding of its positions, which stopped every such run before the check
+took the tolerance ``WALKABLE_TOL_M``.
 """
 
 from __future__ import annotations
@@ -21,10 +26,11 @@ import shapely
 from world_helpers import REPO
 
 from sse_cosim.cli.main import EXIT_ASSUMPTION_BROKEN, main
+from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.world import walker_jitter
 from sse_cosim.world.network import build_network
-from sse_cosim.world.roadmap import load_roadmap
+from sse_cosim.world.roadmap import WALKABLE_TOL_M, load_roadmap
 from sse_cosim.world.sumo import measure_walkers, sumo_version
 
 pytestmark = pytest.mark.sumo
@@ -83,3 +89,12 @@ def test_a_study_that_lists_walkable_ground_runs_on_and_counts(tmp_path, plain) 
     assert [(b["t"], b["lane"]) for b in breaks["first"][:2]] == [
         (15.8, ":1384946487_w1_0"), (15.9, ":1384946487_w1_0")]
     assert 0.2 < max(b["off_m"] for b in breaks["first"]) < 0.25
+
+
+def test_a_walker_on_the_edge_of_a_walking_area_to_rounding_is_on_the_ground(tmp_path) -> None:
+    summary = run_scenario_file(TOWN, tmp_path, {
+        "simulation.duration_s": 5.0, "pedestrians.pedestrian.start_pos_m": 37.0,
+        "pedestrians.pedestrian.steps_onto_crossing_s": 7.0,
+        "pedestrians.pedestrian.walking_speed_mps": 2.0}, plots=False, summary_only=True)
+    assert summary["containment_violations"] == 0
+    assert 1e-13 < WALKABLE_TOL_M <= 1e-7  # above coordinate rounding, within the recorder's
