@@ -185,6 +185,17 @@ class Pedestrian(StrictModel):
         0.0, description="How long it stands still there (s), then walks on at its walking "
         "speed; 0: it does not stop."
     )
+    turn_back_after_s: NonNegativeFloat | None = Field(
+        None, description="How long after stepping onto its crossing it turns back (s): it "
+        "stops, walks back to the zebra's near end, waits there turn_back_wait_s, then crosses "
+        "after all and leaves the scene at the far end (a pedestrian who thinks better of "
+        "crossing, then goes), within its walking speed, and within "
+        "estimator.max_pedestrian_accel_mps2 under the bounded-acceleration model. If it has "
+        "left the crossing by then, it does not turn. None: it crosses."
+    )
+    turn_back_wait_s: NonNegativeFloat = Field(
+        0.0, description="How long it waits at the zebra's near end after turning back (s)."
+    )
 
 
 class RoadSideUnit(StrictModel):

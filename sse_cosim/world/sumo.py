@@ -75,6 +75,13 @@ Pauses. A scenario pedestrian with ``pause_for_s`` stops ``pause_after_s`` after
 onto its crossing and walks on after ``pause_for_s`` (:mod:`sse_cosim.world.walker_pause`):
 ``person.setSpeed`` before each step, ramped as above under the bounded-acceleration model.
 
+Turn-backs. A scenario pedestrian with ``turn_back_after_s`` still on its crossing that long
+after stepping onto it turns back, waits at the near end and crosses after all
+(:mod:`sse_cosim.world.walker_turn`): from then on the world holds it at speed 0 in SUMO and
+places it on the crossing's lane before every step (``person.moveTo``, by its front, its
+lateral position kept), reports the turned walk's speed and heading in its snapshots, and
+removes it at the far end.
+
 Walkable ground. The estimator assumes every pedestrian's centre lies on the road map's
 walkable ground (:attr:`sse_cosim.world.roadmap.RoadMap.walkable`): sidewalks, walking areas and
 crossings, and the patches where SUMO's lone walkers were measured to leave them
@@ -138,6 +145,7 @@ from sse_cosim.world.sumo_setup import (
 )
 from sse_cosim.world.walk_probe import PROBE, ProbeTimer
 from sse_cosim.world.walker_pause import TIME_EPS_S, Pause
+from sse_cosim.world.walker_turn import CrossingWalker, StraightLane, TurnBack
 
 log = logging.getLogger(__name__)
 
@@ -150,6 +158,7 @@ _PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libs
 MOTION_ASSUMPTION = "pedestrian_speed"  # what breaks_assumptions lists for a motion break
 GROUND_ASSUMPTION = "walkable_ground"  # ... for a pedestrian off the walkable ground
 KEPT_BREAKS = 5  # the first breaks a study that lists an assumption keeps (all counted)
+TURN_MARGIN_M = 0.05  # how far from its lane's ends a turned walker's centre and front stay
 
 _open_world: SumoWorld | None = None
 
@@ -196,6 +205,19 @@ class _Automated:
         self.pending.append((speed, emergency))
         if len(self.pending) > self.actuation_delay_steps:
             self.acting = self.pending.popleft()
+
+
+@dataclass
+class _Turned:
+    """A turned-back pedestrian the world places (:mod:`sse_cosim.world.walker_turn`): its
+    walk along the crossing's lane, the lane (SUMO's id and geometry), its lateral position
+    on it (m, left of the lane's direction) and its heading (rad; kept while it stands)."""
+
+    walker: CrossingWalker
+    lane_id: str
+    lane: StraightLane
+    lateral: float
+    heading: float
 
 
 @dataclass(frozen=True)
@@ -253,6 +275,11 @@ class SumoWorld:
         self._stepped_on: dict[str, float] = {}  # pedestrian -> when it stepped onto its crossing
         self._pauses = {pid: pause for pid, ped in present(scenario.pedestrians).items()
                         if (pause := Pause.of(ped)) is not None}
+        self._turns = {pid: turn for pid, ped in present(scenario.pedestrians).items()
+                       if (turn := TurnBack.of(ped)) is not None}  # not yet turned
+        self._turned: dict[str, _Turned] = {}  # placed by the world every step
+        self._centres: dict[str, tuple[float, float]] = {}  # at the latest snapshot
+        self._previous_centres: dict[str, tuple[float, float]] = {}
 
     # --- context manager ------------------------------------------------------------------
 
@@ -331,6 +358,7 @@ class SumoWorld:
         self._require_open()
         try:
             self._set_walking_speeds()
+            self._place_turned_walkers()
             libsumo.simulationStep()
             snapshot = self._snapshot()
         except LIBSUMO_ERRORS as exc:
@@ -347,14 +375,70 @@ class SumoWorld:
         """Each walker's speed for the next step: its own, or a pausing pedestrian's
         (:class:`~sse_cosim.world.walker_pause.Pause`), ramped within the acceleration bound
         where the motion model has one (then every walker's, every step)."""
+        walking = {pid: speed for pid, speed in self._person_speeds.items()
+                   if pid not in self._turned}  # (the world places a turned walker itself)
         wanted = {pid: self._pauses[pid].speed(self._since_on(pid))
-                  for pid in self._pauses.keys() & self._person_speeds.keys()}
+                  for pid in self._pauses.keys() & walking.keys()}
         if self._ramp is not None:
             self._ramp.apply({pid: (wanted.get(pid, self._walking_speeds[pid]), speed)
-                              for pid, speed in self._person_speeds.items()})
+                              for pid, speed in walking.items()})
             return
         for pid, speed in sorted(wanted.items()):
             libsumo.person.setSpeed(pid, speed)
+
+    def _place_turned_walkers(self) -> None:
+        """Turn back every pedestrian whose turn is due (one that has left its crossing does
+        not turn; one not wholly on it yet turns a step later), and place every turned one for
+        the next step, or remove it at the far end."""
+        for pid in sorted(self._turns):
+            if not self._turns[pid].due(self._since_on(pid)):
+                continue
+            if not self._on_crossing(pid):
+                del self._turns[pid]  # it has crossed
+                continue
+            turned = self._turn(pid, self._turns[pid])
+            if turned is not None:
+                self._turned[pid] = turned
+                del self._turns[pid]
+                libsumo.person.setSpeed(pid, 0.0)
+        for pid in sorted(self._turned):
+            turned = self._turned[pid]
+            at = turned.walker.step()
+            if at is None:
+                libsumo.person.remove(pid)
+                del self._turned[pid]
+                continue
+            if turned.walker.velocity_mps != 0.0:
+                turned.heading = turned.lane.heading + (
+                    0.0 if turned.walker.velocity_mps > 0.0 else math.pi)
+            libsumo.person.moveTo(pid, turned.lane_id, at + 0.5 * self._person_size(pid),
+                                  turned.lateral)
+
+    def _turn(self, pid: str, turn: TurnBack) -> _Turned | None:
+        """Pedestrian ``pid`` turned back on the lane it is on, or None while its centre is
+        not wholly on it (SUMO places it by its front, which :meth:`_place_turned_walkers`
+        puts half its length ahead along the lane, where SUMO then faces it)."""
+        lane_id = self._person_lanes[pid]
+        xy = libsumo.lane.getShape(lane_id)
+        lane = StraightLane(tuple(xy[0]), tuple(xy[-1]))
+        centre, before = self._centres[pid], self._previous_centres.get(pid, self._centres[pid])
+        at = lane.along(centre)
+        low = TURN_MARGIN_M
+        high = lane.length - 0.5 * self._person_size(pid) - TURN_MARGIN_M
+        if not low <= at <= high:
+            return None
+        velocity = (at - lane.along(before)) / self._dt
+        near, far = (low, high) if velocity > 0.0 else (high, low)
+        rise = None if self._accel is None else self._accel * self._dt
+        walker = CrossingWalker(at, velocity, near, far, turn.walking_mps, turn.wait_s,
+                                self._dt, rise)
+        return _Turned(walker, lane_id, lane, lane.lateral(centre),
+                       lane.heading + (0.0 if velocity > 0.0 else math.pi))
+
+    def _on_crossing(self, pid: str) -> bool:
+        """Whether scenario pedestrian ``pid`` is on its planned crossing now."""
+        plan = self.pedestrian_plans[pid]
+        return self._person_lanes.get(pid, "").rpartition("_")[0] == plan.crossing
 
     def _since_on(self, pid: str) -> float | None:
         """How long ago (s) pedestrian ``pid`` stepped onto its crossing; None: not yet."""
@@ -657,7 +741,7 @@ class SumoWorld:
             if pid in self._stepped_on:
                 continue
             wanted = plan.crossing_time_s
-            on = self._person_lanes.get(pid, "").rpartition("_")[0] == plan.crossing
+            on = self._on_crossing(pid)
             if on:
                 self._stepped_on[pid] = time
             tolerance = self.scenario.pedestrians[pid].crossing_tolerance_s
@@ -750,18 +834,24 @@ class SumoWorld:
                 self._automated[vid].distance = float(values[libsumo.VAR_DISTANCE])
         persons: dict[str, PersonState] = {}
         self._previous_lanes = self._person_lanes
+        self._previous_centres = self._centres
         self._person_lanes = {}
         self._person_speeds = {}
+        self._centres = {}
         for pid, values in libsumo.person.getAllSubscriptionResults().items():
             self._person_lanes[pid] = str(values[libsumo.VAR_LANE_ID])
             self._person_speeds[pid] = float(values[libsumo.VAR_SPEED])
             walking = bool(values[libsumo.VAR_LANE_ID])
+            self._centres[pid] = self._person_position(pid, values)
+            speed, walking_heading = float(values[libsumo.VAR_SPEED]), \
+                heading(values[libsumo.VAR_ANGLE]) if walking else None
+            turned = self._turned.get(pid)
+            if turned is not None:  # SUMO holds it at speed 0, facing along the lane
+                speed, walking_heading = abs(turned.walker.velocity_mps), turned.heading
             persons[pid] = PersonState(
-                id=pid,
-                position=self._person_position(pid, values),
-                speed=float(values[libsumo.VAR_SPEED]),
+                id=pid, position=self._centres[pid], speed=speed,
                 on_crossing=values[libsumo.VAR_ROAD_ID] in self.roadmap.crossing_ids,
-                heading=heading(values[libsumo.VAR_ANGLE]) if walking else None)
+                heading=walking_heading)
         return Snapshot(time=self._time, vehicles=vehicles, persons=persons)
 
     def _person_position(self, pid: str, values: dict[int, Any]) -> tuple[float, float]:
