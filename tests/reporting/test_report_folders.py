@@ -21,3 +21,14 @@ def test_runs_of_a_safety_campaign_are_not_single_runs(tmp_path):
     finished_run(campaign / "runs" / "s1_pedestrian__step_s=9__seed1__abc")
     (campaign / "safety.json").write_text("{}")
     assert [run.path for run in single_runs([tmp_path], [])] == [plain]
+
+
+def test_runs_and_worst_cases_of_a_falsify_search_are_not_single_runs(tmp_path):
+    """A search's runs inject faults (its sensor errors, its losses): counted as single runs
+    they would fill the fault table and the run list of every report over results/."""
+    plain = finished_run(tmp_path / "runs" / "s1_pedestrian")
+    search = tmp_path / "falsify" / "s1_pedestrian"
+    finished_run(search / "runs" / "cma-0001__seed1__abc")
+    finished_run(search / "worst_cma")
+    (search / "falsify.json").write_text("{}")
+    assert [run.path for run in single_runs([tmp_path], [])] == [plain]
