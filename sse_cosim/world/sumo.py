@@ -428,12 +428,15 @@ class SumoWorld:
         if not low <= at <= high:
             return None
         velocity = (at - lane.along(before)) / self._dt
-        near, far = (low, high) if velocity > 0.0 else (high, low)
+        # it came from the end on its start's side (it may stand still now: a pause)
+        start = self.pedestrian_plans[pid].standing_xy
+        forward = math.dist(lane.start, start) < math.dist(lane.end, start)
+        near, far = (low, high) if forward else (high, low)
         rise = None if self._accel is None else self._accel * self._dt
         walker = CrossingWalker(at, velocity, near, far, turn.walking_mps, turn.wait_s,
                                 self._dt, rise)
         return _Turned(walker, lane_id, lane, lane.lateral(centre),
-                       lane.heading + (0.0 if velocity > 0.0 else math.pi))
+                       lane.heading + (0.0 if forward else math.pi))
 
     def _on_crossing(self, pid: str) -> bool:
         """Whether scenario pedestrian ``pid`` is on its planned crossing now."""

@@ -134,3 +134,17 @@ def test_a_pedestrian_off_the_zebra_by_its_turn_does_not_turn(tmp_path):
         tmp_path / "late")
     assert [s.persons.get("pedestrian") for s in late.snapshots] == [
         s.persons.get("pedestrian") for s in plain.snapshots]
+
+
+@pytest.mark.sumo
+def test_a_pedestrian_paused_when_its_turn_comes_goes_back_to_its_own_side(tmp_path):
+    """Standing still on the zebra (a pause) when it turns, it has no heading of its own to
+    turn from: it goes back to the end on its start's side (south), then crosses."""
+    run = run_world(scenario("s1_pedestrian", **{
+        "pedestrians.pedestrian.pause_after_s": 1.0, "pedestrians.pedestrian.pause_for_s": 5.0,
+        "pedestrians.pedestrian.turn_back_after_s": 2.0, "simulation.duration_s": 30.0}),
+        tmp_path)
+    xy, _, on = _pedestrian(run)
+    y = xy[on:, 1]
+    south = int(np.argmin(y[20:])) + 20  # after the turn it went south, back to its side
+    assert y[south] == pytest.approx(-5.65) and y[south] < y[20] - 0.5 and y[-1] > 5.5
