@@ -10,6 +10,14 @@ lies inside the exact one. A point of the dilation lies at most sqrt(1 + limit²
 distance from the shape (a cut corner's end on a needle). Arcs would not do: GEOS splits an
 arc into a rounded number of chords, up to 1.5 times the nominal angle each, which dip inside
 the disc.
+
+GEOS's mitred offset is not always a valid geometry: a town run's cut dilated a valid
+38-vertex polygon by 1.27 m into two nested shells, and the overlay that took it dropped the
+part of a pedestrian's region that held the pedestrian (0.54 m off it; the safety campaign's
+town runs, tests/regions/test_polygon.py). Every offset is therefore checked, and an invalid
+one is replaced by the round offset by :data:`ROUND_FACTOR` times the distance, whose chords
+lie on or beyond the disc's arcs (beyond the shape for a dilation, within it for an
+erosion). An invalid round offset too is an error, never a region.
 """
 
 from __future__ import annotations
@@ -29,6 +37,11 @@ REACH_FACTOR = math.sqrt(1.0 + MITRE_LIMIT**2)  # how far a dilation reaches, pe
 LEAST_DILATION_M = 1e-9  # GEOS buffers by less than about 1e-16 m to nothing: dilate by this
 NO_BOUNDS = (0.0, 0.0, -1.0, -1.0)
 COARSEN_ABOVE = 64  # vertices above which a region is coarsened
+ROUND_QUAD_SEGS = 8  # chords per quarter circle of a round offset (GEOS's default)
+ROUND_FACTOR = 1.0 / math.cos(0.75 * (0.5 * math.pi / ROUND_QUAD_SEGS))
+"""A round offset's distance per metre of the one it stands for: GEOS's chords span up to 1.5
+times the nominal angle (pi / 2 / ROUND_QUAD_SEGS), and a chord's middle lies cos(half its
+angle) of the radius from the arc's centre; 1.011 for 8 chords, below :data:`REACH_FACTOR`."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,16 +76,13 @@ class PolygonRegion:
     def dilate(self, distance: float) -> PolygonRegion:
         if distance <= 0 or self.shape.is_empty:
             return self
-        return PolygonRegion(self.shape.buffer(max(distance, LEAST_DILATION_M),
-                                               cap_style="square", join_style="mitre",
-                                               mitre_limit=MITRE_LIMIT))
+        return PolygonRegion(_offset(self.shape, max(distance, LEAST_DILATION_M)))
 
     def erode(self, distance: float) -> PolygonRegion:
         if distance <= 0 or self.shape.is_empty:
             return self
         if distance not in self._eroded:
-            self._eroded[distance] = PolygonRegion(self.shape.buffer(
-                -distance, cap_style="square", join_style="mitre", mitre_limit=MITRE_LIMIT))
+            self._eroded[distance] = PolygonRegion(_offset(self.shape, -distance))
         return self._eroded[distance]
 
     def coarsen(self, tolerance: float) -> PolygonRegion:
@@ -119,6 +129,22 @@ class PolygonRegion:
         if not shapely.is_prepared(self.shape):
             shapely.prepare(self.shape)
         return self.shape
+
+
+def _offset(shape: shapely.Geometry, distance: float) -> shapely.Geometry:
+    """``shape`` offset by ``distance`` (m; outward if positive, inward if negative), mitred
+    (module docstring), or, where GEOS's mitred offset is not a valid geometry, round by
+    :data:`ROUND_FACTOR` times the distance; ValueError if that is not valid either."""
+    mitred = shape.buffer(distance, cap_style="square", join_style="mitre",
+                          mitre_limit=MITRE_LIMIT)
+    if shapely.is_valid(mitred):
+        return mitred
+    rounded = shape.buffer(distance * ROUND_FACTOR, quad_segs=ROUND_QUAD_SEGS)
+    if shapely.is_valid(rounded):
+        return rounded
+    raise ValueError(f"GEOS offsets a region by {distance:g} m into no valid geometry, mitred "
+                     f"({shapely.is_valid_reason(mitred)}) or round "
+                     f"({shapely.is_valid_reason(rounded)}): {shapely.to_wkt(shape)}")
 
 
 def _overlay(operation: Callable[[shapely.Geometry, shapely.Geometry], shapely.Geometry],

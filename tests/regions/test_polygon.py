@@ -9,6 +9,7 @@ sampled on the exact set's vertices, boundary and inside, and just within the di
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -341,3 +342,21 @@ def test_a_region_with_lines_where_shapes_touch_overlays_with_an_empty_one():
     box = PolygonRegion(shapely.box(190.0, -7.0, 199.0, -4.0))  # meets the line and the polygon
     assert box.intersection(touching).shape.equals(
         shapely.intersection(box.shape, touching.shape))
+
+
+def test_a_dilation_geos_would_draw_as_nested_shells_is_valid_and_holds_the_disc():
+    """A town run's cut (the safety campaign, pedestrian 37 m along its sidewalk, seed 2): the
+    38-vertex polygon of walkable ground outside a view, dilated by 1.27 m. GEOS's mitred
+    offset of it is two nested shells, and the overlay that took them dropped the region's
+    part that held the pedestrian (0.54 m off). The dilation falls back to the round offset:
+    valid, and holding every point within the distance (a 64-chord round offset by a hair
+    less, whose chords lie inside the disc)."""
+    shape = shapely.from_wkt((Path(__file__).parent / "nested_shells_case.wkt").read_text())
+    assert shapely.is_valid(shape)
+    mitred = shape.buffer(1.27, cap_style="square", join_style="mitre", mitre_limit=1.0)
+    assert not shapely.is_valid(mitred)  # GEOS's offset: the case still stands
+    region = PolygonRegion(shape).dilate(1.27)
+    assert shapely.is_valid(region.shape)
+    assert region.shape.covers(shape.buffer(1.27 * (1 - 1e-9), quad_segs=64))
+    eroded = PolygonRegion(region.shape).erode(1.0)
+    assert shapely.is_valid(eroded.shape) and region.shape.covers(eroded.shape)
