@@ -70,7 +70,6 @@ class CrossingWalker:
                  rise_mps: float | None) -> None:
         self.at_m = at_m
         self.velocity_mps = velocity_mps
-        self.near_m = near_m
         self.far_m = far_m
         self.walking_mps = walking_mps
         self.step_s = step_s
