@@ -80,11 +80,13 @@ class RasterRegion:
     """A region as the set cells of ``mask`` (rows, cols) of bool (read-only; rows along y,
     columns along x), whose cell [0, 0] is the grid's cell ``offset`` (column, row). Made by
     :class:`RasterKind` and the operations, which crop the mask to its set cells (an empty
-    region has a (0, 0) mask)."""
+    region has a (0, 0) mask). Its erosions are kept on it: a step tests many sets against the
+    same view at the same slack."""
 
     cell: float
     mask: np.ndarray
     offset: tuple[int, int]
+    _eroded: dict[float, RasterRegion] = field(default_factory=dict, repr=False)
 
     @property
     def is_empty(self) -> bool:
@@ -138,8 +140,10 @@ class RasterRegion:
     def erode(self, distance: float) -> RasterRegion:
         if distance <= 0 or self.is_empty:
             return self
-        kept = kernels.erode(self.mask, reach_widths(distance, self.cell))
-        return _cropped(self.cell, kept, *self.offset)
+        if distance not in self._eroded:
+            kept = kernels.erode(self.mask, reach_widths(distance, self.cell))
+            self._eroded[distance] = _cropped(self.cell, kept, *self.offset)
+        return self._eroded[distance]
 
     def coarsen(self, tolerance: float) -> RasterRegion:
         """Self: a raster's cost does not grow with its history."""

@@ -215,6 +215,18 @@ def test_an_erosion_keeps_only_points_that_far_inside(name, shape, distance, see
 
 @KIND_NAMES
 @SETTINGS
+@given(shapes(), DISTANCES)
+def test_a_region_keeps_its_erosions(name, shape, distance):
+    region = KINDS[name].inner(shape)
+    eroded = region.erode(distance)
+    assert region.erode(distance) is eroded
+    fresh = KINDS[name].inner(shape).erode(distance)
+    assert shapely.equals(eroded.geometry(), fresh.geometry()) or (
+        eroded.is_empty and fresh.is_empty)
+
+
+@KIND_NAMES
+@SETTINGS
 @given(shapes(), st.sampled_from([0.0, -0.5]))
 def test_no_positive_distance_leaves_a_region_as_it_is(name, shape, distance):
     region = KINDS[name].outer(shape)
