@@ -197,16 +197,18 @@ class RasterRegion:
         return np.column_stack([xs, ys])
 
     def geometry(self) -> shapely.Geometry:
-        """The set cells as one union of boxes (each row's runs, merged down the rows)."""
+        """The set cells as polygons: the coverage union of their boxes (each row's runs,
+        merged down the rows), whose rings are noded so that boxes share edges corner for
+        corner (:func:`~sse_cosim.regions.raster_kernels.box_rings`)."""
         if self.is_empty:
             return shapely.Polygon()
-        boxes = kernels.run_boxes(self.mask)
+        corners, ptr = kernels.box_rings(kernels.run_boxes(self.mask))
         col0, row0 = self.offset
-        parts = shapely.box(_lines(col0 + boxes[:, 0], self.cell),
-                            _lines(row0 + boxes[:, 2], self.cell),
-                            _lines(col0 + boxes[:, 1], self.cell),
-                            _lines(row0 + boxes[:, 3], self.cell))
-        return parts[0] if len(parts) == 1 else shapely.union_all(parts)
+        xy = np.column_stack([_lines(col0 + corners[:, 0], self.cell),
+                              _lines(row0 + corners[:, 1], self.cell)])
+        rings = shapely.linearrings(xy, indices=np.repeat(np.arange(len(ptr) - 1), np.diff(ptr)))
+        parts = shapely.polygons(rings)
+        return parts[0] if len(parts) == 1 else shapely.coverage_union_all(parts)
 
     def _aligned(self, other: RasterRegion) -> RasterRegion:
         if not isinstance(other, RasterRegion) or other.cell != self.cell:
@@ -490,6 +492,20 @@ def row_runs_reference(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
     stops = np.nonzero(steps == -1)[1]
     ptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=mask.shape[0]))])
     return ptr, starts, stops
+
+
+def box_rings_reference(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``raster_kernels.box_rings``, box by box against every other box."""
+    rings = []
+    for k0, k1, j0, j1 in boxes.tolist():
+        lower = sorted({c for a0, a1, _, b1 in boxes.tolist() if b1 == j0
+                        for c in (a0, a1) if k0 < c < k1})
+        upper = sorted({c for a0, a1, b0, _ in boxes.tolist() if b0 == j1
+                        for c in (a0, a1) if k0 < c < k1}, reverse=True)
+        rings.append([(k0, j0), *((c, j0) for c in lower), (k1, j0), (k1, j1),
+                      *((c, j1) for c in upper), (k0, j1), (k0, j0)])
+    ptr = np.concatenate([[0], np.cumsum([len(r) for r in rings])]).astype(np.int64)
+    return np.array([c for r in rings for c in r], dtype=np.int64).reshape(-1, 2), ptr
 
 
 def least_gap_reference(a: np.ndarray, a_offset: tuple[int, int], b: np.ndarray,

@@ -366,6 +366,78 @@ def run_boxes(mask: BoolArray) -> IntArray:
 
 
 @njit(cache=True)
+def _edge_ends(boxes: IntArray, order: IntArray, rows: IntArray, row: int, start: int,
+               stop: int, out: IntArray, n: int) -> int:
+    """The columns strictly between ``start`` and ``stop`` where a box whose row in ``rows``
+    (sorted by ``order``) is ``row`` begins or ends, written into ``out`` from ``n`` (if it is
+    long enough; else only counted); returns ``n`` plus their number."""
+    i = np.searchsorted(rows[order], row)
+    while i < order.shape[0] and rows[order[i]] == row:
+        for col in (boxes[order[i], 0], boxes[order[i], 1]):
+            if start < col < stop:
+                if n < out.shape[0]:
+                    out[n] = col
+                n += 1
+        i += 1
+    return n
+
+
+@njit(cache=True)
+def _put(corners: IntArray, at: int, col: int, row: int) -> int:
+    corners[at, 0], corners[at, 1] = col, row
+    return at + 1
+
+
+@njit(cache=True)
+def box_rings(boxes: IntArray) -> tuple[IntArray, IntArray]:
+    """The boxes (n, 4) of :func:`run_boxes` as rings noded for a coverage: ``(corners (m, 2)
+    of (column, row) grid lines, ptr (n + 1,))``, box i's ring ``ptr[i]:ptr[i + 1]``,
+    counter-clockwise and closed.
+
+    A box's bottom edge holds every column inside it where a box ending on its bottom row
+    begins or ends, and its top edge every such column of a box beginning on its top row, so
+    that two boxes share each piece of a common edge corner for corner (a coverage union
+    matches edges exactly). Their sides are never shared: a run's ends have unset cells
+    beside them."""
+    n = boxes.shape[0]
+    tops, bottoms = boxes[:, 3].copy(), boxes[:, 2].copy()
+    by_top, by_bottom = np.argsort(tops), np.argsort(bottoms)
+    none = np.empty(0, dtype=np.int64)
+    ends_ptr = np.zeros(n + 1, dtype=np.int64)  # each box's ends below, then above
+    for b in range(n):
+        k0, k1, j0, j1 = boxes[b, 0], boxes[b, 1], boxes[b, 2], boxes[b, 3]
+        count = _edge_ends(boxes, by_top, tops, j0, k0, k1, none, 0)
+        count = _edge_ends(boxes, by_bottom, bottoms, j1, k0, k1, none, count)
+        ends_ptr[b + 1] = ends_ptr[b] + count
+    ends = np.empty(ends_ptr[n], dtype=np.int64)
+    below = np.empty(n, dtype=np.int64)
+    above = np.empty(n, dtype=np.int64)
+    ptr = np.zeros(n + 1, dtype=np.int64)
+    for b in range(n):
+        k0, k1, j0, j1 = boxes[b, 0], boxes[b, 1], boxes[b, 2], boxes[b, 3]
+        own = ends[ends_ptr[b]:ends_ptr[b + 1]]
+        m = _edge_ends(boxes, by_top, tops, j0, k0, k1, own, 0)
+        lower = np.unique(own[:m])
+        upper = np.unique(own[m:_edge_ends(boxes, by_bottom, bottoms, j1, k0, k1, own, m)])
+        below[b], above[b] = lower.shape[0], upper.shape[0]
+        own[:below[b]] = lower
+        own[below[b]:below[b] + above[b]] = upper
+        ptr[b + 1] = ptr[b] + below[b] + above[b] + 5
+    corners = np.empty((ptr[n], 2), dtype=np.int64)
+    for b in range(n):
+        k0, k1, j0, j1 = boxes[b, 0], boxes[b, 1], boxes[b, 2], boxes[b, 3]
+        own = ends[ends_ptr[b]:ends_ptr[b + 1]]
+        at = _put(corners, ptr[b], k0, j0)
+        for i in range(below[b]):  # the bottom edge, left to right
+            at = _put(corners, at, own[i], j0)
+        at = _put(corners, _put(corners, at, k1, j0), k1, j1)
+        for i in range(below[b] + above[b] - 1, below[b] - 1, -1):  # the top, right to left
+            at = _put(corners, at, own[i], j1)
+        _put(corners, _put(corners, at, k0, j1), k0, j0)
+    return corners, ptr
+
+
+@njit(cache=True)
 def _row_gap(col: int, first: int, stop: int, starts: IntArray, stops: IntArray) -> int:
     """The least gap (whole cells between them) from column ``col`` to a run of
     ``first:stop`` (sorted); -1 if there is none."""

@@ -30,6 +30,8 @@ from sse_cosim.regions import raster_kernels as kernels
 from sse_cosim.regions.raster import (
     MAX_CELLS,
     SLACK_M,
+    RasterRegion,
+    box_rings_reference,
     combine_reference,
     contains_points_reference,
     dilate_reference,
@@ -298,6 +300,27 @@ def test_bounds_row_runs_and_boxes_are_the_references(placed):
     for col_start, col_stop, row_start, row_stop in kernels.run_boxes(mask):
         painted[row_start:row_stop, col_start:col_stop] += 1
     assert np.array_equal(painted, mask.astype(int))  # disjoint boxes, exactly the cells
+
+
+@pytest.mark.kernels
+@SETTINGS
+@given(masks())
+def test_box_rings_are_the_reference_and_their_union_is_the_cells(placed):
+    mask, offset = placed
+    boxes = kernels.run_boxes(mask)
+    corners, ptr = kernels.box_rings(boxes)
+    expected_corners, expected_ptr = box_rings_reference(boxes)
+    assert np.array_equal(corners, expected_corners) and np.array_equal(ptr, expected_ptr)
+    if not mask.any():
+        return
+    region = RasterRegion(0.1, mask, offset)
+    rows, cols = np.nonzero(mask)
+    cells = shapely.union_all(shapely.box(
+        (cols + offset[0]) * 0.1, (rows + offset[1]) * 0.1,
+        (cols + offset[0] + 1) * 0.1, (rows + offset[1] + 1) * 0.1))
+    geometry = region.geometry()
+    assert shapely.is_valid(geometry), shapely.is_valid_reason(geometry)
+    assert shapely.equals(geometry, cells)
 
 
 @pytest.mark.kernels
