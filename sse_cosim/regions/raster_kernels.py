@@ -368,11 +368,11 @@ def run_boxes(mask: BoolArray) -> IntArray:
 @njit(cache=True)
 def _edge_ends(boxes: IntArray, order: IntArray, rows: IntArray, row: int, start: int,
                stop: int, out: IntArray, n: int) -> int:
-    """The columns strictly between ``start`` and ``stop`` where a box whose row in ``rows``
-    (sorted by ``order``) is ``row`` begins or ends, written into ``out`` from ``n`` (if it is
-    long enough; else only counted); returns ``n`` plus their number."""
-    i = np.searchsorted(rows[order], row)
-    while i < order.shape[0] and rows[order[i]] == row:
+    """The columns strictly between ``start`` and ``stop`` where a box ``order[i]`` whose row
+    ``rows[i]`` (ascending) is ``row`` begins or ends, written into ``out`` from ``n`` (if it
+    is long enough; else only counted); returns ``n`` plus their number."""
+    i = np.searchsorted(rows, row)
+    while i < order.shape[0] and rows[i] == row:
         for col in (boxes[order[i], 0], boxes[order[i], 1]):
             if start < col < stop:
                 if n < out.shape[0]:
@@ -380,6 +380,19 @@ def _edge_ends(boxes: IntArray, order: IntArray, rows: IntArray, row: int, start
                 n += 1
         i += 1
     return n
+
+
+@njit(cache=True)
+def _sorted_distinct(values: IntArray, first: int, stop: int, to: int) -> int:
+    """Sorts ``values[first:stop]`` in place and moves its distinct values to ``to`` on
+    (``to <= first``); returns how many there are."""
+    values[first:stop].sort()
+    count = 0
+    for i in range(first, stop):
+        if count == 0 or values[i] != values[to + count - 1]:
+            values[to + count] = values[i]
+            count += 1
+    return count
 
 
 @njit(cache=True)
@@ -400,8 +413,8 @@ def box_rings(boxes: IntArray) -> tuple[IntArray, IntArray]:
     matches edges exactly). Their sides are never shared: a run's ends have unset cells
     beside them."""
     n = boxes.shape[0]
-    tops, bottoms = boxes[:, 3].copy(), boxes[:, 2].copy()
-    by_top, by_bottom = np.argsort(tops), np.argsort(bottoms)
+    by_top, by_bottom = np.argsort(boxes[:, 3]), np.argsort(boxes[:, 2])
+    tops, bottoms = boxes[by_top, 3], boxes[by_bottom, 2]  # ascending
     none = np.empty(0, dtype=np.int64)
     ends_ptr = np.zeros(n + 1, dtype=np.int64)  # each box's ends below, then above
     for b in range(n):
@@ -417,11 +430,9 @@ def box_rings(boxes: IntArray) -> tuple[IntArray, IntArray]:
         k0, k1, j0, j1 = boxes[b, 0], boxes[b, 1], boxes[b, 2], boxes[b, 3]
         own = ends[ends_ptr[b]:ends_ptr[b + 1]]
         m = _edge_ends(boxes, by_top, tops, j0, k0, k1, own, 0)
-        lower = np.unique(own[:m])
-        upper = np.unique(own[m:_edge_ends(boxes, by_bottom, bottoms, j1, k0, k1, own, m)])
-        below[b], above[b] = lower.shape[0], upper.shape[0]
-        own[:below[b]] = lower
-        own[below[b]:below[b] + above[b]] = upper
+        stop = _edge_ends(boxes, by_bottom, bottoms, j1, k0, k1, own, m)
+        below[b] = _sorted_distinct(own, 0, m, 0)
+        above[b] = _sorted_distinct(own, m, stop, below[b])
         ptr[b + 1] = ptr[b] + below[b] + above[b] + 5
     corners = np.empty((ptr[n], 2), dtype=np.int64)
     for b in range(n):
