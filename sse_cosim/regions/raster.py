@@ -43,6 +43,7 @@ import itertools
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import shapely
@@ -197,9 +198,15 @@ class RasterRegion:
         return np.column_stack([xs, ys])
 
     def geometry(self) -> shapely.Geometry:
-        """The set cells as polygons: the coverage union of their boxes (each row's runs,
-        merged down the rows), whose rings are noded so that boxes share edges corner for
-        corner (:func:`~sse_cosim.regions.raster_kernels.box_rings`)."""
+        """The set cells as polygons (made once: the recorder's checks and the replay both ask
+        for them)."""
+        return self._polygons
+
+    @cached_property
+    def _polygons(self) -> shapely.Geometry:
+        """The coverage union of the set cells' boxes (each row's runs, merged down the rows),
+        whose rings are noded so that boxes share edges corner for corner
+        (:func:`~sse_cosim.regions.raster_kernels.box_rings`)."""
         if self.is_empty:
             return shapely.Polygon()
         corners, ptr = kernels.box_rings(kernels.run_boxes(self.mask))
