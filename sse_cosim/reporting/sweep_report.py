@@ -41,6 +41,8 @@ FIGURES: dict[str, tuple[str, ...]] = {
         ("first_detection", "fused", "bus_distance_to_crossing_m"),
     "fused_area_mean_m2": ("set_area_m2", "fused", "mean"),
     "fused_area_max_m2": ("set_area_m2", "fused", "max"),
+    "refined_area_mean_m2": ("set_area_m2", "possible", "mean"),
+    "refined_area_max_m2": ("set_area_m2", "possible", "max"),
     "first_shared_fusion_t_s": ("first_shared_fusion", "t"),
     "first_shared_fusion_area_m2": ("first_shared_fusion", "fused_area_m2"),
     "containment_violations": ("containment_violations",),
@@ -58,7 +60,7 @@ LEVEL_SHARE = "level_share"  # one column per speed level: level_share_<level>
 PLOTTED = (
     "average_speed_mps", "time_stopped_s", "travel_time_s", "min_distance_bus_pedestrian_m",
     "first_detection_fused_bus_to_crossing_m", "fused_area_mean_m2", "fused_area_max_m2",
-    "containment_violations", "collisions",
+    "refined_area_mean_m2", "containment_violations", "collisions",
 )
 # The short table (terminal, report): figure -> how runs of one combination are combined.
 SUMMARY_COLUMNS = {

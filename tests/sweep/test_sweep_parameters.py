@@ -196,11 +196,13 @@ def test_summaries_flatten_into_table_figures():
     row = summary_figures({
         "average_speed_mps": 16.5, "first_detection": {"fused": {
             "t": 3.4, "bus_distance_to_crossing_m": 130.0}},
-        "set_area_m2": {"fused": {"mean": 313.1, "max": 1656.5}},
+        "set_area_m2": {"fused": {"mean": 313.1, "max": 1656.5},
+                        "possible": {"mean": 40.2, "max": 96.0}},
         "level_share": {"nominal": 0.75, "very slow": 0.25},
     })
     assert row["first_detection_fused_bus_to_crossing_m"] == 130.0
     assert row["fused_area_max_m2"] == 1656.5
+    assert row["refined_area_mean_m2"] == 40.2 and row["refined_area_max_m2"] == 96.0
     assert row["level_share_very_slow"] == 0.25
     assert row["collisions"] is None
     assert set(summary_figures(None)) <= set(row)
