@@ -24,6 +24,7 @@ from sse_cosim.files import portable_path, write_text_atomic
 from sse_cosim.reporting import falsify_report as report
 from sse_cosim.reporting.margins import check_margins
 from sse_cosim.runner.executors import Execution, execute
+from sse_cosim.runner.safety import ActorPlanner
 from sse_cosim.runner.tasks import RunTask
 from sse_cosim.scenario.loader import load_scenario_data, validate_scenario
 
@@ -48,7 +49,8 @@ def prepare(scenario: Path, spec_file: Path, objective: str, methods: Sequence[s
         raise UserError("command line", "--method", "a method is given twice",
                         "give each method once")
     data = load_scenario_data(scenario)
-    space = build_space(load_falsify_file(spec_file), data, str(scenario), str(spec_file))
+    space = build_space(load_falsify_file(spec_file), data, str(scenario), str(spec_file),
+                        ActorPlanner().crossings)
     check_margins(OBJECTIVES[objective].margins, validate_scenario(data, str(scenario)),
                   str(scenario))
     return SearchSetup(scenario, data, space, OBJECTIVES[objective], tuple(methods), budget,

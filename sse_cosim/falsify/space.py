@@ -26,6 +26,10 @@ scenario overrides:
   predicts each message by its true age, and late views are not used as negative
   information, so A3 holds): its start, its length up to ``longest_s`` and the steps added
   to the link's latency, up to ``most_steps`` (rounded to whole steps; 0: none).
+- ``[crossing]``: which zebra each selected pedestrian steps onto, of those over an automated
+  vehicle's route that its walk from its start to its end can take (the planner lists them,
+  shortest walk first; one value in [0, 1] each, the choices splitting it evenly). A
+  pedestrian with one such zebra is not searched.
 
 The box is validated at its corners with the scenario's own ``breaks_assumptions``, so an
 interval outside the assumptions (a walking speed above the estimator's bound) is refused
@@ -132,6 +136,12 @@ class PresentEntry(_FileModel):
     pedestrians: str = Field("*", min_length=1)
 
 
+class CrossingEntry(_FileModel):
+    """``[crossing]``: the pedestrians (a name glob) whose zebra the search chooses."""
+
+    pedestrians: str = Field("*", min_length=1)
+
+
 class FalsifyFile(_FileModel):
     """A falsify file: the free choices the search steers."""
 
@@ -144,6 +154,7 @@ class FalsifyFile(_FileModel):
     loss: LossEntry | None = None
     latency: LatencyEntry | None = None
     present: PresentEntry | None = None
+    crossing: CrossingEntry | None = None
 
 
 def load_falsify_file(path: Path) -> FalsifyFile:
@@ -180,6 +191,16 @@ class _Noise:
 
 
 @dataclass(frozen=True)
+class _Crossings:
+    pedestrian: str
+    choices: tuple[str, ...]  # shortest walk first
+
+    def chosen(self, value: float) -> str:
+        """The crossing at ``value`` in [0, 1]: the choices split it evenly."""
+        return self.choices[min(int(value * len(self.choices)), len(self.choices) - 1)]
+
+
+@dataclass(frozen=True)
 class SearchSpace:
     """One scenario's search box and how a point of it becomes scenario overrides.
 
@@ -188,7 +209,7 @@ class SearchSpace:
     scenario has it), the start behind the truck (if the scenario has the truck), two per
     noisy sensor (forward, lateral fraction of the bound), two per sender (loss start and
     length), three per late sender (start, length, steps late), one per pedestrian of
-    ``[present]`` (in the scene from 0.5).
+    ``[present]`` (in the scene from 0.5), one per pedestrian of ``[crossing]`` with a choice.
     """
 
     dims: tuple[Dimension, ...]
@@ -201,6 +222,7 @@ class SearchSpace:
     step_length_s: float
     fixed: Mapping[str, Any]
     present: tuple[str, ...] = ()
+    crossings: tuple[_Crossings, ...] = ()
 
     @property
     def size(self) -> int:
@@ -245,6 +267,8 @@ class SearchSpace:
                     "end_s": round(start + length, DECIMALS), "extra_latency_steps": steps}
         for pid in self.present:
             out[f"pedestrians.{pid}.present"] = values[next(names)] >= PRESENT_FROM
+        for choice in self.crossings:
+            out[f"pedestrians.{choice.pedestrian}.crossing"] = choice.chosen(values[next(names)])
         return out
 
     def step_out_override(self, values: Mapping[str, float],
@@ -262,11 +286,18 @@ def step_out_path(pedestrian: str) -> str:
     return f"pedestrians.{pedestrian}.steps_onto_crossing_s"
 
 
+CrossingChoices = Callable[[Scenario, str, str], Sequence[str]]
+"""The crossings pedestrian ``pid`` of a scenario (read from a source) can step onto, shortest
+walk first (:meth:`sse_cosim.runner.safety.ActorPlanner.crossings`): called as
+``(scenario, source, pid)``."""
+
+
 def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
-                spec_source: str) -> SearchSpace:
+                spec_source: str, crossings: CrossingChoices | None = None) -> SearchSpace:
     """``spec`` for the scenario ``data`` (its file ``source``): the dims that select
-    something there. Raises :class:`UserError` if nothing is left to search, or if a corner
-    of the box does not validate (an interval outside what the schema allows)."""
+    something there; ``crossings`` lists a pedestrian's zebras (needed by ``[crossing]``).
+    Raises :class:`UserError` if nothing is left to search, or if a corner of the box does
+    not validate (an interval outside what the schema allows)."""
     fixed = expand_overrides(spec.overrides,
                              validate_scenario(data, source).model_dump(mode="json"), spec_source)
     scenario = validate_scenario(apply_overrides(data, fixed, source), source)
@@ -310,12 +341,14 @@ def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
                  Dimension(f"late_{node}_steps", 0.0, float(spec.latency.most_steps))]
     present = _present(spec, scenario, fields)
     dims += [Dimension(f"present_{pid}", 0.0, 1.0) for pid in present]
+    choices = _crossings(spec, scenario, fields, source, crossings)
+    dims += [Dimension(f"crossing_{c.pedestrian}", 0.0, 1.0) for c in choices]
     if len(dims) < 2:
         raise UserError(spec_source, "dims", f"selects {len(dims)} value(s) in {source}",
                         "a search needs at least two: add dims that name this scenario's "
                         "fields (`sse-cosim fields` lists them)")
     space = SearchSpace(tuple(dims), tuple(targets), waiting, truck_front, noises, senders,
-                        late, scenario.simulation.step_length_s, counted, present)
+                        late, scenario.simulation.step_length_s, counted, present, choices)
     _check_corners(space, data, source, spec_source)
     return space
 
@@ -344,6 +377,24 @@ def _present(spec: FalsifyFile, scenario: Scenario,
     found = selected_paths(f"pedestrians.{spec.present.pedestrians}.present", fields, "")
     return tuple(pid for pid in (path.split(".")[1] for path in found)
                  if scenario.pedestrians[pid].present)
+
+
+def _crossings(spec: FalsifyFile, scenario: Scenario, fields: Mapping[str, Any], source: str,
+               crossings: CrossingChoices | None) -> tuple[_Crossings, ...]:
+    """The pedestrians ``[crossing]`` selects in ``scenario`` (``fields``: its dump) that are in
+    its scene and have more than one zebra to choose from, with their zebras."""
+    if spec.crossing is None:
+        return ()
+    if crossings is None:
+        raise ValueError("a [crossing] search needs the planner's crossing choices")
+    found = selected_paths(f"pedestrians.{spec.crossing.pedestrians}.crossing", fields, "")
+    out = []
+    for pid in (path.split(".")[1] for path in found):
+        if scenario.pedestrians[pid].present:
+            zebras = tuple(crossings(scenario, source, pid))
+            if len(zebras) > 1:
+                out.append(_Crossings(pid, zebras))
+    return tuple(out)
 
 
 def _check_corners(space: SearchSpace, data: Mapping[str, Any], source: str,

@@ -282,6 +282,13 @@ class ActorPlanner:
         net_path, roadmap = self._network(scenario.network, source)
         return demand.walk_times(scenario, net_path, roadmap, source)
 
+    def crossings(self, scenario: Scenario, source: str, pid: str) -> list[str]:
+        """The crossings over an automated vehicle's route that pedestrian ``pid`` can take,
+        the shortest walk first (:func:`~sse_cosim.world.demand.crossing_choices`)."""
+        from sse_cosim.world import demand
+
+        return demand.crossing_choices(scenario, pid, *self._network(scenario.network, source))
+
     def _network(self, network: Network, source: str) -> tuple[Path, RoadMap]:
         key = f"{network.sources_dir}|{network.net_file}"
         if key not in self._networks:

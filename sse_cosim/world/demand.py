@@ -44,7 +44,7 @@ from __future__ import annotations
 import difflib
 import itertools
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -536,10 +536,7 @@ def _check_crossing_on_route(net: sumolib.net.Net, pid: str, ped: Pedestrian,
         return
     field = f"pedestrians.{pid}"
     names = ", ".join(f"automated.{vid}" for vid in routes)
-    on_route = sorted(e.getID() for e in net.getEdges(withInternal=True)
-                      if e.getFunction() == "crossing"
-                      and any(c.getID() in route for route in routes.values()
-                              for c in e.getCrossingEdges()))
+    on_route = route_crossings(net, routes.values())
     zebras = ", ".join(on_route[:NEAREST_EDGES]) + (", ..." if len(on_route) > NEAREST_EDGES
                                                      else "")
     fix = ("end the pedestrian on the far side of the route's street (an edge whose sidewalk "
@@ -551,6 +548,32 @@ def _check_crossing_on_route(net: sumolib.net.Net, pid: str, ped: Pedestrian,
                     f"{', '.join(map(repr, crossed))}), on no automated vehicle's route "
                     f"({names}), so it never steps onto the route at "
                     f"{field}.steps_onto_crossing_s", fix)
+
+
+def route_crossings(net: sumolib.net.Net, routes: Iterable[Sequence[str]]) -> list[str]:
+    """The crossings over any of ``routes`` (each a list of edges), by id: those whose
+    ``crossingEdges`` include an edge of a route."""
+    routes = list(routes)
+    return sorted(e.getID() for e in net.getEdges(withInternal=True)
+                  if e.getFunction() == "crossing"
+                  and any(c.getID() in route for route in routes for c in e.getCrossingEdges()))
+
+
+def crossing_choices(scenario: Scenario, pid: str, net_path: Path, roadmap: RoadMap) -> list[str]:
+    """The crossings over an automated vehicle's route that pedestrian ``pid`` of ``scenario``
+    can take from its start to its end, the shortest walk first (ties by id): the crossings
+    its ``crossing`` may name."""
+    net = _read_net(net_path) if roadmap.net is None else roadmap.net
+    ped = scenario.pedestrians[pid]
+    graph = WalkGraph(net)
+    routes = [av.route_edges for av in present(scenario.automated).values()]
+    walks = []
+    for crossing in route_crossings(net, routes):
+        path = pedestrian_path(net, (ped.start_edge, ped.start_pos_m),
+                               (ped.end_edge, ped.end_pos_m), [crossing], graph)
+        if path is not None:
+            walks.append((walk_length(net, path, ped.start_pos_m, ped.end_pos_m), crossing))
+    return [crossing for _, crossing in sorted(walks)]
 
 
 def pedestrian_path(net: sumolib.net.Net, start: tuple[str, float], end: tuple[str, float],

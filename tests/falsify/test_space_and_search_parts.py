@@ -19,22 +19,25 @@ from sse_cosim.falsify.objectives import (
 from sse_cosim.falsify.searchers import SEARCHERS, generation_size
 from sse_cosim.falsify.space import (
     COUNTED_BREAKS,
+    CrossingEntry,
     DimEntry,
     FalsifyFile,
     LatencyEntry,
+    LossEntry,
     PresentEntry,
     build_space,
     load_falsify_file,
     scenario_of,
 )
 from sse_cosim.runner.safety import ActorPlanner
-from sse_cosim.scenario.loader import load_scenario_data
+from sse_cosim.scenario.loader import load_scenario, load_scenario_data
 
 ROOT = Path(__file__).resolve().parents[2]
 SPACE = ROOT / "sweeps" / "falsify.toml"
 S1 = ROOT / "scenarios" / "s1_pedestrian.toml"
 S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
 CROWD = ROOT / "scenarios" / "crowd.toml"
+JUNCTION = ROOT / "scenarios" / "junction.toml"
 
 
 def _space(scenario: Path, spec: FalsifyFile | None = None):
@@ -127,6 +130,49 @@ def test_the_crowd_box_chooses_who_of_its_pedestrians_steps_out():
                                          _walk_7_3_s)
     kept = [pid for pid, ped in scenario.pedestrians.items() if ped.present]
     assert kept == pedestrians[1::2] and overrides["pedestrians.pedestrian.present"] is False
+
+
+def _crossing_space(scenario: Path, pedestrians: str, planner: ActorPlanner):
+    spec = FalsifyFile(crossing=CrossingEntry(pedestrians=pedestrians),
+                       loss=LossEntry(longest_s=1.0))
+    return build_space(spec, load_scenario_data(scenario), str(scenario), "box",
+                       planner.crossings)
+
+
+def test_a_crossing_box_chooses_each_pedestrians_zebra_among_those_over_the_route():
+    planner = ActorPlanner()
+    space = _crossing_space(JUNCTION, "w*", planner)
+    names = [d.name for d in space.dims]
+    assert [n for n in names if n.startswith("crossing_")] == [
+        "crossing_w1", "crossing_w2", "crossing_w3"]
+    zebras = planner.crossings(load_scenario(JUNCTION), str(JUNCTION), "w1")
+    assert len(zebras) == 4 and zebras[0] == ":J_c3"  # its own west arm: the shortest walk
+    data, at = load_scenario_data(JUNCTION), names.index("crossing_w1")
+    for value, index in ((0.0, 0), (0.3, 1), (0.74, 2), (1.0, 3)):
+        unit = np.zeros(space.size)
+        unit[at] = value
+        _, overrides, scenario = scenario_of(space, data, unit, str(JUNCTION), _walk_7_3_s)
+        assert scenario.pedestrians["w1"].crossing == zebras[index]
+        assert overrides["pedestrians.w2.crossing"] == zebras[0]
+
+
+def test_a_pedestrian_with_one_zebra_over_the_route_has_no_crossing_to_choose():
+    names = [d.name for d in _crossing_space(S3, "*", ActorPlanner()).dims]
+    assert not any(n.startswith("crossing_") for n in names) and len(names) == 4
+
+
+@pytest.mark.sumo
+def test_the_planner_walks_the_pedestrian_over_each_zebra_it_may_choose():
+    # w1 steps out at 22 s; the walk to any of the four zebras takes at most 15 s
+    planner = ActorPlanner()
+    space, data = _crossing_space(JUNCTION, "w1", planner), load_scenario_data(JUNCTION)
+    chosen = set()
+    for value in (0.0, 0.3, 0.6, 1.0):
+        _, _, scenario = scenario_of(space, data, np.full(space.size, value), str(JUNCTION),
+                                     _walk_7_3_s)
+        assert planner(scenario, str(JUNCTION)) is None
+        chosen.add(scenario.pedestrians["w1"].crossing)
+    assert len(chosen) == 4
 
 
 def test_a_step_out_pedestrian_left_out_of_the_scene_gets_no_step_out():
