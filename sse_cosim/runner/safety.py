@@ -250,13 +250,21 @@ class CampaignPlan:
     not_feasible: tuple[NotFeasible, ...]
 
 
+def _is_step_out(field: str) -> bool:
+    """Whether ``field`` is some pedestrian's ``steps_onto_crossing_s``."""
+    table, _, name = STEP_OUT_PATH.split(".")
+    parts = field.split(".")
+    return len(parts) == 3 and parts[0] == table and parts[2] == name
+
+
 class ActorPlanner:
     """Feasibility by the project's own demand planner, on the real road network.
 
     Each network is built (or found in the cache) once. A scenario is infeasible when the
-    planner refuses its step-out time (the pedestrian cannot walk to the zebra by then); the
-    reason is the planner's. Any other refusal (a truck off the parking strip) is a mistake
-    in the grid, not a case that cannot happen, and stops the campaign.
+    planner refuses a pedestrian's step-out time (it cannot walk to its zebra by then: a
+    campaign's pedestrian starting far behind, or a falsify candidate's pedestrian sent to a
+    far zebra); the reason is the planner's. Any other refusal (a truck off the parking strip)
+    is a mistake in the grid, not a case that cannot happen, and stops the campaign.
     """
 
     def __init__(self) -> None:
@@ -269,7 +277,7 @@ class ActorPlanner:
         try:
             demand.plan_actors(scenario, net_path, roadmap, source)
         except UserError as exc:
-            if exc.field != STEP_OUT_PATH:
+            if not _is_step_out(exc.field):
                 raise
             return exc.problem
         return None

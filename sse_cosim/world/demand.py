@@ -594,7 +594,7 @@ def pedestrian_path(net: sumolib.net.Net, start: tuple[str, float], end: tuple[s
     first in ``crossings`` order whose walk is shortest wins, as when every crossing is tried.
     """
     graph = WalkGraph(net) if graph is None else graph
-    avoid = frozenset(crossings)
+    avoid = frozenset(graph.crossings)  # no other zebra before or after it: one crossing only
     firsts = graph.tree(start[0], avoid)
     to_end = graph.costs_to(end[0], avoid)
     end_length = graph.length[end[0]]

@@ -89,6 +89,21 @@ def test_every_walk_is_the_one_trying_every_crossing_gives(net: sumolib.net.Net)
     assert compared > 0
 
 
+def test_a_walk_over_one_named_crossing_takes_no_other(net: sumolib.net.Net) -> None:
+    """A pedestrian whose ``crossing`` names a zebra crosses the road there and nowhere else
+    (its walk once reached the named zebra over another one, which the world then took for
+    its crossing): every walk over one crossing has exactly that crossing in it."""
+    graph = WalkGraph(net)
+    walked = 0
+    for start, end in itertools.permutations(_sidewalks(net), 2):
+        for crossing in graph.crossings:
+            path = demand.pedestrian_path(net, (start, 0.0), (end, 0.0), [crossing], graph)
+            if path is not None:
+                assert [e for e in path if graph.function[e] == "crossing"] == [crossing]
+                walked += 1
+    assert walked > 0
+
+
 def test_a_walk_takes_two_searches_and_one_per_crossing_that_can_win(
         net: sumolib.net.Net) -> None:
     graph = WalkGraph(net)
