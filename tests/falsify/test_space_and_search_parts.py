@@ -38,6 +38,7 @@ S1 = ROOT / "scenarios" / "s1_pedestrian.toml"
 S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
 CROWD = ROOT / "scenarios" / "crowd.toml"
 JUNCTION = ROOT / "scenarios" / "junction.toml"
+TOWN = ROOT / "scenarios" / "town.toml"
 
 
 def _space(scenario: Path, spec: FalsifyFile | None = None):
@@ -358,16 +359,20 @@ def test_cma_closes_in_on_a_minimum_that_random_search_only_stumbles_near():
 
 @pytest.mark.parametrize("box, scenario", [
     ("falsify.toml", S3), ("falsify_pause.toml", S3), ("falsify_turn.toml", S3),
-    ("falsify_crowd.toml", CROWD)])
+    ("falsify_crowd.toml", CROWD), ("falsify_crossing.toml", TOWN)])
 def test_every_committed_box_builds_and_its_corners_are_scenarios(box, scenario):
     """Each falsify file of sweeps/ on the scenario its header names: the box builds (its
     corners validated), and a point decodes into a scenario with the box's fields."""
     path = ROOT / "sweeps" / box
     spec = load_falsify_file(path)
-    space = build_space(spec, load_scenario_data(scenario), str(scenario), str(path))
+    space = build_space(spec, load_scenario_data(scenario), str(scenario), str(path),
+                        ActorPlanner().crossings)
     values, _, decoded = scenario_of(space, load_scenario_data(scenario),
                                      np.full(space.size, 0.5), str(scenario), _walk_7_3_s)
     assert {d.name for d in spec.dims} <= values.keys()
+    if box == "falsify_crossing.toml":
+        assert [c.pedestrian for c in space.crossings] == ["pedestrian"]
+        assert len(space.crossings[0].choices) == 8
     if box == "falsify_turn.toml":
         ped = decoded.pedestrians["pedestrian"]
         assert ped.turn_back_after_s == 3.0 and ped.turn_back_wait_s == 4.0
