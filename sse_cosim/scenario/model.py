@@ -237,6 +237,17 @@ class Estimator(StrictModel):
         "true motion keeps it; a run that breaks it stops (exit status 5) naming the jitter its "
         "walk needs, unless breaks_assumptions lists 'pedestrian_speed'.",
     )
+    junction_ground_margin_m: NonNegativeFloat = Field(
+        0.0,
+        description="How far beyond each junction's walking areas, crossings and measured "
+        "ground patch a pedestrian's centre may be (m): the walkable ground the estimator "
+        "assumes grows by it there. SUMO's lone walkers measure where a walker leaves the "
+        "drawn ground; walkers that meet on a walking area push each other farther (a crowd "
+        "sets it, as it sets a larger position_jitter_m). Every step checks that each "
+        "pedestrian's true centre is on the walkable ground; a run in which one is off it "
+        "stops (exit status 5) naming how far off, unless breaks_assumptions lists "
+        "'walkable_ground'.",
+    )
     max_velocity_change_mps: PositiveFloat = Field(
         5.0,
         description="Bound on a velocity component's change per step (m/s); constant velocity.",

@@ -14,7 +14,8 @@ number of crossings, none included; the road map holds them all.
 centre is: the sidewalks, walking areas and crossings, and the patches where SUMO's lone
 walkers were measured to leave them (``ground_patches``, :mod:`sse_cosim.world.walker_jitter`;
 the world fills them before a run, :meth:`RoadMap.with_ground_patches`, and checks every step
-that each pedestrian is on it).
+that each pedestrian is on it), with the junctions' ground grown by the scenario's
+``estimator.junction_ground_margin_m`` (a crowd pushes walkers off it).
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ import shapely
 import sumolib
 
 from sse_cosim.errors import UserError
+from sse_cosim.regions.polygon import PolygonRegion
 from sse_cosim.world.extent import SceneExtent, scene_extent
 
 if TYPE_CHECKING:
@@ -91,7 +93,9 @@ class RoadMap:
     scene (:func:`load_scene_roadmap`) holds the edges near it only
     (:mod:`sse_cosim.world.extent`), and ``net`` the network it was read from.
     ``ground_patches[node]`` is the ground SUMO's lone walkers were measured to need beyond
-    the plain :attr:`ground` at a junction (none measured: empty).
+    the plain :attr:`ground` at a junction (none measured: empty); ``walking_areas`` the union
+    of the walking areas; ``junction_margin_m`` how far the junctions' ground (walking areas,
+    crossings, patches) is grown in :attr:`walkable`.
     """
 
     net_path: Path
@@ -107,6 +111,8 @@ class RoadMap:
     # junction: a left turn waiting inside the junction)
     internal_next: dict[str, str] = field(default_factory=dict)
     ground_patches: dict[str, shapely.Geometry] = field(default_factory=dict)
+    walking_areas: shapely.Geometry = field(default_factory=shapely.Polygon)
+    junction_margin_m: float = 0.0
     net: sumolib.net.Net | None = field(default=None, compare=False, repr=False)
 
     @functools.cached_property
@@ -117,13 +123,21 @@ class RoadMap:
     @functools.cached_property
     def walkable(self) -> shapely.Geometry:
         """The walkable ground every consumer uses: :attr:`ground` and the measured patches,
-        so it holds every position SUMO's lone walkers were measured at."""
+        so it holds every position SUMO's lone walkers were measured at, and the junctions'
+        ground grown by :attr:`junction_margin_m` (a mitred offset, which holds the disc's:
+        :meth:`~sse_cosim.regions.PolygonRegion.dilate`)."""
         patches = [self.ground_patches[node] for node in sorted(self.ground_patches)]
-        return shapely.union_all([self.ground, *patches]) if patches else self.ground
+        parts = [self.ground, *patches]
+        if self.junction_margin_m > 0:
+            junctions = shapely.union_all([self.walking_areas, self.crossing_area, *patches])
+            parts.append(PolygonRegion(junctions).dilate(self.junction_margin_m).shape)
+        return shapely.union_all(parts) if len(parts) > 1 else self.ground
 
-    def with_ground_patches(self, patches: dict[str, shapely.Geometry]) -> RoadMap:
-        """This road map with ``patches`` (junction -> ground) as its ``ground_patches``."""
-        return replace(self, ground_patches=dict(patches))
+    def with_ground_patches(self, patches: dict[str, shapely.Geometry],
+                            junction_margin_m: float = 0.0) -> RoadMap:
+        """This road map with ``patches`` (junction -> ground) as its ``ground_patches`` and
+        the junctions' ground grown by ``junction_margin_m`` in :attr:`walkable`."""
+        return replace(self, ground_patches=dict(patches), junction_margin_m=junction_margin_m)
 
     @functools.cached_property
     def crossing_area(self) -> shapely.Geometry:
@@ -352,6 +366,7 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
                 driving[lane.getID()] = _geometry(lane)
     sidewalk_union = shapely.union_all(
         [g.polygon() for g in sidewalk.values()] + walking_areas)
+    walking_area_union = shapely.union_all(walking_areas)
     progress.say(f"road map: {len(edge_lengths)} edges "
                  f"{'in all' if extent is None else 'near the scene'}")
     return RoadMap(
@@ -365,6 +380,7 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
         edge_lengths=edge_lengths,
         junction_lanes=_junction_lanes(net, extent),
         internal_next=internal_next,
+        walking_areas=walking_area_union,
         net=None if extent is None else net,
     )
 

@@ -86,7 +86,8 @@ Walkable ground. The estimator assumes every pedestrian's centre lies on the roa
 walkable ground (:attr:`sse_cosim.world.roadmap.RoadMap.walkable`): sidewalks, walking areas and
 crossings, and the patches where SUMO's lone walkers were measured to leave them
 (:mod:`sse_cosim.world.walker_jitter`, measured before every run -- also in a study that sets
-its own jitter and breaks ``pedestrian_speed``). The world fills the road map's patches before
+its own jitter and breaks ``pedestrian_speed``), the junctions' ground grown by
+``estimator.junction_ground_margin_m``. The world fills the road map's patches before
 anything reads the road map, and ``step()`` checks every pedestrian's
 true centre against that ground: one off it stops the run with :class:`AssumptionBroken`
 (``walkable_ground``, exit status 5), unless the study lists ``walkable_ground`` in
@@ -313,7 +314,8 @@ class SumoWorld:
                                                              accel_mps2=self._accel))
             measured = self._measure()
             self.scenario = self._with_jitter(measured)
-        self._roadmap = self._roadmap.with_ground_patches(measured.ground_patches)
+        self._roadmap = self._roadmap.with_ground_patches(
+            measured.ground_patches, self.scenario.estimator.junction_ground_margin_m)
         shapely.prepare(self._roadmap.walkable)
         self._motion = self._motion_check()
         config = self._write_files()
@@ -594,7 +596,9 @@ class SumoWorld:
                 "checked against a truth outside its model",
                 "keep the pedestrian's walk (or the route file's person) on sidewalks, walking "
                 "areas and crossings -- SUMO's walkers were measured there alone, not in a "
-                "crowd or turning back -- or list "
+                "crowd or turning back -- or, for walkers that push each other off a walking "
+                f"area, set estimator.junction_ground_margin_m (now "
+                f"{self.roadmap.junction_margin_m:g} m) to at least how far off it was, or list "
                 f"'{GROUND_ASSUMPTION}' in breaks_assumptions in a study that breaks it on "
                 "purpose")
 
