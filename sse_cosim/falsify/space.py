@@ -11,8 +11,10 @@ scenario overrides:
   nothing in the scenario is not searched there.
 - ``[step_out]``: when a pedestrian steps onto the zebra, as the time it waits at its start
   beyond the earliest its walk allows: it steps out at its walk time (from its start at its
-  walking speed, timed by the project's planner) plus the wait, so every candidate can
-  happen (a step-out time searched directly leaves part of the box unreachable).
+  walking speed, to the zebra it crosses, timed by the project's planner) plus the wait, so
+  every candidate can happen (a step-out time searched directly leaves part of the box
+  unreachable). A name glob times every pedestrian it selects, each with its own wait (with
+  ``[crossing]``, each can then reach whichever zebra the search gives it).
 - ``[start_behind_truck]``: the pedestrian's start as an offset behind the parked truck's
   front, as in the safety campaign (so it stays hidden wherever the truck stands).
 - ``[noise]``: each selected sensor's error held toward a chosen point of its noise bound
@@ -64,6 +66,7 @@ FAULT_PREFIX = "falsify_"
 """Faults the search adds are named ``falsify_<sensor or node>``."""
 PRESENT_FROM = 0.5
 """A ``[present]`` pedestrian is in the scene where its value is at least this."""
+STEP_OUT_FIELD = "steps_onto_crossing_s"
 DECIMALS = 6
 """Decoded values are rounded to this many decimals (1 µs, 1 µm): run keys and the worst
 cases' scenario files stay readable and exact."""
@@ -92,7 +95,8 @@ class DimEntry(_FileModel):
 
 class StepOut(_FileModel):
     """``[step_out]``: pedestrian ``pedestrian`` waits [low, high] s at its start beyond the
-    earliest step-out its walk allows."""
+    earliest step-out its walk allows; a glob (``"*"``, ``"w?"``) gives every pedestrian it
+    selects a wait of its own, named ``<pedestrian>_<name>``."""
 
     name: str = Field("wait_s", min_length=1)
     pedestrian: str = Field("pedestrian", min_length=1)
@@ -182,6 +186,7 @@ class Dimension:
 class _Wait:
     pedestrian: str
     name: str  # its dimension's
+    derived: str  # the name of the step-out time it makes, among a point's values
 
 
 @dataclass(frozen=True)
@@ -205,16 +210,17 @@ class SearchSpace:
     """One scenario's search box and how a point of it becomes scenario overrides.
 
     ``dims`` in order: the ``[[dims]]`` that select something (``targets``: the concrete
-    paths each sets), the wait before the step-out (``step_out``: its pedestrian, if the
-    scenario has it), the start behind the truck (if the scenario has the truck), two per
-    noisy sensor (forward, lateral fraction of the bound), two per sender (loss start and
-    length), three per late sender (start, length, steps late), one per pedestrian of
-    ``[present]`` (in the scene from 0.5), one per pedestrian of ``[crossing]`` with a choice.
+    paths each sets), the waits before the step-outs (``step_outs``: one per pedestrian of
+    ``[step_out]`` the scenario has), the start behind the truck (if the scenario has the
+    truck), two per noisy sensor (forward, lateral fraction of the bound), two per sender
+    (loss start and length), three per late sender (start, length, steps late), one per
+    pedestrian of ``[present]`` (in the scene from 0.5), one per pedestrian of
+    ``[crossing]`` with a choice.
     """
 
     dims: tuple[Dimension, ...]
     targets: tuple[tuple[str, ...], ...]
-    step_out: _Wait | None
+    step_outs: tuple[_Wait, ...]
     truck_front_m: float | None
     noises: tuple[_Noise, ...]
     senders: tuple[str, ...]
@@ -236,12 +242,12 @@ class SearchSpace:
 
     def overrides(self, values: Mapping[str, float]) -> dict[str, Any]:
         """The scenario overrides (dotted path -> value) that realise ``values``, but for the
-        step-out time (:meth:`step_out_override`: it needs the walk they make)."""
+        step-out times (:meth:`step_out_overrides`: they need the walks they make)."""
         names = iter(d.name for d in self.dims)
         out: dict[str, Any] = dict(self.fixed)
         for paths in self.targets:
             out.update(dict.fromkeys(paths, values[next(names)]))
-        if self.step_out is not None:
+        for _ in self.step_outs:
             next(names)
         if self.truck_front_m is not None:
             out[START_PATH] = round(self.truck_front_m - values[next(names)], DECIMALS)
@@ -271,19 +277,18 @@ class SearchSpace:
             out[f"pedestrians.{choice.pedestrian}.crossing"] = choice.chosen(values[next(names)])
         return out
 
-    def step_out_override(self, values: Mapping[str, float],
-                          walk_s: Mapping[str, float]) -> dict[str, float]:
-        """The step-out time of the ``[step_out]`` pedestrian: its walk (``walk_s``: pedestrian
-        -> s, as the planner times the scenario of :meth:`overrides`) plus its wait; empty
-        without a ``[step_out]`` or when ``[present]`` left its pedestrian out."""
-        if self.step_out is None or self.step_out.pedestrian not in walk_s:
-            return {}
-        who = self.step_out.pedestrian
-        return {step_out_path(who): round(walk_s[who] + values[self.step_out.name], DECIMALS)}
+    def step_out_overrides(self, values: Mapping[str, float],
+                           walk_s: Mapping[str, float]) -> dict[str, float]:
+        """The step-out time of each ``[step_out]`` pedestrian: its walk (``walk_s``:
+        pedestrian -> s, as the planner times the scenario of :meth:`overrides`) plus its
+        wait; none for a pedestrian ``[present]`` left out (the planner times no walk)."""
+        return {step_out_path(w.pedestrian): round(walk_s[w.pedestrian] + values[w.name],
+                                                   DECIMALS)
+                for w in self.step_outs if w.pedestrian in walk_s}
 
 
 def step_out_path(pedestrian: str) -> str:
-    return f"pedestrians.{pedestrian}.steps_onto_crossing_s"
+    return f"pedestrians.{pedestrian}.{STEP_OUT_FIELD}"
 
 
 CrossingChoices = Callable[[Scenario, str, str], Sequence[str]]
@@ -310,14 +315,12 @@ def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
         if paths:
             dims.append(Dimension(entry.name, entry.low, entry.high))
             targets.append(tuple(paths))
-    step_out = spec.step_out
-    waiting = None
-    if step_out is not None and step_out.pedestrian in scenario.pedestrians:
-        if any(step_out_path(step_out.pedestrian) in paths for paths in targets):
-            raise UserError(spec_source, "step_out", f"{step_out_path(step_out.pedestrian)} "
+    waits = _waits(spec, fields)
+    for wait in waits:
+        if any(step_out_path(wait.pedestrian) in paths for paths in targets):
+            raise UserError(spec_source, "step_out", f"{step_out_path(wait.pedestrian)} "
                             "is searched by [[dims]] too", "search it in one place")
-        dims.append(Dimension(step_out.name, step_out.low, step_out.high))
-        waiting = _Wait(step_out.pedestrian, step_out.name)
+        dims.append(Dimension(wait.name, spec.step_out.low, spec.step_out.high))
     truck = scenario.parked.get(TRUCK)
     truck_front = None
     behind = spec.start_behind_truck
@@ -347,10 +350,24 @@ def build_space(spec: FalsifyFile, data: Mapping[str, Any], source: str,
         raise UserError(spec_source, "dims", f"selects {len(dims)} value(s) in {source}",
                         "a search needs at least two: add dims that name this scenario's "
                         "fields (`sse-cosim fields` lists them)")
-    space = SearchSpace(tuple(dims), tuple(targets), waiting, truck_front, noises, senders,
+    space = SearchSpace(tuple(dims), tuple(targets), waits, truck_front, noises, senders,
                         late, scenario.simulation.step_length_s, counted, present, choices)
     _check_corners(space, data, source, spec_source)
     return space
+
+
+def _waits(spec: FalsifyFile, fields: Mapping[str, Any]) -> tuple[_Wait, ...]:
+    """The pedestrians ``[step_out]`` selects in the scenario (``fields``: its dump), each with
+    its wait's name: the file's own for a pedestrian named outright, ``<pedestrian>_<name>``
+    for each one a glob selects."""
+    if spec.step_out is None:
+        return ()
+    who, name = spec.step_out.pedestrian, spec.step_out.name
+    found = [path.split(".")[1] for path in selected_paths(
+        step_out_path(who), fields, "")]
+    if found == [who]:
+        return (_Wait(who, name, STEP_OUT_FIELD),)
+    return tuple(_Wait(pid, f"{pid}_{name}", f"{pid}_{STEP_OUT_FIELD}") for pid in found)
 
 
 def _noises(spec: FalsifyFile, scenario: Scenario,
@@ -423,11 +440,12 @@ def scenario_of(space: SearchSpace, data: Mapping[str, Any], unit: Sequence[floa
     values = space.values(unit)
     overrides = space.overrides(values)
     scenario = validate_scenario(apply_overrides(data, overrides, source), source)
-    step_out = space.step_out_override(values, walk_times(scenario, source)
-                                       if space.step_out is not None else {})
-    if not step_out:
+    step_outs = space.step_out_overrides(values, walk_times(scenario, source)
+                                         if space.step_outs else {})
+    if not step_outs:
         return values, overrides, scenario
-    overrides.update(step_out)
-    derived = {path.rsplit(".", 1)[1]: value for path, value in step_out.items()}
+    overrides.update(step_outs)
+    derived = {w.derived: step_outs[step_out_path(w.pedestrian)] for w in space.step_outs
+               if step_out_path(w.pedestrian) in step_outs}
     return ({**values, **derived}, overrides,
             validate_scenario(apply_overrides(data, overrides, source), source))

@@ -224,6 +224,34 @@ def test_every_point_of_the_box_can_happen():
         assert values["steps_onto_crossing_s"] >= values["wait_s"]
 
 
+@pytest.mark.sumo
+def test_a_step_out_glob_times_every_pedestrian_so_that_any_zebra_can_be_reached():
+    """On the junction each pedestrian waits its own time beyond its walk to the zebra the
+    search gives it: at the box's corners (every pedestrian at its own zebra, every one at
+    its farthest) and inside, the planner refuses no candidate."""
+    planner = ActorPlanner()
+    box = ROOT / "sweeps" / "falsify_junction.toml"
+    data = load_scenario_data(JUNCTION)
+    space = build_space(load_falsify_file(box), data, str(JUNCTION), str(box),
+                        planner.crossings)
+    everyone = sorted(load_scenario(JUNCTION).pedestrians)
+    assert sorted(w.pedestrian for w in space.step_outs) == everyone
+    names = [d.name for d in space.dims]
+    assert {f"{pid}_wait_s" for pid in everyone} <= set(names)
+    units = [np.zeros(space.size), np.ones(space.size),
+             *np.random.default_rng(5).uniform(size=(3, space.size))]
+    for unit in units:
+        values, _, scenario = scenario_of(space, data, unit, str(JUNCTION), planner.walk_times)
+        assert planner(scenario, str(JUNCTION)) is None
+        for pid in everyone:
+            step_out = scenario.pedestrians[pid].steps_onto_crossing_s
+            assert values[f"{pid}_steps_onto_crossing_s"] == step_out
+            assert step_out >= values[f"{pid}_wait_s"]
+    farthest = scenario_of(space, data, np.ones(space.size), str(JUNCTION),
+                           planner.walk_times)[2]
+    assert farthest.pedestrians["w1"].crossing == space.crossings[0].choices[-1]
+
+
 def test_a_falsify_file_with_a_bad_field_is_one_line_naming_it(tmp_path: Path):
     bad = tmp_path / "bad.toml"
     bad.write_text('[[dims]]\npath = "x"\nname = "x"\nlow = 2.0\nhigh = 1.0\n')
@@ -359,7 +387,8 @@ def test_cma_closes_in_on_a_minimum_that_random_search_only_stumbles_near():
 
 @pytest.mark.parametrize("box, scenario", [
     ("falsify.toml", S3), ("falsify_pause.toml", S3), ("falsify_turn.toml", S3),
-    ("falsify_crowd.toml", CROWD), ("falsify_crossing.toml", TOWN)])
+    ("falsify_crowd.toml", CROWD), ("falsify_crossing.toml", TOWN),
+    ("falsify_junction.toml", JUNCTION)])
 def test_every_committed_box_builds_and_its_corners_are_scenarios(box, scenario):
     """Each falsify file of sweeps/ on the scenario its header names: the box builds (its
     corners validated), and a point decodes into a scenario with the box's fields."""
