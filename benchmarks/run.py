@@ -15,6 +15,7 @@ from pathlib import Path
 
 from benchmarks import (
     baseline,
+    campaign,
     cluster,
     crowd,
     gain_methods,
@@ -105,6 +106,7 @@ def run_all(out: Path, quick: bool = False, log: Callable[[str], None] = print,
                                                dask=not quick))
     stage("cluster", lambda: cluster.run(runs=10 if quick else 1000,
                                          duration_s=0.5 if quick else 3.0))
+    stage("campaign", lambda: campaign.run(quick=quick, duration_s=1.0 if quick else None))
     results["total_seconds"] = time.perf_counter() - started
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(out / "benchmarks.json", json.dumps(results, indent=2, default=float) + "\n")

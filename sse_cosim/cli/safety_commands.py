@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shlex
+import time
 from pathlib import Path
 
 import click
@@ -75,8 +76,10 @@ def safety(campaign_file: Path, out_dir: Path | None, workers: int | None, execu
     click.echo(f"safety: {len(plan.runs) + len(plan.not_feasible)} combinations: "
                f"{len(plan.runs)} runs, {len(plan.not_feasible)} not feasible (not run) "
                f"-> {out_dir}")
+    started = time.perf_counter()
     run_campaign(campaign, plan, out_dir, _command(campaign_file, out_dir, quick, only),
                  Execution(workers, executor, scheduler, resume))
+    click.echo(f"safety: the runs took {_duration(time.perf_counter() - started)}")
     report = write_safety_report(out_dir)
     for target in report.targets:
         click.echo(f"  {target.verdict:9} {target.label}: {target.measured}")
@@ -108,3 +111,10 @@ def _command(campaign_file: Path, out_dir: Path, quick: bool, only: tuple[str, .
     for stem in only:
         args += ["--scenario", stem]
     return shlex.join([*args, *(["--quick"] if quick else [])])
+
+
+def _duration(seconds: float) -> str:
+    """``seconds`` as h:mm:ss or mm:ss (tqdm's format, as in the progress bar)."""
+    from tqdm import tqdm
+
+    return tqdm.format_interval(seconds)

@@ -36,14 +36,15 @@ def test_every_benchmark_runs_and_reports(quick):
     _, out = quick
     data = json.loads((out / "benchmarks.json").read_text())
     for key in ("machine", "gain_methods", "kernels", "loop_cost", "tightness", "baseline",
-                "soundness", "scaling", "crowd", "throughput", "cluster"):
+                "soundness", "scaling", "crowd", "throughput", "cluster", "campaign"):
         assert key in data, key
     assert {"cpu", "cores", "python", "sumo"} <= set(data["machine"])
     assert data["command"].endswith("--quick")
     text = (out / "benchmarks.md").read_text()
     assert "## Targets" in text and "bare SUMO" in text and "libsumo alone" in text
     assert "Dask cluster" in text and "many pedestrians" in text
-    assert "`make safety` (the whole campaign), minutes on 2 cores | not measured" in text
+    assert "## 8. The safety campaign, projected" in text
+    assert "| 8 `make safety` (the whole campaign), minutes on 2 cores, projected | " in text
 
 
 def test_the_cluster_sweep_gives_the_local_pools_rows(quick):
@@ -86,7 +87,7 @@ def test_independent_lp_catches_a_point_outside():
 
 
 def test_a_missed_cost_target_says_how_much_of_the_step_must_go():
-    from benchmarks.report import _summary
+    from benchmarks.report import SAFETY_ROW, _summary
     from benchmarks.run import TARGETS
 
     labelled = {"ratio_to_libsumo": 350.0, "us_per_step": 700.0,
@@ -118,6 +119,35 @@ def test_a_missed_cost_target_says_how_much_of_the_step_must_go():
     assert "3b anonymous / labelled detections, crowd" not in missed  # 1.2× is met
     assert rows["3b anonymous / labelled detections, crowd"].endswith("| **met** |")
     for info in ("1 bare SUMO through `SumoWorld` (the project's snapshot) / libsumo alone",
-                 "`make safety` (the whole campaign), minutes on 2 cores"):
+                 SAFETY_ROW):
         assert rows[info].endswith("|  |")  # information, no verdict
-    assert "| not measured |" in rows["`make safety` (the whole campaign), minutes on 2 cores"]
+    assert "| not measured |" in rows[SAFETY_ROW]  # without item 8
+
+
+def test_the_campaign_projection_counts_every_run_on_two_workers():
+    """Item 8: planning + runs x one run's time per scenario / item 4's speed-up; a missed
+    target says how many minutes must go and which scenario's runs are the largest part."""
+    from benchmarks.report import SAFETY_ROW, _summary, markdown
+    from benchmarks.run import TARGETS
+
+    campaign = {"campaign": "sweeps/safety.toml", "quick": False, "duration_s": None,
+                "planning_seconds": 120.0, "runs": 300, "not_feasible": 10,
+                "scenarios": {"s1_pedestrian": {"runs": 200, "sample": "a", "run_seconds": 3.0,
+                                                "serial_minutes": 10.0},
+                              "crowd": {"runs": 100, "sample": "b", "run_seconds": 54.0,
+                                        "serial_minutes": 90.0}}}
+    throughput = {"configs": {"local_2": {"speedup_vs_1_worker": 1.6}}}
+    results = {"campaign": campaign, "throughput": throughput}
+    lines = _summary(results, TARGETS)
+    row = next(line for line in lines if line.startswith(f"| {SAFETY_ROW} "))
+    assert row == f"| {SAFETY_ROW} | 64 | ≤ 60 | **not met** |"  # 2 + 100 / 1.6 = 64.5
+    missed = next(line for line in lines if line.startswith(f"- **{SAFETY_ROW}**"))
+    assert "it takes 64, so 4 minutes must go" in missed and "`crowd`'s runs, takes 56" in missed
+    campaign["scenarios"]["crowd"]["serial_minutes"] = 50.0  # 2 + 60 / 1.6 = 39.5: met
+    row = next(line for line in _summary(results, TARGETS) if line.startswith(f"| {SAFETY_ROW} "))
+    assert row.endswith("| 40 | ≤ 60 | **met** |")
+    text = markdown({"campaign": campaign, "machine": {k: "x" for k in (
+        "cpu", "cores", "python", "sumo", "numpy", "scipy", "shapely", "cvxpy", "platform")},
+        "targets": TARGETS, "command": "sse-cosim bench", "total_seconds": 1.0})
+    assert "| crowd | 100 | 54.0 | 50.0 | 83 % |" in text
+    assert "two workers counted as twice one (item 4 not run) = **32 min**" in text

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -30,6 +31,7 @@ def test_quick_runs_writes_the_report_and_says_which_targets_hold(tmp_path):
          "--workers", "2"],
         capture_output=True, text=True, cwd=ROOT, check=False, timeout=120)
     assert proc.returncode == 0, proc.stderr  # every target met on the quick runs
+    assert re.search(r"^safety: the runs took \d\d:\d\d$", proc.stdout, re.M), proc.stdout
     table = pd.read_csv(out / "safety.csv")
     assert table["status"].value_counts().to_dict() == {"ok": 2, "not feasible": 2}
     assert len(list((out / "runs").iterdir())) == 2
