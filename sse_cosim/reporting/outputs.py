@@ -84,7 +84,8 @@ def write_run(
     outcome for the summary (``assumption_breaks`` of a study that runs on with them).
     """
     out_dir.mkdir(parents=True, exist_ok=True)
-    write_json_atomic(out_dir / SCENARIO, {"source": source, **_portable(scenario, out_dir)})
+    write_json_atomic(out_dir / SCENARIO,
+                      {"source": source, **portable_scenario(scenario, out_dir)})
     if not summary_only:
         # pandas and matplotlib load only here: a sweep's summary-only runs skip ~1 s of imports
         import pandas as pd
@@ -110,7 +111,15 @@ def write_run(
     return summary
 
 
-def _portable(scenario: Scenario, out_dir: Path) -> dict:
+def read_scenario_record(folder: Path) -> dict | None:
+    """The run folder's ``scenario.json`` (None if missing or unreadable)."""
+    try:
+        return json.loads((folder / SCENARIO).read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError):
+        return None
+
+
+def portable_scenario(scenario: Scenario, out_dir: Path) -> dict:
     """The resolved scenario with its network's paths relative to the run folder, where the
     loader looks for them (the file that sets them), so that no machine path is recorded."""
     data = scenario.model_dump(mode="json")

@@ -21,6 +21,7 @@ from sse_cosim.runner.tasks import (
     RunTask,
     WorkerPool,
     finished_outcome,
+    ran_as_planned,
     run_batch_in_worker,
 )
 
@@ -54,10 +55,18 @@ def execute(
     in order."""
     done: dict[str, TaskOutcome] = {}
     if execution.resume:
+        stale = 0
         for task in tasks:
             outcome = finished_outcome(task)
             if outcome is not None and outcome.ok:
-                done[task.key] = outcome
+                if ran_as_planned(task):
+                    done[task.key] = outcome
+                else:
+                    stale += 1
+        if stale:
+            tqdm.write(f"{description}: {stale} finished run(s) recorded another scenario "
+                       "than their file and overrides give today (the file edited, or the "
+                       "schema grown since): made again")
     todo = [t for t in tasks if t.key not in done]
     workers = execution.workers or default_workers()
     bar = tqdm(total=len(tasks), initial=len(done), desc=description, unit="run",

@@ -33,7 +33,14 @@ from pathlib import Path
 from typing import IO, Any
 
 from sse_cosim.files import write_json_atomic
-from sse_cosim.reporting.outputs import ERROR, SUMMARY, TaskOutcome, read_outcome
+from sse_cosim.reporting.outputs import (
+    ERROR,
+    SUMMARY,
+    TaskOutcome,
+    portable_scenario,
+    read_outcome,
+    read_scenario_record,
+)
 
 TASKS_PER_WORKER = 100  # then a fresh process: no slow build-up over long sweeps
 
@@ -65,6 +72,44 @@ class RunTask:
 def finished_outcome(task: RunTask) -> TaskOutcome | None:
     """The outcome recorded in the task's folder, if the task already ran to its end."""
     return read_outcome(task.key, Path(task.out_dir))
+
+
+def ran_as_planned(task: RunTask) -> bool:
+    """Whether the task's folder records the scenario the task would run now.
+
+    A run key names a scenario file, its overrides and its seed, not the file's content: a
+    finished run of a scenario file edited since, or written before a field was added to
+    the schema, has the same key. ``--resume`` keeps a run only if its ``scenario.json`` is
+    what the task resolves to today.
+    """
+    from sse_cosim.errors import UserError
+    from sse_cosim.scenario.loader import load_scenario
+
+    folder = Path(task.out_dir)
+    recorded = read_scenario_record(folder)
+    try:
+        scenario = load_scenario(task.scenario, task.overrides)
+    except UserError:  # the file no longer loads: the run is made again and says why
+        return False
+    if recorded is None:
+        return False
+    recorded.pop("source", None)  # where the file was read from, not what it says
+    return _agrees(recorded, portable_scenario(scenario, folder))
+
+
+def _agrees(recorded: Any, planned: Any) -> bool:
+    """Whether a recorded scenario (or a part of it) is the planned one. A field the plan
+    leaves None is the run's to fill (``estimator.position_jitter_m``: measured on the
+    network), so any recorded value agrees with it."""
+    if planned is None:
+        return True
+    if isinstance(planned, dict):
+        return (isinstance(recorded, dict) and recorded.keys() == planned.keys()
+                and all(_agrees(recorded[k], v) for k, v in planned.items()))
+    if isinstance(planned, list):
+        return (isinstance(recorded, list) and len(recorded) == len(planned)
+                and all(_agrees(r, v) for r, v in zip(recorded, planned, strict=True)))
+    return recorded == planned
 
 
 class WorkerProcess:
