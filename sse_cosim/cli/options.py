@@ -36,6 +36,10 @@ def check_scheduler(executor: str, scheduler: str | None) -> None:
                         "add --executor dask or drop --scheduler")
 
 
+RESUME_CHECK = (" A finished run is kept only if its scenario.json is what its scenario file "
+                "and overrides give today (an edited file's runs are made again).")
+
+
 def execution_options(resume_help: str) -> Callable[[F], F]:
     """``--workers``, ``--executor``, ``--scheduler`` and ``--resume``: where the runs of a
     batch, a sweep or a campaign execute (the same for each)."""
@@ -48,7 +52,7 @@ def execution_options(resume_help: str) -> Callable[[F], F]:
             click.option("--scheduler", default=None,
                          help="Dask scheduler address (tcp://host:port); default: a local "
                               "cluster of --workers single-threaded processes."),
-            click.option("--resume", is_flag=True, help=resume_help),
+            click.option("--resume", is_flag=True, help=resume_help + RESUME_CHECK),
         ]):
             command = option(command)
         return command
