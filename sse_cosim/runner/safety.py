@@ -54,6 +54,7 @@ from sse_cosim.scenario.paths import expand_overrides, expand_pattern, selected_
 
 if TYPE_CHECKING:
     from sse_cosim.world.roadmap import RoadMap
+    from sse_cosim.world.walk_probe import ProbeTimer
 
 # The campaign moves the pedestrian ``pedestrian`` and the parked truck ``truck`` of each
 # scenario (the paper's ids); any other actor of a scenario stays as the scenario sets it.
@@ -269,13 +270,15 @@ class ActorPlanner:
 
     def __init__(self) -> None:
         self._networks: dict[str, tuple[Path, RoadMap]] = {}
+        self._timers: dict[tuple[Path, float | None], ProbeTimer] = {}
 
     def __call__(self, scenario: Scenario, source: str) -> str | None:
         from sse_cosim.world import demand
 
         net_path, roadmap = self._network(scenario.network, source)
         try:
-            demand.plan_actors(scenario, net_path, roadmap, source)
+            demand.plan_actors(scenario, net_path, roadmap, source,
+                               self._timer(scenario, net_path))
         except UserError as exc:
             if not _is_step_out(exc.field):
                 raise
@@ -288,7 +291,8 @@ class ActorPlanner:
         from sse_cosim.world import demand
 
         net_path, roadmap = self._network(scenario.network, source)
-        return demand.walk_times(scenario, net_path, roadmap, source)
+        return demand.walk_times(scenario, net_path, roadmap, source,
+                                 self._timer(scenario, net_path))
 
     def crossings(self, scenario: Scenario, source: str, pid: str) -> list[str]:
         """The crossings over an automated vehicle's route that pedestrian ``pid`` can take,
@@ -297,14 +301,30 @@ class ActorPlanner:
 
         return demand.crossing_choices(scenario, pid, *self._network(scenario.network, source))
 
+    def _timer(self, scenario: Scenario, net_path: Path) -> ProbeTimer:
+        """The network's lone-walker timer for the scenario's speed ramp, as
+        :func:`~sse_cosim.world.demand.plan_actors` would make it, kept with the times it has
+        taken (walks that repeat over the grid are walked once)."""
+        from sse_cosim.estimation.motion import acceleration_bound
+        from sse_cosim.world.walk_probe import ProbeTimer
+
+        accel = acceleration_bound(scenario.estimator, scenario.simulation.step_length_s)
+        if (net_path, accel) not in self._timers:
+            self._timers[net_path, accel] = ProbeTimer(net_path, accel_mps2=accel)
+        return self._timers[net_path, accel]
+
     def _network(self, network: Network, source: str) -> tuple[Path, RoadMap]:
         key = f"{network.sources_dir}|{network.net_file}"
         if key not in self._networks:
+            from sse_cosim.world.demand import read_net
             from sse_cosim.world.network import scenario_net_path
             from sse_cosim.world.roadmap import load_roadmap
 
             net_path = scenario_net_path(network, source)
-            self._networks[key] = (net_path, load_roadmap(net_path))
+            # with the network read once, not once per combination (the cached road map of
+            # a whole network does not keep it)
+            roadmap = replace(load_roadmap(net_path), net=read_net(net_path))
+            self._networks[key] = (net_path, roadmap)
         return self._networks[key]
 
 

@@ -147,7 +147,7 @@ def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: st
     :class:`~sse_cosim.world.walk_probe.ProbeTimer` of the network in a temporary folder,
     walking the speed ramp of the scenario's motion model if it bounds the acceleration: the
     safety campaign's feasibility is the run's)."""
-    net = _read_net(net_path) if roadmap.net is None else roadmap.net  # read once
+    net = net_of(net_path, roadmap)  # read once
     lanes = {vid: _check_automated(net, vid, av, source)
              for vid, av in present(scenario.automated).items()}
     for vid, parked in present(scenario.parked).items():
@@ -167,7 +167,7 @@ def walk_times(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: str
     """How long each pedestrian's walk takes from its start to its first step on its crossing
     (s, whole steps), as :func:`plan_actors` times it: the earliest ``steps_onto_crossing_s``
     it can make. UserError (naming ``source``) for a walk the network does not have."""
-    net = _read_net(net_path) if roadmap.net is None else roadmap.net
+    net = net_of(net_path, roadmap)
     return _timed_walks(scenario, net, net_path, source, timer)[1]
 
 
@@ -293,8 +293,14 @@ def _pedestrian(pid: str, ped: Pedestrian, plan: PedestrianPlan) -> Entry:
 # --- checks -------------------------------------------------------------------------------
 
 
-def _read_net(net_path: Path) -> sumolib.net.Net:
+def read_net(net_path: Path) -> sumolib.net.Net:
+    """The network at ``net_path`` as the planner reads it (internal edges, walking links)."""
     return sumolib.net.readNet(str(net_path), withInternal=True, withPedestrianConnections=True)
+
+
+def net_of(net_path: Path, roadmap: RoadMap) -> sumolib.net.Net:
+    """The network the road map holds (``roadmap.net``), or read from ``net_path``."""
+    return read_net(net_path) if roadmap.net is None else roadmap.net
 
 
 def _edge(net: sumolib.net.Net, edge_id: str, field: str, source: str) -> sumolib.net.edge.Edge:
@@ -563,7 +569,7 @@ def crossing_choices(scenario: Scenario, pid: str, net_path: Path, roadmap: Road
     """The crossings over an automated vehicle's route that pedestrian ``pid`` of ``scenario``
     can take from its start to its end, the shortest walk first (ties by id): the crossings
     its ``crossing`` may name."""
-    net = _read_net(net_path) if roadmap.net is None else roadmap.net
+    net = net_of(net_path, roadmap)
     ped = scenario.pedestrians[pid]
     graph = WalkGraph(net)
     routes = [av.route_edges for av in present(scenario.automated).values()]

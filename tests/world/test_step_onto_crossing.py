@@ -132,3 +132,33 @@ def test_a_pedestrian_off_its_time_stops_the_run(tmp_path: Path,
     for words in ("pedestrian 'pedestrian'", ":C_c0", "at 8.5 s", "stepped onto it at 7.50 s",
                   f"{PED}.steps_onto_crossing_s"):
         assert words in line, (words, line)
+
+
+def test_a_timer_walks_the_same_walks_once(net_path: Path, monkeypatch) -> None:
+    """The safety campaign asks its planner's timer for the same walks at every step-out time,
+    noise bound and seed: one SUMO session each, the same times, and a caller's copy."""
+    from sse_cosim.world import walk_probe
+
+    sessions: list[int] = []
+    real = walk_probe.walk_alone
+
+    def counted(*args, **kwargs):
+        sessions.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(walk_probe, "walk_alone", counted)
+    timer = ProbeTimer(net_path)
+    roadmap = load_roadmap(net_path)
+
+    def walk(**fields: object) -> float:
+        sc = scenario("s1_pedestrian", **{f"{PED}.steps_onto_crossing_s": 11.5, **fields})
+        return demand.plan_actors(sc, net_path, roadmap, "test",
+                                  timer).pedestrians["pedestrian"].walk_to_crossing_s
+
+    first = walk()
+    assert walk(**{"simulation.seed": 7, f"{PED}.steps_onto_crossing_s": 13.0}) == first
+    assert len(sessions) == 1  # the same walk: timed once
+    assert walk(**{f"{PED}.walking_speed_mps": 2.5}) < first and len(sessions) == 2
+    walks, step_s = next(iter(timer._timed))
+    timer(dict(walks), step_s).clear()  # a copy: the kept times stay
+    assert walk() == first and len(sessions) == 2
