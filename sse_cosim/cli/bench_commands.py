@@ -19,16 +19,18 @@ ROOT = Path(__file__).resolve().parents[2]
 @click.option("--quick", is_flag=True, help="A tiny version of each benchmark (smoke test).")
 @click.option("--only", multiple=True,
               type=click.Choice(["gain_methods", "kernels", "loop_cost", "tightness", "baseline",
-                                 "soundness", "scaling", "crowd", "throughput", "cluster"]),
+                                 "soundness", "scaling", "crowd", "throughput", "cluster",
+                                 "campaign"]),
               help="Run only this benchmark; repeatable.")
 def bench(out_dir: Path, quick: bool, only: tuple[str, ...]) -> None:
     """Benchmarks and validation: cost per step against bare SUMO, gain methods, scaling,
-    sweep throughput, tightness against the exact filter, the soundness campaign and the
-    Kalman-filter baseline.
+    sweep throughput, tightness against the exact filter, the soundness campaign, the
+    Kalman-filter baseline, and make safety's wall time projected from one timed run per
+    scenario (item 8).
 
     Writes OUT/benchmarks.json (every figure, the command and the machine) and
     OUT/benchmarks.md. Runs from a source checkout (it needs benchmarks/ and scenarios/);
-    the full set takes about ten minutes on two cores.
+    the full set takes about a quarter of an hour on two cores.
     """
     if not (ROOT / "benchmarks" / "run.py").is_file() or not (ROOT / "scenarios").is_dir():
         raise UserError(str(ROOT), "bench", "benchmarks/ or scenarios/ not found",
