@@ -53,7 +53,8 @@ def safety(campaign_file: Path, out_dir: Path | None, workers: int | None, execu
       containment violations (every set, region)   0
       runs that never finish the route             0
       longest standstill after the path is clear   <= 3 s
-    and, reported: minimum distance bus-pedestrian, average speed, time stopped.
+    and, reported: minimum distance bus-pedestrian (any pedestrian, and the campaign's
+    own, "pedestrian"), average speed, time stopped.
 
     OUT gets safety.json (the plan), runs/<key>/ (summary.json and scenario.json),
     safety.csv (one row per combination, those not run included) and two heat maps per

@@ -42,8 +42,13 @@ STANDSTILL = "longest_standstill_after_clear_s"
 MIN_DISTANCE = "min_distance_bus_pedestrian_m"
 SPEED = "average_speed_mps"
 STOPPED = "time_stopped_s"
+# The pedestrian the campaign moves (sse_cosim.runner.safety) and its own least distance to a
+# bus, read from the summary's ``pedestrians.<id>.min_distance_m``: where other pedestrians
+# walk nearer a bus (the crowd, the junction), MIN_DISTANCE is theirs, not the hard case's.
+CAMPAIGN_PEDESTRIAN = "pedestrian"
+OWN_DISTANCE = "min_distance_campaign_pedestrian_m"
 KEYS = (COLLISIONS, VIOLATIONS, VIOLATIONS_BY_SET, ROUTE_COMPLETED, STANDSTILL, MIN_DISTANCE,
-        SPEED, STOPPED)
+        OWN_DISTANCE, SPEED, STOPPED)
 MISSING = "missing_keys"  # table column: the keys a run's summary lacks (or gives as null)
 
 OK, FAILED, UNFINISHED, NOT_FEASIBLE = "ok", "failed", "missing", "not feasible"
@@ -89,12 +94,15 @@ def read_campaign(folder: Path) -> CampaignFolder:
 
 def run_figures(summary: Mapping[str, Any]) -> dict[str, Any]:
     """The campaign's figures of one summary: each key's value (``None`` where absent; the
-    per-set violations as JSON text) and, under :data:`MISSING`, the keys that are absent
-    or null (either way the run has no value for that figure)."""
+    per-set violations as JSON text; :data:`OWN_DISTANCE` from the campaign pedestrian's
+    entry) and, under :data:`MISSING`, the keys that are absent or null (either way the run
+    has no value for that figure)."""
     row: dict[str, Any] = {key: summary.get(key) for key in KEYS}
+    own = (summary.get("pedestrians") or {}).get(CAMPAIGN_PEDESTRIAN) or {}
+    row[OWN_DISTANCE] = own.get("min_distance_m")
     if row[VIOLATIONS_BY_SET] is not None:
         row[VIOLATIONS_BY_SET] = json.dumps(row[VIOLATIONS_BY_SET], sort_keys=True)
-    row[MISSING] = " ".join(key for key in KEYS if summary.get(key) is None)
+    row[MISSING] = " ".join(key for key in KEYS if row[key] is None)
     return row
 
 
@@ -116,7 +124,7 @@ def campaign_table(campaign: CampaignFolder) -> pd.DataFrame:
     for column in (COLLISIONS, VIOLATIONS):
         table[column] = table[column].astype("Int64")
     table[ROUTE_COMPLETED] = table[ROUTE_COMPLETED].astype("boolean")
-    for column in (STANDSTILL, MIN_DISTANCE, SPEED, STOPPED):
+    for column in (STANDSTILL, MIN_DISTANCE, OWN_DISTANCE, SPEED, STOPPED):
         table[column] = table[column].astype("Float64")
     table[MISSING] = table[MISSING].astype(object).fillna("").astype(str)
     return table
@@ -228,6 +236,7 @@ FIGURE_COLUMNS: dict[str, tuple[str, str]] = {
     "route not finished": (ROUTE_COMPLETED, "not"),
     "longest standstill after clear, max (s)": (STANDSTILL, "max"),
     "min distance, min (m)": (MIN_DISTANCE, "min"),
+    "min distance to the campaign's pedestrian, min (m)": (OWN_DISTANCE, "min"),
     "average speed, mean (m/s)": (SPEED, "mean"),
     "average speed, min (m/s)": (SPEED, "min"),
     "average speed, max (m/s)": (SPEED, "max"),
@@ -272,6 +281,7 @@ WORST: dict[str, tuple[str, str]] = {  # figure -> (summary key, which run is wo
     "route not finished": (ROUTE_COMPLETED, "false"),
     "longest standstill after clear (s)": (STANDSTILL, "max"),
     "min distance (m)": (MIN_DISTANCE, "min"),
+    "min distance to the campaign's pedestrian (m)": (OWN_DISTANCE, "min"),
     "average speed (m/s)": (SPEED, "min"),
     "time stopped (s)": (STOPPED, "max"),
 }

@@ -37,7 +37,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from sse_cosim.errors import UserError
 from sse_cosim.files import read_toml_model, write_json_atomic
 from sse_cosim.reporting.outputs import TaskOutcome
-from sse_cosim.reporting.safety_report import SAFETY_PLAN
+from sse_cosim.reporting.safety_report import CAMPAIGN_PEDESTRIAN, SAFETY_PLAN
 from sse_cosim.runner.batch import scenario_files
 from sse_cosim.runner.executors import Execution
 from sse_cosim.runner.sweep import (
@@ -58,9 +58,9 @@ if TYPE_CHECKING:
 
 # The campaign moves the pedestrian ``pedestrian`` and the parked truck ``truck`` of each
 # scenario (the paper's ids); any other actor of a scenario stays as the scenario sets it.
-STEP_OUT_PATH = "pedestrians.pedestrian.steps_onto_crossing_s"
-WALKING_SPEED_PATH = "pedestrians.pedestrian.walking_speed_mps"
-START_PATH = "pedestrians.pedestrian.start_pos_m"
+STEP_OUT_PATH = f"pedestrians.{CAMPAIGN_PEDESTRIAN}.steps_onto_crossing_s"
+WALKING_SPEED_PATH = f"pedestrians.{CAMPAIGN_PEDESTRIAN}.walking_speed_mps"
+START_PATH = f"pedestrians.{CAMPAIGN_PEDESTRIAN}.start_pos_m"
 TRUCK = "truck"
 TRUCK_FRONT_PATH = f"parked.{TRUCK}.end_pos_m"
 BEHIND_TRUCK = f"{START_PATH} = {TRUCK_FRONT_PATH} - value"

@@ -26,6 +26,7 @@ SAFE = {
     "collisions": 0, "containment_violations": 0, "containment_violations_by_set": {},
     "route_completed": True, "longest_standstill_after_clear_s": 1.0,
     "min_distance_bus_pedestrian_m": 5.0, "average_speed_mps": 12.0, "time_stopped_s": 1.0,
+    "pedestrians": {"pedestrian": {"min_distance_m": 5.0}, "other": {"min_distance_m": 6.0}},
 }
 
 Summaries = Callable[[int, PlannedRun], dict[str, Any] | None]
@@ -144,3 +145,22 @@ def test_failed_runs_are_listed_and_keep_the_others(tmp_path, others, verdict):
     assert report.failed[0][1] == "worker died"
     assert {t.verdict for t in report.targets} == {verdict}
     assert "worker died" in report.markdown.read_text(encoding="utf-8")
+
+
+def test_the_campaign_pedestrians_own_distance_is_reported_beside_anyones(tmp_path):
+    """Where another pedestrian walks nearer the bus (the junction, the crowd), the least
+    distance of all is theirs; the hard case's margin is the campaign pedestrian's own."""
+    def summaries(i: int, run: PlannedRun) -> dict[str, Any]:
+        own = {"min_distance_m": 4.0 + i}
+        return {**SAFE, "min_distance_bus_pedestrian_m": 1.5,
+                "pedestrians": {"pedestrian": own, "other": {"min_distance_m": 1.5}}}
+
+    out = campaign_folder(tmp_path, summaries)
+    text = write_safety_report(out).markdown.read_text(encoding="utf-8")
+    table = pd.read_csv(out / SAFETY_TABLE)
+    done = table[table["status"] == "ok"]
+    assert list(done["min_distance_campaign_pedestrian_m"]) == [4.0 + i for i in range(48)]
+    assert set(done["min_distance_bus_pedestrian_m"]) == {1.5}
+    assert "min distance to the campaign's pedestrian, min (m)" in text
+    assert f"| min distance to the campaign's pedestrian (m) | 4.00 | `{keys_of(out)[0]}` |" \
+        in text
