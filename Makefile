@@ -53,9 +53,9 @@ test: $(DEVSTAMP)
 bench: $(BENCHSTAMP)
 	$(BIN)/sse-cosim bench --out results/
 
-# The safety campaign (sweeps/safety.toml; S1-S3 about 25 minutes on two cores, crowd.toml's
-# and junction.toml's runs 10 to 20 times as long each, several hours in all): results/safety/
-# and results/safety.md; exit status 4 if a safety target is missed.
+# The safety campaign (sweeps/safety.toml; measured on two cores: S1-S3 about 36 minutes, the
+# town 44, the junction 109, the crowd 92, about 4.7 hours in all; `make bench` projects it):
+# results/safety/ and results/safety.md; exit status 4 if a safety target is missed.
 safety: $(STAMP)
 	$(BIN)/sse-cosim safety --out results/safety
 
