@@ -302,16 +302,13 @@ class ActorPlanner:
         return demand.crossing_choices(scenario, pid, *self._network(scenario.network, source))
 
     def _timer(self, scenario: Scenario, net_path: Path) -> ProbeTimer:
-        """The network's lone-walker timer for the scenario's speed ramp, as
-        :func:`~sse_cosim.world.demand.plan_actors` would make it, kept with the times it has
-        taken (walks that repeat over the grid are walked once)."""
-        from sse_cosim.estimation.motion import acceleration_bound
-        from sse_cosim.world.walk_probe import ProbeTimer
+        """The network's lone-walker timer for the scenario's speed ramp
+        (:func:`~sse_cosim.world.demand.walk_timer`, as the planner would make it), kept with
+        the times it has taken (walks that repeat over the grid are walked once)."""
+        from sse_cosim.world.demand import walk_timer
 
-        accel = acceleration_bound(scenario.estimator, scenario.simulation.step_length_s)
-        if (net_path, accel) not in self._timers:
-            self._timers[net_path, accel] = ProbeTimer(net_path, accel_mps2=accel)
-        return self._timers[net_path, accel]
+        fresh = walk_timer(scenario, net_path)
+        return self._timers.setdefault((net_path, fresh.accel_mps2), fresh)
 
     def _network(self, network: Network, source: str) -> tuple[Path, RoadMap]:
         key = f"{network.sources_dir}|{network.net_file}"

@@ -87,11 +87,11 @@ def ran_as_planned(task: RunTask) -> bool:
 
     folder = Path(task.out_dir)
     recorded = read_scenario_record(folder)
+    if recorded is None:
+        return False
     try:
         scenario = load_scenario(task.scenario, task.overrides)
     except UserError:  # the file no longer loads: the run is made again and says why
-        return False
-    if recorded is None:
         return False
     recorded.pop("source", None)  # where the file was read from, not what it says
     return _agrees(recorded, portable_scenario(scenario, folder))

@@ -47,6 +47,7 @@ import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 from xml.sax.saxutils import quoteattr
 
 import sumolib
@@ -70,6 +71,9 @@ from sse_cosim.world.roadmap import (
     is_sidewalk,
 )
 from sse_cosim.world.walkgraph import WalkGraph
+
+if TYPE_CHECKING:
+    from sse_cosim.world.walk_probe import ProbeTimer
 
 VEHICLE_VCLASS = "passenger"  # the class of the scenario's other moving vehicles
 PARKED_DURATION_S = 1.0e7  # "for ever": a parked vehicle's stop outlasts any run
@@ -186,10 +190,17 @@ def _timed_walks(scenario: Scenario, net: sumolib.net.Net, net_path: Path, sourc
     for pid, walk in walks.items():
         _check_crossing_on_route(net, pid, scenario.pedestrians[pid], walk.path, routes, source)
     if timer is None:
-        from sse_cosim.world.walk_probe import ProbeTimer  # imported here: it imports demand
-
-        timer = ProbeTimer(net_path, accel_mps2=acceleration_bound(scenario.estimator, dt))
+        timer = walk_timer(scenario, net_path)
     return walks, timer(walks, dt)
+
+
+def walk_timer(scenario: Scenario, net_path: Path) -> ProbeTimer:
+    """The network's probe walker for ``scenario``: lone SUMO walkers ramping their speed as
+    the scenario's motion model bounds the acceleration (none without a bound)."""
+    from sse_cosim.world.walk_probe import ProbeTimer  # imported here: it imports demand
+
+    dt = scenario.simulation.step_length_s
+    return ProbeTimer(net_path, accel_mps2=acceleration_bound(scenario.estimator, dt))
 
 
 def write_route_file(scenario: Scenario, plan: ActorPlan, path: Path) -> Path:
