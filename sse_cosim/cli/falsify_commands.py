@@ -60,7 +60,7 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
     OUT (results/falsify/<scenario>/ by default) gets:
       report.md              the box, each method's least margin and first failure,
                              the least margin so far by evaluations, the worst cases
-      evaluations.csv        one row per evaluation
+      evaluations.csv        one row per evaluation (after every generation)
       falsify_progress.png   least margin against evaluations, per method
       worst_<method>.toml    the worst case, a scenario file: sse-cosim run reproduces it
       worst_<method>/        that run, with its replay
@@ -70,7 +70,9 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
     the walkable ground) instead of stopping at them; a failure counts only if it began
     before the first break, and the report lists the breaks apart. A search is
     reproducible from its seed; --resume reads back the finished runs of a killed one and
-    goes on where it stopped.
+    goes on where it stopped. evaluations.csv is rewritten after every generation: --resume
+    takes what it records (of the same scenario, objective, seed and box) without running
+    it again, so a search committed part-way goes on where runs/ is gone.
 
     Exit status 4 if a run broke the guarantee within the assumptions (a collision or a
     containment violation before any break), 3 if a run failed, otherwise 0 (a failure of

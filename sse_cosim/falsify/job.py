@@ -1,32 +1,46 @@
 """``sse-cosim falsify`` as one job: plan the search, run it, write what it found.
 
 The search (:func:`~sse_cosim.falsify.search.run_search`) gives every evaluation; this module
-writes them (:mod:`sse_cosim.reporting.falsify_report`), then turns each method's worst case
-into a scenario file and runs that file again, in full with its replay, to show that it
-reproduces the margin the search saw.
+writes them (:mod:`sse_cosim.reporting.falsify_report`) after every round, then turns each
+method's worst case into a scenario file and runs that file again, in full with its replay, to
+show that it reproduces the margin the search saw.
+
+``evaluations.csv`` is the search's ledger: with ``resume``, an evaluation it records as run
+(with a margin) is taken from it, not run again, provided ``falsify.json`` names the same
+search (:data:`SAME_SEARCH`; the scenario compared as it resolves). So a search can be
+committed part-way and go on in a fresh checkout, where the runs' folders are gone.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
+from tqdm import tqdm
 
 from sse_cosim.errors import UserError
 from sse_cosim.falsify.objectives import OBJECTIVES
-from sse_cosim.falsify.search import Evaluation, Progress, SearchSetup, run_search
+from sse_cosim.falsify.search import Evaluation, Progress, Recorded, SearchSetup, run_search
 from sse_cosim.falsify.searchers import SEARCHERS
 from sse_cosim.falsify.space import build_space, load_falsify_file
 from sse_cosim.files import portable_path, write_text_atomic
 from sse_cosim.reporting import falsify_report as report
 from sse_cosim.reporting.margins import check_margins
+from sse_cosim.reporting.outputs import portable_scenario
 from sse_cosim.runner.executors import Execution, execute
 from sse_cosim.runner.safety import ActorPlanner
 from sse_cosim.runner.tasks import RunTask
 from sse_cosim.scenario.loader import load_scenario_data, validate_scenario
+
+SAME_SEARCH = ("scenario_file", "scenario_sha256", "objective", "seed", "dims")
+"""The fields of ``falsify.json`` that must agree for a resumed search to take an earlier
+one's evaluations from its ledger (the run keys name the method, evaluation, seed, margins
+asked and overrides, not these)."""
 
 
 @dataclass(frozen=True)
@@ -59,26 +73,71 @@ def prepare(scenario: Path, spec_file: Path, objective: str, methods: Sequence[s
 
 def falsify(setup: SearchSetup, out_dir: Path, execution: Execution, command: str,
             progress: Progress | None = None) -> FalsifyOutcome:
-    """Run the search into ``out_dir``, write its outputs and reproduce its worst cases."""
-    evaluations = run_search(setup, out_dir, execution, progress)
-    table = report.evaluations_table([_row(e) for e in evaluations])
-    plan = plan_document(setup, command)
-    report.write_outputs(out_dir, plan, table)
+    """Run the search into ``out_dir``, write its outputs after every round and reproduce
+    its worst cases."""
+    plan = plan_document(setup, command, out_dir)
+    recorded = recorded_outcomes(out_dir, plan) if execution.resume else {}
+
+    def checkpoint(evaluations: list[Evaluation]) -> None:
+        report.write_outputs(out_dir, plan, _table(evaluations))
+
+    evaluations = run_search(setup, out_dir, execution, progress, checkpoint, recorded)
+    table = _table(evaluations)
     worst = tuple(_reproduce(setup, case, out_dir, execution)
                   for case in _worst(evaluations, setup.methods))
     return FalsifyOutcome(table, worst, report.write_report(out_dir, plan, table, worst))
 
 
-def plan_document(setup: SearchSetup, command: str) -> dict[str, Any]:
-    """``falsify.json``: what was searched, and how."""
+def plan_document(setup: SearchSetup, command: str, out_dir: Path) -> dict[str, Any]:
+    """``falsify.json``: what was searched, and how (the scenario's digest as it resolves,
+    its network's paths relative to ``out_dir``)."""
     objective = setup.objective
+    resolved = portable_scenario(validate_scenario(setup.data, str(setup.scenario)), out_dir)
+    digest = hashlib.sha256(json.dumps(resolved, sort_keys=True).encode()).hexdigest()
     return {"command": command, "scenario": setup.data.get("name", setup.scenario.stem),
-            "scenario_file": portable_path(setup.scenario), "objective": objective.name,
+            "scenario_file": portable_path(setup.scenario), "scenario_sha256": digest,
+            "objective": objective.name,
             "objective_help": objective.help, "unit": objective.unit,
             "methods": list(setup.methods), "budget": setup.budget, "seed": setup.seed,
             "generation": setup.generation, "generations": setup.generations,
             "dims": [{"name": d.name, "low": d.low, "high": d.high}
                      for d in setup.space.dims]}
+
+
+def recorded_outcomes(out_dir: Path, plan: dict[str, Any]) -> dict[str, Recorded]:
+    """The outcomes ``out_dir``'s ledger records, by run key: the rows with a margin (a run
+    that failed, or a point not feasible, is planned again). None if the folder holds no
+    ledger, and none, with one line saying why, if it holds another search's."""
+    plan_file, ledger = out_dir / report.FALSIFY_PLAN, out_dir / report.EVALUATIONS
+    if not (plan_file.is_file() and ledger.is_file()):
+        return {}
+    earlier = json.loads(plan_file.read_text())
+    differs = [field for field in SAME_SEARCH if earlier.get(field) != plan[field]]
+    if differs:
+        tqdm.write(f"{ledger}: recorded by another search (its {differs[0]} differs): its "
+                   "evaluations are not taken; finished runs are read back from runs/")
+        return {}
+    table = pd.read_csv(ledger, keep_default_na=False, na_values={"margin": [""],
+                                                                  "first_break_t": [""]})
+    if len(table) and table["generation"].max() >= plan["generations"]:
+        raise UserError(str(ledger), "generation",
+                        f"records {table['generation'].max() + 1} generations, more than "
+                        f"--budget {plan['budget']} makes ({plan['generations']}): resuming "
+                        "would drop them", "give a budget at least as large, or another --out")
+    ran = table[table["margin"].notna() & (table["error"] == "")]
+    return {row.key: Recorded(float(row.margin), _flag(row.failed), _flag(row.failed_outside),
+                              None if pd.isna(row.first_break_t) else float(row.first_break_t),
+                              tuple(part for part in str(row.broken).split("; ") if part))
+            for row in ran.itertuples()}
+
+
+def _flag(value: Any) -> bool:
+    """A ledger's True/False (read as a bool or as its text)."""
+    return value is True or str(value) == "True"
+
+
+def _table(evaluations: Sequence[Evaluation]) -> pd.DataFrame:
+    return report.evaluations_table([_row(e) for e in evaluations])
 
 
 def _row(e: Evaluation) -> dict[str, Any]:

@@ -11,7 +11,10 @@ evaluation and the overrides.
 
 A killed search resumes: with ``resume`` the finished runs are read back, every searcher is
 rebuilt from its seed and told the same margins again, so it proposes the same points and the
-search goes on where it stopped, with the results an uninterrupted search gives.
+search goes on where it stopped, with the results an uninterrupted search gives. What a search
+has found is also handed to ``checkpoint`` after every round (the job writes it to
+``evaluations.csv``), and a resumed search takes an evaluation from ``recorded`` (those rows,
+by key) without its run: a search can go on in another checkout, where ``runs/`` is gone.
 """
 
 from __future__ import annotations
@@ -34,6 +37,10 @@ from sse_cosim.runner.tasks import RunTask
 
 Progress = Callable[[int, int, dict[str, float | None]], None]
 """Told after each round: the round, the rounds, each method's least margin so far."""
+
+Checkpoint = Callable[[list["Evaluation"]], None]
+"""Told after each round, before :data:`Progress`: every evaluation so far, in method then
+evaluation order."""
 
 NOT_RUN_MARGIN = 1e6
 """The margin given to a point that is not run (not feasible) or whose run failed: far above
@@ -73,6 +80,18 @@ class Evaluation:
 
 
 @dataclass(frozen=True)
+class Recorded:
+    """A run's outcome as a checkpoint recorded it (see :class:`Evaluation`): what a resumed
+    search takes instead of making the run again."""
+
+    margin: float
+    failed: bool
+    failed_outside: bool
+    first_break_t: float | None
+    broken: tuple[str, ...]
+
+
+@dataclass(frozen=True)
 class SearchSetup:
     """What one search runs: a scenario file (and its resolved data), its space, the
     objective, the methods, the budget per method and the seed."""
@@ -96,13 +115,16 @@ class SearchSetup:
 
 
 def run_search(setup: SearchSetup, out_dir: Path, execution: Execution,
-               progress: Progress | None = None) -> list[Evaluation]:
+               progress: Progress | None = None, checkpoint: Checkpoint | None = None,
+               recorded: Mapping[str, Recorded] | None = None) -> list[Evaluation]:
     """Every method's evaluations, in method then evaluation order.
 
     The methods advance together, one generation each per round, so that their runs share
-    each round's workers. ``progress(round, rounds, best)`` is called after each round
-    (``best``: method -> least margin so far).
+    each round's workers. ``checkpoint(evaluations)`` and then ``progress(round, rounds,
+    best)`` are called after each round (``best``: method -> least margin so far). A planned
+    evaluation whose key is in ``recorded`` takes its outcome from there and is not run.
     """
+    recorded = recorded or {}
     planner = ActorPlanner()
     searchers = {m: SEARCHERS[m](setup.space.size, setup.seed, setup.generation)
                  for m in setup.methods}
@@ -111,14 +133,18 @@ def run_search(setup: SearchSetup, out_dir: Path, execution: Execution,
         proposed = {m: searchers[m].ask() for m in setup.methods}
         planned = {m: [_plan(setup, m, round_, i, p, planner, out_dir)
                        for i, p in enumerate(points)] for m, points in proposed.items()}
-        tasks = [task for plans in planned.values() for _, task in plans if task is not None]
+        tasks = [task for plans in planned.values() for _, task in plans
+                 if task is not None and task.key not in recorded]
         outcomes = {o.key: o for o in execute(tasks, execution,
                                               description=f"falsify {round_ + 1}")}
         for method in setup.methods:
-            evaluations = [_scored(setup.objective, plan, outcomes) for plan, _ in
-                           planned[method]]
+            evaluations = [_recalled(plan, recorded[plan.key]) if plan.key in recorded
+                           else _scored(setup.objective, plan, outcomes)
+                           for plan, _ in planned[method]]
             searchers[method].tell(proposed[method], [e.search_margin for e in evaluations])
             done[method] += evaluations
+        if checkpoint is not None:
+            checkpoint([e for m in setup.methods for e in done[m]])
         if progress is not None:
             progress(round_ + 1, setup.generations, {m: _least(done[m]) for m in done})
     return [e for m in setup.methods for e in done[m]]
@@ -158,6 +184,13 @@ def _scored(objective: Objective, planned: Evaluation,
     return replace(planned, margin=objective.margin(summary), failed=failed and within,
                    failed_outside=failed and not within, first_break_t=since,
                    broken=tuple(broken(summary)))
+
+
+def _recalled(planned: Evaluation, recorded: Recorded) -> Evaluation:
+    """``planned`` with the outcome ``recorded`` for its key (its run is not made again)."""
+    return replace(planned, margin=recorded.margin, failed=recorded.failed,
+                   failed_outside=recorded.failed_outside,
+                   first_break_t=recorded.first_break_t, broken=recorded.broken)
 
 
 def _least(evaluations: Sequence[Evaluation]) -> float | None:

@@ -3,8 +3,10 @@ cases as scenario files, and the report.
 
 Written into the search folder (``results/falsify/<scenario>/``):
 
-- ``falsify.json``: the plan (command, scenario, objective, methods, budget, seed, the box);
-- ``evaluations.csv``: one row per evaluation, in method then evaluation order: its values,
+- ``falsify.json``: the plan (command, scenario and its digest as it resolves, objective,
+  methods, budget, seed, the box);
+- ``evaluations.csv`` (after every generation; the ledger a resumed search reads): one row per
+  evaluation, in method then evaluation order: its values,
   margin, whether it failed, what it broke, why it did not run;
 - ``falsify_progress.png``: each method's least margin so far against evaluations;
 - ``worst_<method>.toml``: the method's worst case, a scenario file that extends the searched

@@ -5,8 +5,10 @@
   --seed N`; seed 1 with --budget 120), CMA-ES found the collision in four (at evaluations 37,
   20, 16, 16; in the fifth it came to 0.40 m), random search with the same budget and seed in
   two (at 25 and 14; elsewhere no closer than 1.94 m). The test takes seed 3, where CMA-ES
-  finds it at evaluation 16 and random search not in 36: the search is stopped after 24
-  evaluations and resumed, so what ran is read back, not run again.
+  finds it at evaluation 16 and random search not in 36. The search is killed after its second
+  generation and resumed: random search's runs are read back from their folders, CMA-ES's
+  from the ledger alone (their folders removed, as in a fresh checkout), and none is run
+  again.
 - The safe policy with its reaction time mis-set (the bus acts 0.6 s late, its stops allow for
   0.3 s): the first generation finds an emergency brake. Nearly every candidate brakes in
   emergency there (random search finds one at its first evaluation too), so this case shows
@@ -15,12 +17,14 @@
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
 from sse_cosim.falsify.job import falsify, prepare
-from sse_cosim.reporting.falsify_report import first_failure
+from sse_cosim.reporting.falsify_report import EVALUATIONS, first_failure
 from sse_cosim.reporting.outputs import RUNS_FOLDER
 from sse_cosim.runner.executors import Execution
 
@@ -37,18 +41,37 @@ def _summaries(folder: Path) -> dict[str, int]:
             for p in (folder / RUNS_FOLDER).glob("*/summary.json")}
 
 
-def test_cma_finds_the_paper_policys_collision_before_random_search(tmp_path: Path):
-    execution = Execution(workers=2, progress=False)
-    killed = prepare(PAPER_S3, SPACE, "distance", ("cma", "random"), budget=24, seed=3)
-    falsify(killed, tmp_path, execution, "test")
-    before = _summaries(tmp_path)
+class Killed(Exception):
+    """The search's process stopping between two generations."""
 
+
+def _kill_after(rounds: int):
+    def progress(round_: int, _rounds: int, _least: object) -> None:
+        if round_ == rounds:
+            raise Killed
+    return progress
+
+
+def test_cma_finds_the_paper_policys_collision_before_random_search(tmp_path: Path):
     setup = prepare(PAPER_S3, SPACE, "distance", ("cma", "random"), budget=36, seed=3)
+    with pytest.raises(Killed):
+        falsify(setup, tmp_path, Execution(workers=2, progress=False), "test", _kill_after(2))
+    ledger = pd.read_csv(tmp_path / EVALUATIONS)
+    assert sorted(set(ledger["generation"])) == [0, 1]  # written after every generation
+    before = _summaries(tmp_path)
+    from_ledger = set(ledger.loc[ledger["method"] == "cma", "key"])
+    for key in from_ledger:
+        shutil.rmtree(tmp_path / RUNS_FOLDER / key, ignore_errors=True)
+
     outcome = falsify(setup, tmp_path, Execution(workers=2, resume=True, progress=False),
                       "test")
     after = _summaries(tmp_path)
-    assert all(after[key] == mtime for key, mtime in before.items())  # read back, not rerun
-    assert len(after) > len(before)
+    assert not from_ledger & after.keys()  # taken from the ledger, not run again
+    assert all(after[key] == mtime for key, mtime in before.items() if key not in from_ledger)
+    assert len(after) > len(before) - len(from_ledger)
+    resumed = outcome.table.set_index("key").loc[ledger["key"], "margin"]
+    pd.testing.assert_series_equal(resumed.reset_index(drop=True), ledger["margin"],
+                                   check_exact=True)  # and what it says, kept
 
     found = first_failure(outcome.table, "cma")
     assert found is not None and found <= 36

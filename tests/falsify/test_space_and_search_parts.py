@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sse_cosim.errors import UserError
-from sse_cosim.falsify.job import prepare
+from sse_cosim.falsify.job import plan_document, prepare, recorded_outcomes
 from sse_cosim.falsify.objectives import (
     OBJECTIVES,
     OPEN_DEPTH_M,
@@ -16,6 +16,7 @@ from sse_cosim.falsify.objectives import (
     broken,
     first_break_t,
 )
+from sse_cosim.falsify.search import Recorded
 from sse_cosim.falsify.searchers import SEARCHERS, generation_size
 from sse_cosim.falsify.space import (
     COUNTED_BREAKS,
@@ -29,6 +30,8 @@ from sse_cosim.falsify.space import (
     load_falsify_file,
     scenario_of,
 )
+from sse_cosim.files import write_json_atomic
+from sse_cosim.reporting.falsify_report import EVALUATIONS, FALSIFY_PLAN
 from sse_cosim.runner.safety import ActorPlanner
 from sse_cosim.scenario.loader import load_scenario, load_scenario_data
 
@@ -405,3 +408,34 @@ def test_every_committed_box_builds_and_its_corners_are_scenarios(box, scenario)
     if box == "falsify_turn.toml":
         ped = decoded.pedestrians["pedestrian"]
         assert ped.turn_back_after_s == 3.0 and ped.turn_back_wait_s == 4.0
+
+
+LEDGER_HEAD = "method,evaluation,generation,key,margin,failed,failed_outside,first_break_t," \
+              "broken,not_feasible,error\n"
+
+
+def test_a_ledger_gives_its_runs_outcomes_and_only_to_the_same_search(tmp_path: Path):
+    setup = prepare(S3, SPACE, "distance", ("cma",), budget=2, seed=1)
+    plan = plan_document(setup, "test", tmp_path)
+    write_json_atomic(tmp_path / FALSIFY_PLAN, plan)
+    (tmp_path / EVALUATIONS).write_text(
+        LEDGER_HEAD
+        + "cma,0,0,k0,2.5,False,False,,,,\n"
+        + "cma,1,0,k1,0.0,True,False,12.5,1 collision(s); 2 containment violation(s),,\n"
+        + "cma,2,0,k2,,False,False,,,cannot reach the zebra,\n"
+        + "cma,3,0,k3,,False,False,,,,run failed: boom\n")
+    assert recorded_outcomes(tmp_path, plan) == {
+        "k0": Recorded(2.5, False, False, None, ()),
+        "k1": Recorded(0.0, True, False, 12.5,
+                       ("1 collision(s)", "2 containment violation(s)"))}
+    assert recorded_outcomes(tmp_path, {**plan, "objective": "ttc"}) == {}
+    assert recorded_outcomes(tmp_path, {**plan, "scenario_sha256": "0" * 64}) == {}
+
+
+def test_resuming_a_longer_search_with_a_smaller_budget_is_refused(tmp_path: Path):
+    setup = prepare(S3, SPACE, "distance", ("cma",), budget=2, seed=1)
+    plan = plan_document(setup, "test", tmp_path)
+    write_json_atomic(tmp_path / FALSIFY_PLAN, plan)
+    (tmp_path / EVALUATIONS).write_text(LEDGER_HEAD + "cma,40,3,k40,2.5,False,False,,,,\n")
+    with pytest.raises(UserError, match=r"records 4 generations.*--budget 2"):
+        recorded_outcomes(tmp_path, plan)
