@@ -30,6 +30,7 @@ from sse_cosim.falsify.searchers import SEARCHERS
 from sse_cosim.falsify.space import build_space, load_falsify_file
 from sse_cosim.files import portable_path, write_text_atomic
 from sse_cosim.reporting import falsify_report as report
+from sse_cosim.reporting.falsify_report import UNFINISHED
 from sse_cosim.reporting.margins import check_margins
 from sse_cosim.reporting.outputs import portable_scenario
 from sse_cosim.runner.executors import Execution, execute
@@ -127,13 +128,19 @@ def recorded_outcomes(out_dir: Path, plan: dict[str, Any]) -> dict[str, Recorded
     ran = table[table["margin"].notna() & (table["error"] == "")]
     return {row.key: Recorded(float(row.margin), _flag(row.failed), _flag(row.failed_outside),
                               None if pd.isna(row.first_break_t) else float(row.first_break_t),
-                              tuple(part for part in str(row.broken).split("; ") if part))
+                              tuple(part for part in str(row.broken).split("; ") if part),
+                              _known_flag(getattr(row, UNFINISHED, "")))
             for row in ran.itertuples()}
 
 
 def _flag(value: Any) -> bool:
     """A ledger's True/False (read as a bool or as its text)."""
     return value is True or str(value) == "True"
+
+
+def _known_flag(value: Any) -> bool | None:
+    """A ledger's True/False, None where it is empty or missing."""
+    return None if str(value) == "" else _flag(value)
 
 
 def _table(evaluations: Sequence[Evaluation]) -> pd.DataFrame:
@@ -144,7 +151,8 @@ def _row(e: Evaluation) -> dict[str, Any]:
     return {"method": e.method, "evaluation": e.index, "generation": e.generation,
             "key": e.key, **e.values, "margin": e.margin, "failed": e.failed,
             "failed_outside": e.failed_outside, "first_break_t": e.first_break_t,
-            "broken": "; ".join(e.broken), "not_feasible": e.not_feasible, "error": e.error}
+            "broken": "; ".join(e.broken), "not_feasible": e.not_feasible, "error": e.error,
+            UNFINISHED: e.unfinished}
 
 
 def _worst(evaluations: Sequence[Evaluation], methods: Sequence[str]) -> list[Evaluation]:

@@ -56,7 +56,9 @@ class Evaluation:
     (it began before ``first_break_t``, the first time the world broke one, or the world broke
     none); ``failed_outside``: a failure that came after such a break, or whose start the
     summary does not give in a run with a break. ``broken``: collisions and containment
-    violations within the assumptions, whatever the objective.
+    violations within the assumptions, whatever the objective. ``unfinished``: whether the run
+    ended with an automated vehicle's route unfinished (liveness, whatever the objective; None
+    where not known).
     """
 
     method: str
@@ -72,6 +74,7 @@ class Evaluation:
     broken: tuple[str, ...] = ()
     not_feasible: str | None = None
     error: str | None = None
+    unfinished: bool | None = None
 
     @property
     def search_margin(self) -> float:
@@ -89,6 +92,7 @@ class Recorded:
     failed_outside: bool
     first_break_t: float | None
     broken: tuple[str, ...]
+    unfinished: bool | None = None  # None: a ledger written before it was recorded
 
 
 @dataclass(frozen=True)
@@ -183,14 +187,16 @@ def _scored(objective: Objective, planned: Evaluation,
     within = since is None or (at is not None and at < since)
     return replace(planned, margin=objective.margin(summary), failed=failed and within,
                    failed_outside=failed and not within, first_break_t=since,
-                   broken=tuple(broken(summary)))
+                   broken=tuple(broken(summary)),
+                   unfinished=summary.get("route_completed") is False)
 
 
 def _recalled(planned: Evaluation, recorded: Recorded) -> Evaluation:
     """``planned`` with the outcome ``recorded`` for its key (its run is not made again)."""
     return replace(planned, margin=recorded.margin, failed=recorded.failed,
                    failed_outside=recorded.failed_outside,
-                   first_break_t=recorded.first_break_t, broken=recorded.broken)
+                   first_break_t=recorded.first_break_t, broken=recorded.broken,
+                   unfinished=recorded.unfinished)
 
 
 def _least(evaluations: Sequence[Evaluation]) -> float | None:

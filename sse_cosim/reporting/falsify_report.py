@@ -37,6 +37,8 @@ FALSIFY_PLAN = "falsify.json"
 EVALUATIONS = "evaluations.csv"
 PROGRESS_PLOT = "falsify_progress.png"
 REPORT = "report.md"
+UNFINISHED = "route_unfinished"
+"""The column of ``evaluations.csv`` that says whether a run left a route unfinished."""
 CHECKPOINTS = (10, 20, 50, 100, 200, 500, 1000, 2000)
 """Evaluation counts at which the report gives each method's least margin so far."""
 
@@ -154,6 +156,10 @@ def render(plan: Mapping[str, Any], table: pd.DataFrame, worst: Sequence[WorstCa
         "",
         markdown_table([_method_row(table, m) for m in methods]),
         "",
+        "Routes unfinished: runs that ended (at the scenario's duration) with an automated "
+        f"vehicle short of its route's end, whatever the objective (`{UNFINISHED}` in "
+        f"`{EVALUATIONS}`): the bus stood or crept for good, a liveness finding.",
+        "",
         "Least margin so far, by evaluations:",
         "",
         markdown_table(_checkpoint_rows(table, methods)),
@@ -202,8 +208,16 @@ def _method_row(table: pd.DataFrame, method: str) -> dict[str, str]:
             "failures found": str(int(rows["failed"].sum())),
             "after a break": str(int(rows["failed_outside"].sum())),
             "runs with a break": str(int(rows["first_break_t"].notna().sum())),
+            "routes unfinished": _unfinished(rows),
             "first failure at": "—" if found is None else f"evaluation {found}",
             "least margin": _num(least[-1] if least.size else np.nan)}
+
+
+def _unfinished(rows: pd.DataFrame) -> str:
+    """How many runs left a route unfinished ("—" where the ledger does not say)."""
+    if UNFINISHED not in rows or rows[UNFINISHED].isna().all():
+        return "—"
+    return str(int((rows[UNFINISHED] == True).sum()))  # noqa: E712 (True, False or missing)
 
 
 def _checkpoint_rows(table: pd.DataFrame, methods: Sequence[str]) -> list[dict[str, str]]:
@@ -240,7 +254,7 @@ def _broken_rows(table: pd.DataFrame) -> list[dict[str, str]]:
 
 def _value_columns(table: pd.DataFrame) -> list[str]:
     fixed = {"method", "evaluation", "generation", "key", "margin", "failed", "failed_outside",
-             "first_break_t", "broken", "not_feasible", "error"}
+             "first_break_t", "broken", "not_feasible", "error", UNFINISHED}
     return [c for c in table.columns if c not in fixed]
 
 

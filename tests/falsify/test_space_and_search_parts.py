@@ -411,7 +411,7 @@ def test_every_committed_box_builds_and_its_corners_are_scenarios(box, scenario)
 
 
 LEDGER_HEAD = "method,evaluation,generation,key,margin,failed,failed_outside,first_break_t," \
-              "broken,not_feasible,error\n"
+              "broken,not_feasible,error"
 
 
 def test_a_ledger_gives_its_runs_outcomes_and_only_to_the_same_search(tmp_path: Path):
@@ -419,23 +419,26 @@ def test_a_ledger_gives_its_runs_outcomes_and_only_to_the_same_search(tmp_path: 
     plan = plan_document(setup, "test", tmp_path)
     write_json_atomic(tmp_path / FALSIFY_PLAN, plan)
     (tmp_path / EVALUATIONS).write_text(
-        LEDGER_HEAD
-        + "cma,0,0,k0,2.5,False,False,,,,\n"
-        + "cma,1,0,k1,0.0,True,False,12.5,1 collision(s); 2 containment violation(s),,\n"
-        + "cma,2,0,k2,,False,False,,,cannot reach the zebra,\n"
-        + "cma,3,0,k3,,False,False,,,,run failed: boom\n")
+        LEDGER_HEAD + ",route_unfinished\n"
+        + "cma,0,0,k0,2.5,False,False,,,,,False\n"
+        + "cma,1,0,k1,0.0,True,False,12.5,1 collision(s); 2 containment violation(s),,,True\n"
+        + "cma,2,0,k2,,False,False,,,cannot reach the zebra,,\n"
+        + "cma,3,0,k3,,False,False,,,,run failed: boom,\n")
     assert recorded_outcomes(tmp_path, plan) == {
-        "k0": Recorded(2.5, False, False, None, ()),
+        "k0": Recorded(2.5, False, False, None, (), unfinished=False),
         "k1": Recorded(0.0, True, False, 12.5,
-                       ("1 collision(s)", "2 containment violation(s)"))}
+                       ("1 collision(s)", "2 containment violation(s)"), unfinished=True)}
     assert recorded_outcomes(tmp_path, {**plan, "objective": "ttc"}) == {}
     assert recorded_outcomes(tmp_path, {**plan, "scenario_sha256": "0" * 64}) == {}
+    (tmp_path / EVALUATIONS).write_text(LEDGER_HEAD + "\ncma,0,0,k0,2.5,False,False,,,,\n")
+    assert recorded_outcomes(tmp_path, plan) == {  # a ledger from before the column
+        "k0": Recorded(2.5, False, False, None, (), unfinished=None)}
 
 
 def test_resuming_a_longer_search_with_a_smaller_budget_is_refused(tmp_path: Path):
     setup = prepare(S3, SPACE, "distance", ("cma",), budget=2, seed=1)
     plan = plan_document(setup, "test", tmp_path)
     write_json_atomic(tmp_path / FALSIFY_PLAN, plan)
-    (tmp_path / EVALUATIONS).write_text(LEDGER_HEAD + "cma,40,3,k40,2.5,False,False,,,,\n")
+    (tmp_path / EVALUATIONS).write_text(LEDGER_HEAD + "\ncma,40,3,k40,2.5,False,False,,,,\n")
     with pytest.raises(UserError, match=r"records 4 generations.*--budget 2"):
         recorded_outcomes(tmp_path, plan)
