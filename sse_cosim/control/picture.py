@@ -35,6 +35,9 @@ least and the region's largest extent along each direction, from their vertices,
 holds for any shape). Hidden ground carries no state: an undetected pedestrian may be moving
 at v_max toward the zone. The speed policies (:mod:`sse_cosim.control.speed`) decide on it.
 
+A zone the bus's body is already on counts only where the footprints to come reach
+(:func:`_ahead_of_body`): the ground behind them is out of a forward-moving bus's way.
+
 Hidden ground is tracked in a *window*: within ``interest_radius_m`` of every crossing on the
 route and of every conflict zone; walkable ground outside it always counts as occupied. The
 paper policy looks at one crossing at a time: the nearest on the route that the bus has not
@@ -50,7 +53,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from itertools import pairwise
 
@@ -59,7 +62,14 @@ import shapely
 import shapely.ops
 
 from sse_cosim.control.kinematics import BusDynamics
-from sse_cosim.control.swept import RoutePath, SweepPiece, body_sweep, swept_region, touch_extent
+from sse_cosim.control.swept import (
+    RoutePath,
+    SweepPiece,
+    ahead_cover,
+    body_sweep,
+    swept_region,
+    touch_extent,
+)
 from sse_cosim.estimation.motion import MotionModel, Separation, unit_fan
 from sse_cosim.regions import Region, RegionKind
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
@@ -93,6 +103,8 @@ class ConflictZone:
     start_m: float
     end_m: float
     beyond_arrival_s: float
+    ground: shapely.Geometry | None = None  # the piece of walkable ground ``polygon`` holds
+    sweep: tuple[SweepPiece, ...] = ()  # the pieces of the body's sweep that meet it
 
     @cached_property
     def least_along(self) -> np.ndarray:
@@ -125,6 +137,7 @@ class SceneContext:
     window: Region  # where hidden ground is tracked; outside, it counts as occupied
     zones: tuple[ConflictZone, ...]
     kind: RegionKind
+    sweep_width_m: float  # the body's sweep: its width and a pedestrian's radius each side
     _relevant: dict[tuple[int, float], Region] = field(default_factory=dict, repr=False)
 
     @classmethod
@@ -143,17 +156,20 @@ class SceneContext:
         corridor = _with_sweep(corridor, _from_start(swept_region(sweep), route_line), walkable)
         crossings = _route_crossings(route_line, corridor, [c.area for c in roadmap.crossings],
                                      kind)
-        swept = [(kind.outer(piece), *_touched(sweep, piece, start, end, bus.length_m))
+        swept = [(piece, kind.outer(piece), *_touched(sweep, piece, start, end, bus.length_m))
                  for piece, start, end in _swept_walkable(route_line, corridor, walkable)]
-        swept.sort(key=lambda piece: piece[1])
+        swept.sort(key=lambda piece: piece[2])
         ground = kind.outer(walkable)
-        window = _window(crossings, swept, config.interest_radius_m, kind)
+        window = _window(crossings, [(region, start, end) for _, region, start, end in swept],
+                         config.interest_radius_m, kind)
         beyond = Source(ground.difference(window))
         zones = tuple(
-            ConflictZone(polygon, start, end, _arrival(beyond, polygon, pedestrians, kind))
-            for polygon, start, end in swept)
+            ConflictZone(region, start, end, _arrival(beyond, region, pedestrians, kind), piece,
+                         _meeting(sweep, piece))
+            for piece, region, start, end in swept)
         return cls(route_line, ground, crossings, bus, config, pedestrians,
-                   BusDynamics.of(bus, config, step_length), window, zones, kind)
+                   BusDynamics.of(bus, config, step_length), window, zones, kind,
+                   bus.width_m + 2.0 * pedestrian_radius)
 
     def crossing_at(self, front_s: float) -> RouteCrossing | None:
         """The nearest crossing on the route that the bus (front at ``front_s``) has not
@@ -348,13 +364,17 @@ class ArrivalMemory:
 def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
              in_view: Sequence[Source], in_view_beyond: bool,
              floors: Mapping[int, float]) -> tuple[ZoneOutlook, ...]:
-    """The zones the bus has not yet cleared, with the earliest arrival from ``sources`` (and
-    from beyond the window; never before its ``floors``) and from the pedestrians in view
-    alone: their regions ``in_view``, and beyond the window if ``in_view_beyond`` (every
-    source to every such zone in one distance call)."""
+    """The zones the bus has not yet cleared, as far as its body can still touch them
+    (:func:`_ahead_of_body`), with the earliest arrival from ``sources`` (and from beyond the
+    window; never before its ``floors``) and from the pedestrians in view alone: their regions
+    ``in_view``, and beyond the window if ``in_view_beyond`` (every source to every such zone
+    in one distance call)."""
     ahead = [(index, zone, zone.end_m + context.bus.length_m - front_s)
              for index, zone in enumerate(context.zones)]
-    ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead if to_clear > 0.0]
+    ahead = [(index, _ahead_of_body(context, zone, front_s), to_clear)
+             for index, zone, to_clear in ahead if to_clear > 0.0]
+    ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead
+             if not zone.polygon.is_empty]
     zones = [zone for _, zone, _ in ahead]
     arrivals = _arrivals(sources, zones, context.pedestrians, context.kind)
     in_view_arrivals = _arrivals(in_view, zones, context.pedestrians, context.kind)
@@ -365,6 +385,29 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
                         float(in_view_arrival)))
         for (index, zone, to_clear), arrival, in_view_arrival
         in zip(ahead, arrivals, in_view_arrivals, strict=True))
+
+
+def _ahead_of_body(context: SceneContext, zone: ConflictZone, front_s: float) -> ConflictZone:
+    """``zone`` as far as the body, its front at ``front_s``, can still touch it.
+
+    Once the front has passed the zone's start, the part of the zone that only footprints
+    with the front further back covered is out of the bus's way for good (it moves forward
+    along its route): the zone counts where the footprints from ``front_s`` on reach
+    (:func:`~sse_cosim.control.swept.ahead_cover`, widened by a pedestrian's radius as the
+    sweep is). Without it, hidden ground behind a bus standing with its rear over a sidewalk
+    corner keeps an arrival there sooner than the bus can move its rear out, and the bus
+    never moves again. A zone not yet reached is whole."""
+    if front_s <= zone.start_m or zone.ground is None:
+        return zone
+    ahead = ahead_cover(zone.sweep, front_s, context.bus.length_m, context.sweep_width_m)
+    return replace(zone, polygon=context.kind.outer(shapely.intersection(zone.ground, ahead)))
+
+
+def _meeting(sweep: Sequence[SweepPiece], piece: shapely.Geometry) -> tuple[SweepPiece, ...]:
+    """The pieces of ``sweep`` whose cover meets ``piece``."""
+    covers = np.array([p.cover for p in sweep], dtype=object)
+    return tuple(p for p, meets in zip(sweep, shapely.intersects(covers, piece), strict=True)
+                 if meets)
 
 
 def _arrivals(sources: Iterable[Source], zones: Sequence[ConflictZone],

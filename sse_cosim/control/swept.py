@@ -174,6 +174,28 @@ def swept_region(pieces: Sequence[SweepPiece]) -> shapely.Geometry:
     return shapely.union_all([p.cover for p in pieces])
 
 
+def ahead_cover(pieces: Sequence[SweepPiece], front_m: float, length: float,
+                width: float) -> shapely.Geometry:
+    """Every footprint of a body ``length`` x ``width`` (m) whose front is at station
+    ``front_m`` or beyond lies in it: the covers of the pieces not yet left behind, the one the
+    front is in cut at the front if it is straight (its footprints with the front behind it
+    are left out; a turning piece, at most :data:`MAX_PIECE_M` long, is kept whole). The
+    ground only the footprints behind ``front_m`` covered is out of the body's way from then
+    on, since a vehicle moves forward along its route."""
+    covers = []
+    for piece in pieces:
+        if piece.end_m < front_m:
+            continue
+        if piece.straight and piece.start_m < front_m:
+            ends = [piece.front + (at - piece.start_m) * piece.axis
+                    for at in (front_m, piece.end_m)]
+            covers.append(shapely.convex_hull(shapely.multipoints(np.vstack(
+                [footprint(end, piece.axis, length, width) for end in ends]))))
+        else:
+            covers.append(piece.cover)
+    return shapely.union_all(covers)
+
+
 def touch_extent(pieces: Sequence[SweepPiece], area: shapely.Geometry,
                  length: float) -> tuple[float, float] | None:
     """``(start, end)`` (m): the body touches ``area`` only while its front is between

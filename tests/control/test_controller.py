@@ -149,6 +149,30 @@ def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
     assert assess(context, at_zebra, 0.0, empty, empty, [Source(R(far))]).path_clear
 
 
+def test_a_zone_counts_only_where_the_body_can_still_touch_it(context):
+    """The bus stands with its rear 1 m onto the zebra: ground behind that is out of its way
+    for good. A pedestrian on the sidewalk 3 m before the zebra arrives at the part of the
+    zebra ahead of the rear, not at its near edge; so the standing bus may move on."""
+    (zone,) = context.zones
+    length = context.bus.length_m
+    front_s = zone.start_m + length + 1.0
+    front = np.array(context.route_line.interpolate(front_s).coords[0])
+    rear_x = float(context.route_line.interpolate(front_s - length).x)
+    south = zone.polygon.bounds[1]
+    near_x = float(context.route_line.interpolate(zone.start_m).x)
+    pedestrian = shapely.Point(near_x - 3.0, south - 1.0).buffer(0.3)
+    empty = K.empty()
+    result = assess(context, front, 0.0, empty, empty, [Source(R(pedestrian))])
+    (outlook,) = result.zones
+    ahead = shapely.intersection(zone.ground, shapely.box(rear_x, -1e3, 1e3, 1e3))
+    eps, speed = context.pedestrians.jitter, context.pedestrians.max_speed
+    assert outlook.arrival_s == pytest.approx(
+        (shapely.distance(pedestrian, ahead) - 2 * eps) / speed, abs=1e-3)
+    whole = (shapely.distance(pedestrian, zone.ground) - 2 * eps) / speed
+    assert outlook.arrival_s > whole + 0.3  # the whole zebra's near edge: 4 m nearer
+    assert outlook.to_clear_m == pytest.approx(zone.end_m - zone.start_m - 1.0, abs=1e-6)
+
+
 def front_before_zebra(context: SceneContext, metres: float) -> np.ndarray:
     """The point on the bus's route ``metres`` before the zebra, shape (2,)."""
     start = context.crossings[0].start_m

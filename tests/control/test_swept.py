@@ -18,6 +18,7 @@ from swept_checks import assert_in_the_way
 from sse_cosim.control.picture import SceneContext, route_lanes
 from sse_cosim.control.swept import (
     RoutePath,
+    ahead_cover,
     body_sweep,
     chord_footprint,
     footprint,
@@ -69,6 +70,10 @@ def test_a_straight_route_sweeps_the_centre_line_widened_by_half_the_width() -> 
     assert touch_extent(pieces, zebra, LENGTH) == pytest.approx((198.0, 202.0), abs=1e-12)
     assert chord_footprint(path, 150.0, LENGTH, WIDTH) == pytest.approx(
         footprint(np.array([150.0, -1.75]), np.array([1.0, 0.0]), LENGTH, WIDTH))
+    # from a front at 150 m on, the body covers the band from its rear (138 m) to the end
+    ahead = ahead_cover(pieces, 150.0, LENGTH, WIDTH)
+    band = shapely.box(150.0 - LENGTH, -1.75 - 0.5 * WIDTH, 300.0, -1.75 + 0.5 * WIDTH)
+    assert shapely.symmetric_difference(ahead, band).area < 1e-9
 
 
 def test_the_straight_routes_of_the_junction_keep_their_zones(roadmap: RoadMap) -> None:
@@ -98,6 +103,25 @@ def test_on_the_right_turn_the_sweep_covers_every_footprint(roadmap: RoadMap) ->
     assert float(shapely.distance(region, points).max()) <= 1e-9
     missed = float(shapely.distance(band, points).max())
     assert 0.9 < missed < 1.1  # the old zone's miss: about 1.0 m
+
+
+def test_the_cover_ahead_holds_every_footprint_to_come_and_none_left_behind(
+        roadmap: RoadMap) -> None:
+    """From a front station inside the turn, the footprints with the front there or beyond
+    (4,000, off the pieces' ends) lie in the cover ahead; the first footprints of the route do
+    not, nor does the rear's position a few metres back."""
+    path = RoutePath.of_lanes(route_lanes(roadmap, TURN))
+    pieces = body_sweep(path, LENGTH, WIDTH)
+    sigma = 170.0
+    front_m = float(np.interp(sigma, path.sigma, path.station))
+    ahead = ahead_cover(pieces, front_m, LENGTH, WIDTH)
+    sigmas = np.linspace(sigma, float(path.sigma[-1]), 4001)[:-1] + 1e-3 / 3.0
+    corners = np.vstack([chord_footprint(path, s, LENGTH, WIDTH) for s in sigmas])  # (4k, 2)
+    assert float(shapely.distance(ahead, shapely.points(corners)).max()) <= 1e-9
+    behind = chord_footprint(path, float(path.sigma[0]) + LENGTH, LENGTH, WIDTH)
+    assert not shapely.intersects(ahead, shapely.Polygon(behind))
+    rear_then = chord_footprint(path, sigma - 3.0, LENGTH, WIDTH)[0]  # its rear right corner
+    assert not shapely.intersects(ahead, shapely.Point(rear_then))
 
 
 def test_a_pedestrian_where_only_the_swinging_rear_reaches_is_a_conflict(
