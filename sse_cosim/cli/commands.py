@@ -86,10 +86,14 @@ def batch(paths: tuple[Path, ...], out_dir: Path, workers: int | None, executor:
 
 
 def _echo_summary(summary: dict, out_dir: Path) -> None:
+    from sse_cosim.reporting.recorder import walk_ins
+
+    standing = walk_ins(summary)
     click.echo(
         f"{summary['scenario']}: average speed {summary['average_speed_mps']:.2f} m/s, "
         f"containment violations {summary['containment_violations']}, "
-        f"collisions {summary['collisions']} -> {out_dir}"
+        f"collisions {summary['collisions']}"
+        + (f" ({standing} with the bus standing)" if standing else "") + f" -> {out_dir}"
     )
 
 

@@ -8,7 +8,9 @@ the search asks its runs for it. A new objective is one class added to :data:`OB
 
 Whatever the objective, a run with a collision or a containment violation is a failure the
 report lists (:func:`broken`): the search for one margin still reports every broken promise
-it meets.
+it meets. A collision is contact with a moving vehicle: the claim (docs/controller.md) is that
+the vehicle stands before any contact. A pedestrian who walks into a standing vehicle (SUMO's
+walkers do; people do not) is a **walk-in**: listed beside the broken promises, not one of them.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol
 
 from sse_cosim.reporting import margins as run_margins
+from sse_cosim.reporting.recorder import collisions, first_collision_t, walk_ins
 
 STANDSTILL_TARGET_S = 3.0
 """The safety campaign's liveness target: the bus stands at most this long on a clear path."""
@@ -58,18 +61,20 @@ def _step_s(summary: Mapping[str, Any]) -> float:
 
 
 class _FailsAtCollision:
-    """An objective whose failure is a collision, from the first contact on."""
+    """An objective whose failure is a collision (contact with a moving vehicle), from the
+    first one on."""
 
     def failed(self, summary: Mapping[str, Any]) -> bool:
-        return bool(summary["collisions"])
+        return collisions(summary) > 0
 
     def failed_at(self, summary: Mapping[str, Any]) -> float | None:
-        return summary.get("first_collision_t_s")
+        return first_collision_t(summary)
 
 
 @dataclass(frozen=True)
 class LeastDistance(_FailsAtCollision):
-    """The least distance between the bus and any pedestrian (m); 0 at a collision."""
+    """The least distance between the bus and any pedestrian (m); 0 at a collision (a walk-in
+    keeps its distance, below the walker's radius: the search still closes in on it)."""
 
     name: ClassVar[str] = "distance"
     unit: ClassVar[str] = "m"
@@ -77,7 +82,7 @@ class LeastDistance(_FailsAtCollision):
     margins: ClassVar[tuple[str, ...]] = ()
 
     def margin(self, summary: Mapping[str, Any]) -> float:
-        if summary["collisions"]:
+        if collisions(summary):
             return 0.0
         return float(summary["min_distance_bus_pedestrian_m"])
 
@@ -100,7 +105,7 @@ class EmergencyBrake:
         return LeastDistance().margin(summary)
 
     def failed(self, summary: Mapping[str, Any]) -> bool:
-        return _emergency_s(summary) > 0 or bool(summary["collisions"])
+        return _emergency_s(summary) > 0 or collisions(summary) > 0
 
     def failed_at(self, summary: Mapping[str, Any]) -> float | None:
         return None  # the summary gives the braking's length, not its start
@@ -141,7 +146,7 @@ class TimeToCollision(_FailsAtCollision):
     margins: ClassVar[tuple[str, ...]] = (run_margins.TimeToCollision.name,)
 
     def margin(self, summary: Mapping[str, Any]) -> float:
-        if summary["collisions"]:
+        if collisions(summary):
             return 0.0
         least = summary["margins"][run_margins.TimeToCollision.name]["least_s"]
         return OPEN_TTC_S if least is None else min(float(least), OPEN_TTC_S)
@@ -207,16 +212,19 @@ def first_break_t(summary: Mapping[str, Any]) -> float | None:
 def broken(summary: Mapping[str, Any]) -> list[str]:
     """The guarantee's broken promises in a run, within its assumptions: collisions and
     containment violations that began before the world first broke an assumption (after it,
-    the estimator's sets owe nothing to a truth outside its model)."""
+    the estimator's sets owe nothing to a truth outside its model). Walk-ins are listed
+    after them, whenever they came: no assumption excuses them, and no promise covers them."""
     since = first_break_t(summary)
 
     def before(t: float | None) -> bool:
         return since is None or (t is not None and t < since)
 
     out = []
-    if summary["collisions"] and before(summary.get("first_collision_t_s")):
-        out.append(f"{summary['collisions']} collision(s)")
+    if collisions(summary) and before(first_collision_t(summary)):
+        out.append(f"{collisions(summary)} collision(s)")
     violations = summary["violations"]
     if summary["containment_violations"] and before(violations[0]["t"] if violations else None):
         out.append(f"{summary['containment_violations']} containment violation(s)")
+    if walk_ins(summary):
+        out.append(f"{walk_ins(summary)} walk-in(s) into the standing bus")
     return out

@@ -56,9 +56,9 @@ class Evaluation:
     (it began before ``first_break_t``, the first time the world broke one, or the world broke
     none); ``failed_outside``: a failure that came after such a break, or whose start the
     summary does not give in a run with a break. ``broken``: collisions and containment
-    violations within the assumptions, whatever the objective. ``unfinished``: whether the run
-    ended with an automated vehicle's route unfinished (liveness, whatever the objective; None
-    where not known).
+    violations within the assumptions, and walk-ins, whatever the objective. ``unfinished``:
+    whether the run ended with an automated vehicle's route unfinished (liveness, whatever the
+    objective; None where not known).
     """
 
     method: str

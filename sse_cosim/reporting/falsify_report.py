@@ -170,10 +170,12 @@ def render(plan: Mapping[str, Any], table: pd.DataFrame, worst: Sequence[WorstCa
         "",
         markdown_table([_worst_row(w, table, folder) for w in worst]),
         "",
-        "## Broken promises",
+        "## Broken promises, and walk-ins",
         "",
-        "Runs with a collision or a containment violation before any break of the "
-        "assumptions (whatever the objective):",
+        "Runs with a collision (contact with a moving vehicle) or a containment violation "
+        "before any break of the assumptions, whatever the objective; and runs in which a "
+        "pedestrian walked into the standing bus (a walk-in: the claim is that the bus stands "
+        "before any contact, docs/controller.md), whenever it came:",
         "",
         markdown_table(_broken_rows(table)),
         "",

@@ -630,9 +630,24 @@ class RunRecorder:
             "route_completed": _all_known([v["route_completed"] for v in vehicles.values()]),
         }
         contact = [r["t"] for r in self.rows if r["collision"]]
-        if contact:  # only a run with a collision has the key (the falsifier orders it in time)
+        if contact:  # only a run with a collision has these keys (the falsifier reads them)
             summary["first_collision_t_s"] = contact[0]
+            summary.update(self._moving_contact())
         return summary
+
+    def _moving_contact(self) -> dict[str, Any]:
+        """Contact with a moving vehicle, apart from a pedestrian walking into a standing one:
+        the claim of docs/controller.md is that every vehicle stands before any contact.
+        ``collisions_moving``: contacts (per vehicle, times contact began) during steps with
+        the vehicle at :data:`STOPPED_SPEED_MPS` or faster; ``first_moving_collision_t_s``:
+        the first such step (None: every contact was with a standing vehicle)."""
+        moving = [[r["collision"] and r["bus_speed"] >= STOPPED_SPEED_MPS
+                   for r in self.rows if r["vehicle"] == vid]
+                  for vid in present(self.scenario.automated)]
+        times = [r["t"] for r in self.rows
+                 if r["collision"] and r["bus_speed"] >= STOPPED_SPEED_MPS]
+        return {"collisions_moving": sum(_entries(flags) for flags in moving),
+                "first_moving_collision_t_s": times[0] if times else None}
 
     def _vehicle_figures(self, rows: list[dict[str, Any]],
                          route_completed: bool | None) -> dict[str, Any]:
@@ -793,6 +808,26 @@ def _all(flags) -> bool | None:
 def _all_known(flags: list[bool | None]) -> bool | None:
     """Whether every flag holds; None if any is unknown."""
     return None if None in flags else all(flags)
+
+
+def collisions(summary: Mapping[str, Any]) -> int:
+    """A run's collisions: contacts with a moving vehicle (``collisions_moving``; a summary
+    written before contact was split counts every contact as one)."""
+    if not summary["collisions"]:
+        return 0
+    return int(summary.get("collisions_moving", summary["collisions"]))
+
+
+def walk_ins(summary: Mapping[str, Any]) -> int:
+    """A run's contacts that began with the vehicle standing: a pedestrian walked into it."""
+    return int(summary["collisions"]) - collisions(summary)
+
+
+def first_collision_t(summary: Mapping[str, Any]) -> float | None:
+    """When the first contact with a moving vehicle began (s); None: none, or not known."""
+    if "collisions_moving" in summary:
+        return summary["first_moving_collision_t_s"]
+    return summary.get("first_collision_t_s")
 
 
 def _entries(flags: list[bool]) -> int:

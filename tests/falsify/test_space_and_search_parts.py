@@ -285,6 +285,21 @@ def test_the_objectives_read_their_margins_and_failures():
     assert standstill.failed(_summary(route_completed=False))
 
 
+def test_a_walk_in_into_the_standing_bus_fails_no_objective_and_is_listed():
+    distance, emergency, ttc = (OBJECTIVES[n] for n in ("distance", "emergency", "ttc"))
+    walk_in = _summary(collisions=1, min_distance_bus_pedestrian_m=0.26, first_collision_t_s=37.4,
+                       collisions_moving=0, first_moving_collision_t_s=None,
+                       margins={"time_to_collision": {"least_s": 0.0}})
+    assert distance.margin(walk_in) == 0.26
+    assert not (distance.failed(walk_in) or emergency.failed(walk_in) or ttc.failed(walk_in))
+    assert distance.failed_at(walk_in) is None
+    assert broken(walk_in) == ["1 walk-in(s) into the standing bus"]
+    # a walk-in, then the bus drives off while in contact: a collision from that step on
+    both = {**walk_in, "collisions": 2, "collisions_moving": 1, "first_moving_collision_t_s": 40.1}
+    assert distance.margin(both) == 0.0 and distance.failed_at(both) == 40.1
+    assert broken(both) == ["1 collision(s)", "1 walk-in(s) into the standing bus"]
+
+
 def test_the_time_to_collision_objective_asks_for_its_margin_and_caps_it():
     ttc = OBJECTIVES["ttc"]
     assert ttc.margins == ("time_to_collision",)
