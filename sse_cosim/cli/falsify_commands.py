@@ -72,7 +72,9 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
     reproducible from its seed; --resume reads back the finished runs of a killed one and
     goes on where it stopped. evaluations.csv is rewritten after every generation: --resume
     takes what it records (of the same scenario, objective, seed and box) without running
-    it again, so a search committed part-way goes on where runs/ is gone.
+    it again, so a search committed part-way goes on where runs/ is gone. A search that
+    other code made (falsify.json's code_sha256, a digest of the package's sources) is not
+    resumed: exit status 2.
 
     Exit status 4 if a run broke the guarantee within the assumptions (a collision or a
     containment violation before any break), 3 if a run failed, otherwise 0 (a failure of

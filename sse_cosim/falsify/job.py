@@ -8,7 +8,9 @@ show that it reproduces the margin the search saw.
 ``evaluations.csv`` is the search's ledger: with ``resume``, an evaluation it records as run
 (with a margin) is taken from it, not run again, provided ``falsify.json`` names the same
 search (:data:`SAME_SEARCH`; the scenario compared as it resolves). So a search can be
-committed part-way and go on in a fresh checkout, where the runs' folders are gone.
+committed part-way and go on in a fresh checkout, where the runs' folders are gone. Made by
+other code (``code_sha256``: :func:`code_digest`), neither the ledger nor the runs' folders
+are taken: the resume is refused, since one search's figures must come from one code.
 """
 
 from __future__ import annotations
@@ -44,6 +46,21 @@ one's evaluations from its ledger (the run keys name the method, evaluation, see
 asked and overrides, not these)."""
 
 
+CODE_FIELD = "code_sha256"
+"""The field of ``falsify.json`` naming the code that made the search's runs."""
+
+
+def code_digest() -> str:
+    """SHA-256 of this package's Python sources (paths and contents, in path order): the
+    same on every checkout of one commit, different once any of them changes."""
+    package = Path(__file__).resolve().parents[1]
+    digest = hashlib.sha256()
+    for source in sorted(package.rglob("*.py")):
+        digest.update(source.relative_to(package).as_posix().encode() + b"\0")
+        digest.update(source.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
 @dataclass(frozen=True)
 class FalsifyOutcome:
     """What a search found: its evaluations (as written), the worst cases, the report."""
@@ -77,6 +94,8 @@ def falsify(setup: SearchSetup, out_dir: Path, execution: Execution, command: st
     """Run the search into ``out_dir``, write its outputs after every round and reproduce
     its worst cases."""
     plan = plan_document(setup, command, out_dir)
+    if execution.resume:
+        check_same_code(out_dir, plan)
     recorded = recorded_outcomes(out_dir, plan) if execution.resume else {}
 
     def checkpoint(evaluations: list[Evaluation]) -> None:
@@ -97,12 +116,28 @@ def plan_document(setup: SearchSetup, command: str, out_dir: Path) -> dict[str, 
     digest = hashlib.sha256(json.dumps(resolved, sort_keys=True).encode()).hexdigest()
     return {"command": command, "scenario": setup.data.get("name", setup.scenario.stem),
             "scenario_file": portable_path(setup.scenario), "scenario_sha256": digest,
+            CODE_FIELD: code_digest(),
             "objective": objective.name,
             "objective_help": objective.help, "unit": objective.unit,
             "methods": list(setup.methods), "budget": setup.budget, "seed": setup.seed,
             "generation": setup.generation, "generations": setup.generations,
             "dims": [{"name": d.name, "low": d.low, "high": d.high}
                      for d in setup.space.dims]}
+
+
+def check_same_code(out_dir: Path, plan: dict[str, Any]) -> None:
+    """Refuse (:class:`UserError`) to resume a search in ``out_dir`` whose ``falsify.json``
+    says other code made its runs, or does not say which: its ledger and its runs' folders
+    would mix two codes' figures in one search."""
+    plan_file = out_dir / report.FALSIFY_PLAN
+    if not plan_file.is_file():
+        return
+    earlier = json.loads(plan_file.read_text()).get(CODE_FIELD)
+    if earlier != plan[CODE_FIELD]:
+        made = "other code than this checkout's" if earlier else "code it does not name"
+        raise UserError(str(plan_file), CODE_FIELD, f"its runs were made by {made}",
+                        "run without --resume to make them again, or give --out another "
+                        "folder")
 
 
 def recorded_outcomes(out_dir: Path, plan: dict[str, Any]) -> dict[str, Recorded]:

@@ -279,6 +279,19 @@ def test_a_pedestrian_on_an_edge_without_sidewalk(tmp_path, capsys):
     check_line(capsys.readouterr().err, case)
 
 
+def test_resuming_a_search_made_by_other_code(tmp_path, capsys):
+    """--resume over a search whose falsify.json names other code: refused before any run."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "falsify.json").write_text(json.dumps({"code_sha256": "0" * 64}))
+    with pytest.raises(SystemExit) as info:
+        main(["falsify", str(S1_RUN), "--budget", "2", "--resume", "--out", str(out)])
+    assert info.value.code == EXIT_BAD_INPUT
+    check_line(capsys.readouterr().err, Case("other code", None, (
+        "code_sha256", "other code", "without --resume"), named="falsify.json"))
+    assert sorted(p.name for p in out.iterdir()) == ["falsify.json"]  # nothing ran
+
+
 @pytest.mark.parametrize("case", [c for c in CASES if c.id in (
     "syntax", "set a path that does not exist")], ids=lambda c: c.id)
 def test_as_a_user_runs_it(case, tmp_path):

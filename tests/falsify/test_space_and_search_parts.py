@@ -8,7 +8,14 @@ import numpy as np
 import pytest
 
 from sse_cosim.errors import UserError
-from sse_cosim.falsify.job import plan_document, prepare, recorded_outcomes
+from sse_cosim.falsify.job import (
+    CODE_FIELD,
+    check_same_code,
+    code_digest,
+    plan_document,
+    prepare,
+    recorded_outcomes,
+)
 from sse_cosim.falsify.objectives import (
     OBJECTIVES,
     OPEN_DEPTH_M,
@@ -448,6 +455,21 @@ def test_a_ledger_gives_its_runs_outcomes_and_only_to_the_same_search(tmp_path: 
     (tmp_path / EVALUATIONS).write_text(LEDGER_HEAD + "\ncma,0,0,k0,2.5,False,False,,,,\n")
     assert recorded_outcomes(tmp_path, plan) == {  # a ledger from before the column
         "k0": Recorded(2.5, False, False, None, (), unfinished=None)}
+
+
+def test_resuming_a_search_that_other_code_made_is_refused(tmp_path: Path):
+    setup = prepare(S3, SPACE, "distance", ("cma",), budget=2, seed=1)
+    plan = plan_document(setup, "test", tmp_path)
+    assert plan[CODE_FIELD] == code_digest() and len(plan[CODE_FIELD]) == 64
+    check_same_code(tmp_path, plan)  # nothing to resume: nothing to refuse
+    write_json_atomic(tmp_path / FALSIFY_PLAN, plan)
+    check_same_code(tmp_path, plan)  # the same code
+    write_json_atomic(tmp_path / FALSIFY_PLAN, {**plan, CODE_FIELD: "0" * 64})
+    with pytest.raises(UserError, match=r"code_sha256.*other code than this checkout"):
+        check_same_code(tmp_path, plan)
+    write_json_atomic(tmp_path / FALSIFY_PLAN, {k: v for k, v in plan.items() if k != CODE_FIELD})
+    with pytest.raises(UserError, match=r"code_sha256.*code it does not name"):
+        check_same_code(tmp_path, plan)
 
 
 def test_resuming_a_longer_search_with_a_smaller_budget_is_refused(tmp_path: Path):
