@@ -158,7 +158,8 @@ def render(plan: Mapping[str, Any], table: pd.DataFrame, worst: Sequence[WorstCa
         "",
         "Routes unfinished: runs that ended (at the scenario's duration) with an automated "
         f"vehicle short of its route's end, whatever the objective (`{UNFINISHED}` in "
-        f"`{EVALUATIONS}`): the bus stood or crept for good, a liveness finding.",
+        f"`{EVALUATIONS}`), a liveness finding to look into: the bus stood or crept for "
+        "good, or the duration was too short for the way it went (a late step-out).",
         "",
         "Least margin so far, by evaluations:",
         "",
