@@ -226,5 +226,15 @@ def broken(summary: Mapping[str, Any]) -> list[str]:
     if summary["containment_violations"] and before(violations[0]["t"] if violations else None):
         out.append(f"{summary['containment_violations']} containment violation(s)")
     if walk_ins(summary):
-        out.append(f"{walk_ins(summary)} walk-in(s) into the standing bus")
+        out.append(f"{walk_ins(summary)} {WALK_IN}")
     return out
+
+
+WALK_IN = "walk-in(s) into the standing bus"
+"""How :func:`broken` names a run's walk-ins (after their count)."""
+
+
+def promises_broken(listed: str) -> bool:
+    """Whether ``listed`` (:func:`broken`'s entries joined by ``"; "``, as the ledger holds
+    them) names a broken promise, not only walk-ins."""
+    return any(entry and not entry.endswith(WALK_IN) for entry in listed.split("; "))

@@ -22,6 +22,7 @@ from sse_cosim.falsify.objectives import (
     OPEN_TTC_S,
     broken,
     first_break_t,
+    promises_broken,
 )
 from sse_cosim.falsify.search import Recorded
 from sse_cosim.falsify.searchers import SEARCHERS, generation_size
@@ -305,6 +306,9 @@ def test_a_walk_in_into_the_standing_bus_fails_no_objective_and_is_listed():
     both = {**walk_in, "collisions": 2, "collisions_moving": 1, "first_moving_collision_t_s": 40.1}
     assert distance.margin(both) == 0.0 and distance.failed_at(both) == 40.1
     assert broken(both) == ["1 collision(s)", "1 walk-in(s) into the standing bus"]
+    # as the ledger holds them: only a broken promise makes the search exit with status 4
+    assert not promises_broken("; ".join(broken(walk_in))) and not promises_broken("")
+    assert promises_broken("; ".join(broken(both)))
 
 
 def test_the_time_to_collision_objective_asks_for_its_margin_and_caps_it():
