@@ -666,6 +666,9 @@ class RunRecorder:
             "collisions": _entries([r["collision"] for r in rows]),
             "route_completed": route_completed,
             "time_stopped_s": round(dt * int(np.sum(speeds < STOPPED_SPEED_MPS)), 6),
+            # stop and go: the controller's order to move after its order to stop
+            "restarts": sum(before["commanded_speed"] == 0.0 < now["commanded_speed"]
+                            for before, now in pairwise(rows)),
             # the controller's own standstill: SUMO holding a bus that was told to go (right of
             # way to a car, a leader) does not count
             "longest_standstill_after_clear_s": round(dt * _longest_run(

@@ -163,6 +163,35 @@ def test_a_pedestrian_in_view_who_cannot_arrive_before_the_bus_clears_lets_it_cr
     assert max(creep_from_standstill(1.0, 2.39, 30.0)) > ZONE_LENGTH + BUS.length_m
 
 
+def start_before_overlapping_zones(in_view_arrival_b: float,
+                                   steps: int = 40) -> tuple[list[float], list[float]]:
+    """The front (m past zone A's start) and the command at every step of a bus that starts
+    standing 1 m before zone A, which it would clear long before A's pedestrian in view
+    (30 s), with zone B (a junction's next walking area) starting 4 m on, inside A's clearing
+    distance, and B's pedestrian in view ``in_view_arrival_b`` from it (both arrivals held)."""
+    safe = policy()
+    s, v, fronts, commands = 0.0, 0.0, [], []
+    for _ in range(steps):
+        a = ZoneOutlook(0, 1.0 - s, 1.0 - s + ZONE_LENGTH + BUS.length_m, 30.0, 30.0)
+        b = ZoneOutlook(1, 5.0 - s, 5.0 - s + ZONE_LENGTH + BUS.length_m, in_view_arrival_b,
+                        in_view_arrival_b)
+        commands.append(safe.decide(picture(v, (a, b))).command_mps)
+        s, v = DYN.advance(s, v, commands[-1])
+        fronts.append(s - 1.0)
+    return fronts, commands
+
+
+def test_a_bus_does_not_speed_up_onto_ground_it_cannot_clear():
+    """Speeding up into A would hold the bus inside A before B (B's pedestrian 1.4 s away):
+    it creeps to A's edge and stands there, instead of moving off at nominal speed, stopping
+    and moving off again (a lurch); with B's pedestrian far off it goes at nominal speed."""
+    fronts, commands = start_before_overlapping_zones(1.4)
+    assert max(fronts) <= 0.0 and commands[-10:] == [0.0] * 10
+    assert max(commands) < level_speed(SpeedLevel.VERY_SLOW, BUS.nominal_speed_mps, CONFIG)
+    fronts, commands = start_before_overlapping_zones(30.0)
+    assert commands == [BUS.nominal_speed_mps] * 40
+
+
 def test_a_pedestrian_coming_into_view_stops_the_bus_without_an_emergency_brake():
     # moving too fast to stop short: the comfortable stop (on the crossing) is what is left
     decision = policy().decide(picture(2.0, (zone(0.3, 3.0, 3.0),)))

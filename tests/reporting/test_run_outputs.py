@@ -143,3 +143,12 @@ def test_run_folder_records_no_machine_path(tmp_path, monkeypatch):
     assert not Path(scenario["network"]["sources_dir"]).is_absolute()
     sources = (out / scenario["network"]["sources_dir"]).resolve()
     assert sources == (repo / "sumo_net").resolve()
+
+
+def test_restarts_count_orders_to_move_that_follow_an_order_to_stop():
+    speeds = [5.0, 2.0, 0.0, 0.0, 0.2, 0.0, 0.3, 1.0]
+    commanded = [5.0, 0.0, 0.0, 8.0, 0.0, 8.0, 8.0, 0.5]  # stop, go, stop, go, slow down
+    summary = recorder_with(speeds, [False] * len(speeds), None, commanded).summary()
+    assert summary["restarts"] == 2
+    assert summary["vehicles"]["bus"]["restarts"] == 2
+    assert recorder_with([3.0] * 4, [False] * 4).summary()["restarts"] == 0
