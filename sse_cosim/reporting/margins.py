@@ -7,6 +7,9 @@ what it saw or from what the recorder kept; the run writes it under ``summary.js
 always did). The falsifier's objectives name the margins they read. A new margin is one class
 added to :data:`MARGINS`.
 
+:class:`MovingDistance` is the least distance between a moving vehicle and a pedestrian:
+the distance of the controller's claim (a vehicle stands before any contact).
+
 :class:`TimeToCollision` is the classic surrogate safety measure: at every step, for every
 automated vehicle and pedestrian, how long until they touch if both keep their velocity
 (the vehicle along its heading at its speed; the pedestrian at SUMO's speed along the
@@ -113,6 +116,40 @@ def time_to_contact(p: np.ndarray, w: np.ndarray, half: np.ndarray,
     corners = np.array([[sx * half[0], sy * half[1]] for sx in (-1, 1) for sy in (-1, 1)])
     times += [ray_disc_entry(p, w, corner, radius) for corner in corners]
     return np.min(times, axis=0)
+
+
+@dataclass
+class MovingDistance:
+    """The least distance between an automated vehicle that moves and any pedestrian (m),
+    with when and which vehicle: the recorder's distance (footprint to the pedestrian's
+    centre) at the steps the vehicle moved, at
+    :data:`~sse_cosim.reporting.recorder.STOPPED_SPEED_MPS` or faster.
+
+    The claim of docs/controller.md is that a vehicle stands before any contact, so this is
+    the distance the claim is about: a pedestrian who walks up to (or into) a standing vehicle
+    does not bring it down. ``least_m`` is None where no pedestrian was in the scene while a
+    vehicle moved.
+    """
+
+    name: ClassVar[str] = "moving_distance"
+    help: ClassVar[str] = ("least distance between a moving automated vehicle (0.1 m/s or "
+                           "faster) and a pedestrian (m)")
+    labelled_only: ClassVar[bool] = False
+
+    scenario: Scenario
+
+    def __call__(self, result: StepResult) -> None:
+        """Nothing to watch: the recorder keeps every step's speed and distance."""
+
+    def value(self, recorder: RunRecorder) -> dict[str, Any]:
+        from sse_cosim.reporting.recorder import STOPPED_SPEED_MPS
+
+        least = _Least()
+        for row in recorder.rows:
+            if row["distance_bus_pedestrian"] is not None and \
+                    row["bus_speed"] >= STOPPED_SPEED_MPS:
+                least.note(row["distance_bus_pedestrian"], t=row["t"], vehicle=row["vehicle"])
+        return least.value()
 
 
 @dataclass
@@ -259,7 +296,7 @@ def _signed_depth(region: Any, point: tuple[float, float]) -> float:
 
 
 MARGINS: dict[str, Callable[[Scenario], Margin]] = {
-    margin.name: margin for margin in (TimeToCollision, ContainmentDepth)}
+    margin.name: margin for margin in (MovingDistance, TimeToCollision, ContainmentDepth)}
 
 
 def _walking_velocities(persons: Sequence[PersonState]) -> np.ndarray:

@@ -7,7 +7,8 @@ walks along the walking area and into the bus's side at 37.4 s (people step arou
 standing bus; SUMO's walkers do not). The claim of docs/controller.md is that the bus stands
 before any contact, so this contact is a walk-in, not a collision: the summary counts it in
 ``collisions`` (every contact, as the campaign does) and not in ``collisions_moving``, and
-the falsifier lists it beside the broken promises without failing the distance objective.
+the falsifier lists it beside the broken promises without failing the distance objective,
+whose margin is the distance while the bus moves.
 """
 
 from __future__ import annotations
@@ -27,14 +28,16 @@ CASE = Path(__file__).with_name("town_walk_in.toml")
 
 def test_a_pedestrian_walking_into_the_standing_bus_is_a_walk_in_not_a_collision(
         tmp_path: Path):
-    run_scenario_file(CASE, tmp_path, plots=False, summary_only=True)
+    distance = OBJECTIVES["distance"]
+    run_scenario_file(CASE, tmp_path, plots=False, summary_only=True, margins=distance.margins)
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["collisions"] == 1
     assert 37.0 < summary["first_collision_t_s"] < 38.0
     assert summary["collisions_moving"] == 0
     assert summary["first_moving_collision_t_s"] is None
     assert summary["containment_violations"] == 0
-    distance = OBJECTIVES["distance"]
     assert not distance.failed(summary)
-    assert 0.0 < distance.margin(summary) <= 0.3  # within the walker's radius of the body
+    # within the walker's radius of the body, but the bus stood: its margin is the distance
+    # while it moved
+    assert summary["min_distance_bus_pedestrian_m"] <= 0.3 < distance.margin(summary)
     assert broken(summary) == ["1 walk-in(s) into the standing bus"]

@@ -19,6 +19,7 @@ from sse_cosim.falsify.job import (
 from sse_cosim.falsify.objectives import (
     OBJECTIVES,
     OPEN_DEPTH_M,
+    OPEN_DISTANCE_M,
     OPEN_TTC_S,
     broken,
     first_break_t,
@@ -274,7 +275,8 @@ def _summary(**changes):
     base = {"collisions": 0, "contact_steps": 0, "min_distance_bus_pedestrian_m": 2.5,
             "containment_violations": 0, "violations": [], "route_completed": True,
             "longest_standstill_after_clear_s": 0.5, "travel_time_s": 30.0, "steps": 300,
-            "level_share": {"emergency": 0.0}}
+            "level_share": {"emergency": 0.0},
+            "margins": {"moving_distance": {"least_m": 2.5}}}
     return {**base, **changes}
 
 
@@ -282,6 +284,10 @@ def test_the_objectives_read_their_margins_and_failures():
     distance, emergency, standstill = (OBJECTIVES[n] for n in
                                        ("distance", "emergency", "standstill"))
     assert distance.margin(_summary()) == 2.5
+    # the distance while the bus moves, not the least of the run
+    assert distance.margin(_summary(min_distance_bus_pedestrian_m=0.4)) == 2.5
+    unmet = _summary(margins={"moving_distance": {"least_m": None}})
+    assert distance.margin(unmet) == OPEN_DISTANCE_M == emergency.margin(unmet)
     hit = _summary(collisions=1, min_distance_bus_pedestrian_m=0.1, first_collision_t_s=11.9)
     assert distance.margin(hit) == 0.0 and distance.failed(hit)
     assert distance.failed_at(hit) == 11.9
@@ -297,8 +303,9 @@ def test_a_walk_in_into_the_standing_bus_fails_no_objective_and_is_listed():
     distance, emergency, ttc = (OBJECTIVES[n] for n in ("distance", "emergency", "ttc"))
     walk_in = _summary(collisions=1, min_distance_bus_pedestrian_m=0.26, first_collision_t_s=37.4,
                        collisions_moving=0, first_moving_collision_t_s=None,
-                       margins={"time_to_collision": {"least_s": 0.0}})
-    assert distance.margin(walk_in) == 0.26
+                       margins={"time_to_collision": {"least_s": 0.0},
+                                "moving_distance": {"least_m": 3.1}})
+    assert distance.margin(walk_in) == 3.1  # the walker came near only the standing bus
     assert not (distance.failed(walk_in) or emergency.failed(walk_in) or ttc.failed(walk_in))
     assert distance.failed_at(walk_in) is None
     assert broken(walk_in) == ["1 walk-in(s) into the standing bus"]
@@ -314,7 +321,9 @@ def test_a_walk_in_into_the_standing_bus_fails_no_objective_and_is_listed():
 def test_the_time_to_collision_objective_asks_for_its_margin_and_caps_it():
     ttc = OBJECTIVES["ttc"]
     assert ttc.margins == ("time_to_collision",)
-    assert all(OBJECTIVES[n].margins == () for n in ("distance", "emergency", "standstill"))
+    assert OBJECTIVES["distance"].margins == OBJECTIVES["emergency"].margins == (
+        "moving_distance",)
+    assert OBJECTIVES["standstill"].margins == ()
 
     def timed(least, **changes):
         return _summary(margins={"time_to_collision": {"least_s": least}}, **changes)
@@ -360,7 +369,7 @@ def test_the_depth_objective_refuses_anonymous_detections(tmp_path: Path):
     walk_only.write_text('[step_out]\nhigh = 5.0\n[start_behind_truck]\nlow = 1.0\nhigh = 9.0\n')
     with pytest.raises(UserError, match="containment_depth margin needs sets that name"):
         prepare(anonymous, walk_only, "depth", ("cma",), budget=4, seed=1)
-    prepare(anonymous, walk_only, "distance", ("cma",), budget=4, seed=1)  # needs no margin
+    prepare(anonymous, walk_only, "distance", ("cma",), budget=4, seed=1)  # no labelled one
 
 
 def test_a_collision_after_the_world_broke_an_assumption_is_not_a_broken_promise():

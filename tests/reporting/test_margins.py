@@ -16,6 +16,7 @@ import shapely
 from sse_cosim.pipeline.result import StepResult
 from sse_cosim.reporting.margins import (
     ContainmentDepth,
+    MovingDistance,
     TimeToCollision,
     time_to_contact,
 )
@@ -106,9 +107,15 @@ def test_a_run_reports_its_margins_only_when_asked_and_the_files_agree(tmp_path:
 
     out = tmp_path / "asked"
     summary = run_scenario_file(S3, out, plots=False,
-                                margins=("time_to_collision", "containment_depth"))
+                                margins=("time_to_collision", "containment_depth",
+                                         "moving_distance"))
     _the_time_agrees_with_the_files(summary, out)
     _the_depth_agrees_with_the_files(summary, out)
+    trace = pd.read_csv(out / "trace.csv")
+    moving = trace[trace["bus_speed"] >= 0.1]
+    least = summary["margins"]["moving_distance"]
+    assert least["least_m"] == pytest.approx(moving["distance_bus_pedestrian"].min())
+    assert least["least_m"] >= summary["min_distance_bus_pedestrian_m"]
 
 
 def _the_time_agrees_with_the_files(summary: dict, out: Path) -> None:
@@ -172,6 +179,17 @@ def _the_depth_agrees_with_the_files(summary: dict, out: Path) -> None:
     point = truth[(accounted["t"], accounted["pedestrian"])]
     assert union.covers(point) and accounted["least_m"] >= 0.0
     assert accounted["least_m"] == pytest.approx(union.boundary.distance(point), abs=1e-5)
+
+
+def test_the_moving_distance_leaves_out_the_steps_a_vehicle_stood():
+    rows = [{"t": 0.1 * i, "vehicle": "bus", "bus_speed": v, "distance_bus_pedestrian": d}
+            for i, (v, d) in enumerate([(5.0, None), (2.0, 3.0), (0.09, 0.2), (0.0, 0.1),
+                                        (0.1, 2.5), (4.0, 6.0)])]
+    margin = MovingDistance(load_scenario(S3))
+    assert margin.value(SimpleNamespace(rows=rows)) == {  # type: ignore[arg-type]
+        "least_m": 2.5, "t": pytest.approx(0.4), "vehicle": "bus"}
+    assert margin.value(SimpleNamespace(rows=rows[2:4])) == {  # type: ignore[arg-type]
+        "least_m": None}
 
 
 def test_the_pedestrian_keeps_the_heading_sumo_walks_it_through_a_sideways_step():
