@@ -20,6 +20,20 @@ DEFAULT_BUDGET = 100
 DEFAULT_SEED = 1
 
 
+def _case(text: str) -> tuple[str, int]:
+    """``METHOD:N`` as (method, N); click.BadParameter if it is not that."""
+    method, _, number = text.partition(":")
+    if method not in SEARCHERS or not number.isdigit() or int(number) < 1:
+        raise click.BadParameter(f"{text!r} is not METHOD:N (METHOD one of "
+                                 f"{', '.join(SEARCHERS)}, N from 1), e.g. cma:27")
+    return method, int(number)
+
+
+def _cases(_ctx: click.Context, _param: click.Parameter,
+           values: tuple[str, ...]) -> tuple[tuple[str, int], ...]:
+    return tuple(_case(text) for text in values)
+
+
 @cli.command()
 @click.argument("scenario", type=click.Path(path_type=Path, dir_okay=False, exists=True))
 @click.option("-f", "--file", "space_file", type=click.Path(path_type=Path, dir_okay=False),
@@ -39,11 +53,16 @@ DEFAULT_SEED = 1
               help="Seed of every method: the same seed, the same search.")
 @click.option("--out", "out_dir", type=click.Path(path_type=Path, file_okay=False),
               default=None, help=f"Search folder (default {OUT}/<scenario file name>).")
+@click.option("--case", "cases", multiple=True, metavar="METHOD:N", callback=_cases,
+              help="Run nothing: write METHOD's evaluation N (from 1, as the report counts) "
+              "of the search in OUT as a scenario file, OUT/case_<method>_<N>.toml, that "
+              "`sse-cosim run` reproduces (repeatable; give the search's falsify file, "
+              "objective and seed).")
 @execution_options("Keep finished runs of an earlier search with the same seed and go on "
                    "where it stopped.")
 def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str, ...],
-            budget: int, seed: int, out_dir: Path | None, workers: int | None, executor: str,
-            scheduler: str | None, resume: bool) -> None:
+            budget: int, seed: int, out_dir: Path | None, cases: tuple[tuple[str, int], ...],
+            workers: int | None, executor: str, scheduler: str | None, resume: bool) -> None:
     """Search for the world that breaks the guarantee, within its assumptions.
 
     Instead of a grid, a search steers every free choice of the scenario (the
@@ -65,6 +84,8 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
       worst_<method>.toml    the worst case, a scenario file: sse-cosim run reproduces it
       worst_<method>/        that run, with its replay
       runs/<key>/            every evaluation's summary.json
+      case_<method>_<N>.toml with --case (and nothing else): that evaluation as a
+                             scenario file, from the ledger
 
     Every run counts the world's breaks of A1 (SUMO moving a walker off the model or off
     the walkable ground) instead of stopping at them; a failure counts only if it began
@@ -82,12 +103,18 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
     are findings in the report).
     """
     from sse_cosim.falsify.job import falsify as run_falsify
-    from sse_cosim.falsify.job import prepare
+    from sse_cosim.falsify.job import prepare, write_case
     from sse_cosim.runner.executors import Execution
 
     check_scheduler(executor, scheduler)
     methods = methods or DEFAULT_METHODS
     setup = prepare(scenario, space_file, objective, methods, budget, seed)
+    if cases:
+        for method, number in cases:
+            case = write_case(setup, out_dir or OUT / scenario.stem, method, number)
+            asked = "".join(f" --margin {name}" for name in setup.objective.margins)
+            click.echo(f"wrote {case}: sse-cosim run {case.as_posix()}{asked}")
+        return
     out_dir = writable_folder(out_dir or OUT / scenario.stem, "--out")
     click.echo(f"falsify: {setup.scenario}: {setup.space.size} values searched, "
                f"{', '.join(methods)}, {setup.generations} generation(s) of "

@@ -27,9 +27,16 @@ from tqdm import tqdm
 
 from sse_cosim.errors import UserError
 from sse_cosim.falsify.objectives import OBJECTIVES
-from sse_cosim.falsify.search import Evaluation, Progress, Recorded, SearchSetup, run_search
+from sse_cosim.falsify.search import (
+    Evaluation,
+    Progress,
+    Recorded,
+    SearchSetup,
+    evaluation_key,
+    run_search,
+)
 from sse_cosim.falsify.searchers import SEARCHERS
-from sse_cosim.falsify.space import build_space, load_falsify_file
+from sse_cosim.falsify.space import build_space, load_falsify_file, step_out_path
 from sse_cosim.files import portable_path, write_text_atomic
 from sse_cosim.reporting import falsify_report as report
 from sse_cosim.reporting.falsify_report import UNFINISHED
@@ -147,10 +154,9 @@ def recorded_outcomes(out_dir: Path, plan: dict[str, Any]) -> dict[str, Recorded
     plan_file, ledger = out_dir / report.FALSIFY_PLAN, out_dir / report.EVALUATIONS
     if not (plan_file.is_file() and ledger.is_file()):
         return {}
-    earlier = json.loads(plan_file.read_text())
-    differs = [field for field in SAME_SEARCH if earlier.get(field) != plan[field]]
-    if differs:
-        tqdm.write(f"{ledger}: recorded by another search (its {differs[0]} differs): its "
+    differs = _differs(json.loads(plan_file.read_text()), plan)
+    if differs is not None:
+        tqdm.write(f"{ledger}: recorded by another search (its {differs} differs): its "
                    "evaluations are not taken; finished runs are read back from runs/")
         return {}
     table = pd.read_csv(ledger, keep_default_na=False, na_values={"margin": [""],
@@ -166,6 +172,57 @@ def recorded_outcomes(out_dir: Path, plan: dict[str, Any]) -> dict[str, Recorded
                               tuple(part for part in str(row.broken).split("; ") if part),
                               _known_flag(getattr(row, UNFINISHED, "")))
             for row in ran.itertuples()}
+
+
+def _differs(earlier: dict[str, Any], plan: dict[str, Any]) -> str | None:
+    """The first field of :data:`SAME_SEARCH` in which an earlier search's ``falsify.json``
+    differs from ``plan``; None if it is the same search."""
+    return next((field for field in SAME_SEARCH if earlier.get(field) != plan[field]), None)
+
+
+def write_case(setup: SearchSetup, out_dir: Path, method: str, number: int) -> Path:
+    """``method``'s evaluation ``number`` (from 1, as the report counts) of the search in
+    ``out_dir`` as a scenario file, ``case_<method>_<number>.toml`` in ``out_dir``.
+
+    Its overrides are those the search's values recorded in ``evaluations.csv`` make (its
+    step-out times as recorded: the planner timed them), checked against the run's key, so
+    that the file is the run the search made; :class:`UserError` if the folder holds no such
+    search or evaluation, or if the falsify file or scenario now make other overrides."""
+    plan_file, ledger = out_dir / report.FALSIFY_PLAN, out_dir / report.EVALUATIONS
+    for needed in (plan_file, ledger):
+        if not needed.is_file():
+            raise UserError(str(needed), "--case", "no search's ledger is here",
+                            "give --out the folder of the search the case is from")
+    differs = _differs(json.loads(plan_file.read_text()), plan_document(setup, "", out_dir))
+    if differs is not None:
+        raise UserError(str(plan_file), differs, "is another search's than the command's",
+                        "give the search's scenario, --file, --objective and --seed")
+    table = pd.read_csv(ledger)
+    rows = table[(table["method"] == method) & (table["evaluation"] == number - 1)]
+    if rows.empty:
+        counted = int((table["method"] == method).sum())
+        raise UserError(str(ledger), "--case", f"has no evaluation {number} of {method}",
+                        f"give one from 1 to {counted}" if counted else
+                        f"give a method of the search ({', '.join(sorted(set(table['method'])))})")
+    row = rows.iloc[0]
+    space = setup.space
+    overrides = space.overrides({d.name: float(row[d.name]) for d in space.dims})
+    overrides.update({step_out_path(w.pedestrian): float(row[w.derived])
+                      for w in space.step_outs if pd.notna(row.get(w.derived))})
+    if evaluation_key(setup, method, number - 1, overrides) != row["key"]:
+        raise UserError(str(ledger), "key", f"{method}'s evaluation {number} ran with other "
+                        "overrides than the falsify file and scenario make of its values now",
+                        "use the falsify file and scenario the search used")
+    target = out_dir / f"case_{method}_{number}.toml"
+    outcome = (f"{setup.objective.name} margin {row['margin']:.3f} {setup.objective.unit}"
+               if pd.notna(row["margin"]) else
+               f"not feasible: {row['not_feasible']}" if pd.notna(row["not_feasible"]) else
+               "its run failed")
+    description = (f"{setup.data.get('name', setup.scenario.stem)}: {method}'s evaluation "
+                   f"{number} ({outcome})")
+    write_text_atomic(target, report.worst_case_document(setup.scenario, target, overrides,
+                                                         description, setup.objective.margins))
+    return target
 
 
 def _flag(value: Any) -> bool:

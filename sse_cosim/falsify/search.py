@@ -162,16 +162,24 @@ def _plan(setup: SearchSetup, method: str, generation: int, position: int, point
     source = str(setup.scenario)
     values, overrides, scenario = scenario_of(setup.space, setup.data, point, source,
                                               planner.walk_times)
-    asked = setup.objective.margins  # part of the run's identity: its summary differs
-    key = run_key("-".join([f"{method}-{index:04d}", *asked]), [], setup.seed, overrides)
+    key = evaluation_key(setup, method, index, overrides)
     planned = Evaluation(method, index, generation, values, overrides, key, None, False)
     reason = planner(scenario, source)
     if reason is not None:
         return replace(planned, not_feasible=reason), None
     task = RunTask(key=key, scenario=str(setup.scenario.resolve()),
                    out_dir=str(out_dir / RUNS_FOLDER / key), overrides=overrides,
-                   plots=False, summary_only=True, margins=asked)
+                   plots=False, summary_only=True, margins=setup.objective.margins)
     return planned, task
+
+
+def evaluation_key(setup: SearchSetup, method: str, index: int,
+                   overrides: Mapping[str, Any]) -> str:
+    """The run key of ``method``'s evaluation ``index`` (from 0) with ``overrides``: the
+    method, the evaluation, the margins asked (part of the run's identity: its summary
+    differs) and the seed, and a digest of the overrides."""
+    asked = setup.objective.margins
+    return run_key("-".join([f"{method}-{index:04d}", *asked]), [], setup.seed, overrides)
 
 
 def _scored(objective: Objective, planned: Evaluation,

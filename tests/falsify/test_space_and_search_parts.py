@@ -5,8 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
+from sse_cosim.cli.main import main
 from sse_cosim.errors import UserError
 from sse_cosim.falsify.job import (
     CODE_FIELD,
@@ -15,6 +17,7 @@ from sse_cosim.falsify.job import (
     plan_document,
     prepare,
     recorded_outcomes,
+    write_case,
 )
 from sse_cosim.falsify.objectives import (
     OBJECTIVES,
@@ -25,7 +28,7 @@ from sse_cosim.falsify.objectives import (
     first_break_t,
     promises_broken,
 )
-from sse_cosim.falsify.search import Recorded
+from sse_cosim.falsify.search import Recorded, evaluation_key
 from sse_cosim.falsify.searchers import SEARCHERS, generation_size
 from sse_cosim.falsify.space import (
     COUNTED_BREAKS,
@@ -42,7 +45,12 @@ from sse_cosim.falsify.space import (
 from sse_cosim.files import write_json_atomic
 from sse_cosim.reporting.falsify_report import EVALUATIONS, FALSIFY_PLAN
 from sse_cosim.runner.safety import ActorPlanner
-from sse_cosim.scenario.loader import load_scenario, load_scenario_data
+from sse_cosim.scenario.loader import (
+    apply_overrides,
+    load_scenario,
+    load_scenario_data,
+    validate_scenario,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 SPACE = ROOT / "sweeps" / "falsify.toml"
@@ -492,3 +500,58 @@ def test_resuming_a_longer_search_with_a_smaller_budget_is_refused(tmp_path: Pat
     (tmp_path / EVALUATIONS).write_text(LEDGER_HEAD + "\ncma,40,3,k40,2.5,False,False,,,,\n")
     with pytest.raises(UserError, match=r"records 4 generations.*--budget 2"):
         recorded_outcomes(tmp_path, plan)
+
+
+def _search_with_one_evaluation(folder: Path, walk_mps: float | None = None):
+    """S3's search (distance, seed 1) whose ledger in ``folder`` holds cma's evaluation 5:
+    the setup, and the overrides that evaluation ran with (its walk timed at 6.1 s)."""
+    setup = prepare(S3, SPACE, "distance", ("cma",), budget=2, seed=1)
+    write_json_atomic(folder / FALSIFY_PLAN, plan_document(setup, "test", folder))
+    values, overrides, _ = scenario_of(setup.space, setup.data, np.full(setup.space.size, 0.3),
+                                       str(S3), lambda scenario, source: {"pedestrian": 6.1})
+    row = {"method": "cma", "evaluation": 4, "generation": 0,
+           "key": evaluation_key(setup, "cma", 4, overrides), **values, "margin": 3.25,
+           "failed": False, "failed_outside": False, "first_break_t": None, "broken": "",
+           "not_feasible": None, "error": None}
+    if walk_mps is not None:
+        row["walk_mps"] = walk_mps
+    pd.DataFrame([row]).to_csv(folder / EVALUATIONS, index=False)
+    return setup, overrides
+
+
+def test_an_evaluation_of_the_ledger_becomes_the_scenario_file_of_its_run(tmp_path: Path):
+    setup, overrides = _search_with_one_evaluation(tmp_path)
+    case = write_case(setup, tmp_path, "cma", 5)
+    assert case == tmp_path / "case_cma_5.toml"
+    assert "cma's evaluation 5 (distance margin 3.250 m)" in case.read_text()
+    ran = validate_scenario(apply_overrides(setup.data, overrides, str(S3)), str(S3))
+    assert overrides["pedestrians.pedestrian.steps_onto_crossing_s"] == round(
+        6.1 + 0.3 * 10.0, 6)  # the step-out as recorded, not timed again
+    assert load_scenario(case).model_dump(exclude={"description"}) == ran.model_dump(
+        exclude={"description"})
+
+
+def test_a_case_the_ledger_does_not_hold_or_ran_otherwise_is_refused(tmp_path: Path):
+    setup, _ = _search_with_one_evaluation(tmp_path)
+    with pytest.raises(UserError, match=r"--case.*no evaluation 6 of cma.*from 1 to 1"):
+        write_case(setup, tmp_path, "cma", 6)
+    with pytest.raises(UserError, match=r"--case.*no evaluation 1 of random.*\(cma\)"):
+        write_case(setup, tmp_path, "random", 1)
+    other = prepare(S3, SPACE, "ttc", ("cma",), budget=2, seed=1)
+    with pytest.raises(UserError, match=r"falsify.json: objective: is another search's"):
+        write_case(other, tmp_path, "cma", 5)
+    with pytest.raises(UserError, match=r"no search's ledger is here"):
+        write_case(setup, tmp_path / "elsewhere", "cma", 5)
+    setup, _ = _search_with_one_evaluation(tmp_path, walk_mps=1.234567)  # not what it ran
+    with pytest.raises(UserError, match=r"evaluations.csv: key: cma's evaluation 5 ran with"):
+        write_case(setup, tmp_path, "cma", 5)
+    assert not list(tmp_path.glob("case_*.toml"))
+
+
+@pytest.mark.parametrize("case", ["cma:0", "cma", "annealing:3", "cma:x"])
+def test_a_case_that_is_not_method_and_number_is_one_line(case, capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["falsify", str(S3), "--case", case])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and f"'{case}' is not METHOD:N" in err
