@@ -106,7 +106,7 @@ import contextlib
 import logging
 import math
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
@@ -170,6 +170,11 @@ def sumo_version() -> str:
     if version:
         return version
     return str(libsumo.getVersion()[1]).removeprefix("SUMO ").strip()
+
+
+def vehicles_on(area: shapely.Geometry, vehicles: Iterable[VehicleState]) -> list[str]:
+    """The ids of the ``vehicles`` whose bodies meet ``area`` (a crossing's), sorted."""
+    return sorted(v.id for v in vehicles if v.footprint.polygon().intersects(area))
 
 
 def measure_walkers(net_path: Path, roadmap: RoadMap, extent: SceneExtent | None,
@@ -368,7 +373,7 @@ class SumoWorld:
                                   f"SUMO step at t={self._time + self._dt:.2f} s failed: "
                                   f"{message(exc)}") from exc
         self._check_insertions()
-        self._check_steps_onto_crossings(snapshot.time)
+        self._check_steps_onto_crossings(snapshot)
         self._check_motion(snapshot)
         self._check_ground(snapshot)
         return snapshot
@@ -740,10 +745,13 @@ class SumoWorld:
                                 "name a vType of the route files, or carry the sensor on a "
                                 "node (sensors.<name>.node)")
 
-    def _check_steps_onto_crossings(self, time: float) -> None:
+    def _check_steps_onto_crossings(self, snapshot: Snapshot) -> None:
         """Every planned pedestrian steps onto its crossing within one step of its
         ``steps_onto_crossing_s``; SUMO holding it up (a person or vehicle in its way, a red
-        light) or letting it step on early stops the run (:class:`SimulationError`)."""
+        light) or letting it step on early stops the run (:class:`SimulationError`, naming
+        the vehicles on that crossing: SUMO keeps a pedestrian off a crossing a vehicle
+        occupies)."""
+        time = snapshot.time
         for pid, plan in self.pedestrian_plans.items():
             if pid in self._stepped_on:
                 continue
@@ -755,8 +763,9 @@ class SumoWorld:
             allowed = self._dt if tolerance is None else max(self._dt, tolerance)
             if abs(time - wanted) <= allowed + TIME_EPS_S or (not on and time < wanted):
                 continue
-            when = f"stepped onto it at {time:.2f} s" if on else \
+            when = f"stepped onto it at {time:.2f} s" if on else (
                 f"had not stepped onto it by {time:.2f} s"
+                f"{self._occupied(plan.crossing, snapshot)}")
             raise SimulationError(
                 self.scenario_name, f"pedestrian {pid!r} was to step onto its crossing "
                 f"{plan.crossing} at {wanted:g} s (pedestrians.{pid}.steps_onto_crossing_s, "
@@ -766,6 +775,13 @@ class SumoWorld:
                 f"way, a pedestrian light), change pedestrians.{pid}.steps_onto_crossing_s "
                 f"or pedestrians.{pid}.start_pos_m, or allow more with "
                 f"pedestrians.{pid}.crossing_tolerance_s")
+
+    def _occupied(self, crossing: str, snapshot: Snapshot) -> str:
+        """Which vehicles' bodies are on ``crossing`` now, as a clause of the message; empty
+        if none is."""
+        area = next((c.area for c in self.roadmap.crossings if c.id == crossing), None)
+        on = [] if area is None else vehicles_on(area, snapshot.vehicles.values())
+        return f" (on it: {', '.join(on)})" if on else ""
 
     def _check_insertions(self) -> None:
         """Every automated and moving vehicle is on the road from its departure on; SUMO

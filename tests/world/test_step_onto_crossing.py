@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import shapely
 import sumolib
 from world_helpers import REPO, run_world, scenario
 
@@ -16,6 +17,8 @@ from sse_cosim.errors import SimulationError, UserError
 from sse_cosim.world import demand
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import load_roadmap
+from sse_cosim.world.snapshot import Footprint, Pose, VehicleState
+from sse_cosim.world.sumo import vehicles_on
 from sse_cosim.world.walk_probe import ProbeTimer
 
 pytestmark = pytest.mark.sumo
@@ -162,3 +165,20 @@ def test_a_timer_walks_the_same_walks_once(net_path: Path, monkeypatch) -> None:
     walks, step_s = next(iter(timer._timed))
     timer(dict(walks), step_s).clear()  # a copy: the kept times stay
     assert walk() == first and len(sessions) == 2
+
+
+def test_the_stop_names_the_vehicles_on_the_crossing() -> None:
+    """SUMO keeps a pedestrian off a crossing a vehicle occupies: the falsifier's town search
+    found the bus standing with its rear on the walker's crossing, and the run stopping with
+    "had not stepped onto it by 34.40 s (on it: bus)"
+    (results/falsify/town_second/standoff_cma_27.toml)."""
+    crossing = shapely.box(196.0, -8.0, 200.0, 8.0)  # a zebra across the road at x 196-200
+
+    def bus(vid: str, front_x: float) -> VehicleState:
+        return VehicleState(vid, "automated", Footprint(Pose(front_x, -1.75, 0.0), 12.0, 2.55),
+                            0.0)
+
+    vehicles = [bus("rear_on_it", 211.9), bus("past", 212.1), bus("before", 195.9),
+                bus("front_on_it", 196.1), bus("astride", 203.0)]
+    assert vehicles_on(crossing, vehicles) == ["astride", "front_on_it", "rear_on_it"]
+    assert vehicles_on(crossing, []) == []
