@@ -104,6 +104,7 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
     """
     from sse_cosim.falsify.job import falsify as run_falsify
     from sse_cosim.falsify.job import prepare, write_case
+    from sse_cosim.reporting.falsify_report import run_command
     from sse_cosim.runner.executors import Execution
 
     check_scheduler(executor, scheduler)
@@ -112,8 +113,7 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
     if cases:
         for method, number in cases:
             case = write_case(setup, out_dir or OUT / scenario.stem, method, number)
-            asked = "".join(f" --margin {name}" for name in setup.objective.margins)
-            click.echo(f"wrote {case}: sse-cosim run {case.as_posix()}{asked}")
+            click.echo(f"wrote {case}: {run_command(case.as_posix(), setup.objective.margins)}")
         return
     out_dir = writable_folder(out_dir or OUT / scenario.stem, "--out")
     click.echo(f"falsify: {setup.scenario}: {setup.space.size} values searched, "

@@ -113,9 +113,13 @@ def worst_case_document(scenario_file: Path, target: Path, overrides: Mapping[st
         node[last] = value
     extends = Path(os.path.relpath(scenario_file.resolve(), target.parent.resolve())).as_posix()
     body = tomli_w.dumps({"extends": extends, "description": description, **nested})
-    asked = "".join(f" --margin {name}" for name in margins)
-    how = "`sse-cosim run` on this file" if not asked else f"`sse-cosim run {target.name}{asked}`"
+    how = f"`{run_command(target.name, margins)}`" if margins else "`sse-cosim run` on this file"
     return f"# Written by `sse-cosim falsify`: reproduce it with {how}.\n" + body
+
+
+def run_command(scenario_file: str, margins: Sequence[str] = ()) -> str:
+    """The command that runs ``scenario_file`` with the ``margins`` an objective reads."""
+    return f"sse-cosim run {scenario_file}" + "".join(f" --margin {name}" for name in margins)
 
 
 def write_outputs(folder: Path, plan: Mapping[str, Any], table: pd.DataFrame) -> None:
