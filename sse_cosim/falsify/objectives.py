@@ -147,6 +147,33 @@ class Standstill:
 
 
 @dataclass(frozen=True)
+class CrossingBlocked:
+    """Liveness at crossings: the target (3 s, the standstill's) less the longest a vehicle
+    stood on a crossing while a pedestrian waited to step onto it (s;
+    :class:`~sse_cosim.reporting.margins.CrossingBlocked` measures it). The ``standstill``
+    objective cannot see a bus that stands on a crossing and waits for the pedestrian it
+    holds up, for its path is never clear (the town's standoff, results/falsify.md)."""
+
+    name: ClassVar[str] = "blocking"
+    unit: ClassVar[str] = "s"
+    help: ClassVar[str] = (f"{STANDSTILL_TARGET_S:g} s less the longest a vehicle stood on a "
+                           "crossing while a pedestrian waited to step onto it; fails beyond it")
+    margins: ClassVar[tuple[str, ...]] = (run_margins.CrossingBlocked.name,)
+
+    def margin(self, summary: Mapping[str, Any]) -> float:
+        longest = summary["margins"][run_margins.CrossingBlocked.name]["longest_s"]
+        return STANDSTILL_TARGET_S - float(longest)
+
+    def failed(self, summary: Mapping[str, Any]) -> bool:
+        return self.margin(summary) < 0
+
+    def failed_at(self, summary: Mapping[str, Any]) -> float | None:
+        if not self.failed(summary):
+            return None
+        return summary["margins"][run_margins.CrossingBlocked.name]["t"] + STANDSTILL_TARGET_S
+
+
+@dataclass(frozen=True)
 class TimeToCollision(_FailsAtCollision):
     """The least time to collision of the run (s), capped at :data:`OPEN_TTC_S`; 0 at a
     collision (:class:`~sse_cosim.reporting.margins.TimeToCollision` measures it)."""
@@ -209,8 +236,9 @@ class AccountedDepth(ContainmentDepth):
 
 
 OBJECTIVES: dict[str, Objective] = {o.name: o for o in (LeastDistance(), EmergencyBrake(),
-                                                         Standstill(), TimeToCollision(),
-                                                         ContainmentDepth(), AccountedDepth())}
+                                                         Standstill(), CrossingBlocked(),
+                                                         TimeToCollision(), ContainmentDepth(),
+                                                         AccountedDepth())}
 
 
 def first_break_t(summary: Mapping[str, Any]) -> float | None:

@@ -18,6 +18,9 @@ SUMO takes between the lanes of its walking areas does not turn it). Touching is
 recorder's collision: the pedestrian's centre within its body radius of the vehicle's
 footprint, so a time of 0 is a collision.
 
+:class:`CrossingBlocked` measures liveness at crossings: how long a vehicle stood on a
+crossing while a pedestrian waited to step onto it.
+
 :class:`ContainmentDepth` grades the recorder's containment checks: how deep each pedestrian's
 true position lies inside every position set and refined region written for it (the
 distance to the set's boundary; negative: outside, a containment violation).
@@ -295,8 +298,78 @@ def _signed_depth(region: Any, point: tuple[float, float]) -> float:
     return distance if region.covers(p) else -distance
 
 
+@dataclass
+class _Blocking:
+    """A stretch of one vehicle's steps blocking a crossing: from ``t`` (s), ``steps`` long,
+    the crossings it stood on and the pedestrians that waited at them."""
+
+    t: float
+    vehicle: str
+    steps: int = 0
+    crossings: set[str] = field(default_factory=set)
+    pedestrians: set[str] = field(default_factory=set)
+
+
+@dataclass
+class CrossingBlocked:
+    """How long an automated vehicle stood on a crossing while a pedestrian stood waiting to
+    step onto it (s): a liveness measure. SUMO keeps a pedestrian off a crossing a vehicle
+    occupies (eclipse-sumo/sumo#3138), and a bus that waits for that pedestrian waits for
+    itself (the falsifier's town standoff, results/falsify.md).
+
+    A step counts for a vehicle that stands (below
+    :data:`~sse_cosim.reporting.recorder.STOPPED_SPEED_MPS`) with its body on a crossing
+    (:attr:`~sse_cosim.world.snapshot.VehicleState.on_crossings`) while a pedestrian stands
+    (below the same speed) on a walking area with that crossing next on its walk
+    (:attr:`~sse_cosim.world.snapshot.PersonState.next_crossing`). ``longest_s`` is the
+    longest stretch of one vehicle's counted steps, ``total_s`` every vehicle's counted steps
+    together; the longest's start ``t``, its ``vehicle``, and the ``crossings`` and
+    ``pedestrians`` of its steps come with it (none: no step counted).
+    """
+
+    name: ClassVar[str] = "crossing_blocked"
+    help: ClassVar[str] = ("longest time an automated vehicle stood on a crossing while a "
+                           "pedestrian stood waiting to step onto it (s)")
+    labelled_only: ClassVar[bool] = False
+
+    scenario: Scenario
+    _open: dict[str, _Blocking] = field(default_factory=dict)  # vehicle -> its stretch now
+    _longest: _Blocking | None = None
+    _steps: int = 0
+
+    def __call__(self, result: StepResult) -> None:
+        from sse_cosim.reporting.recorder import STOPPED_SPEED_MPS
+
+        persons = result.snapshot.persons
+        for vehicle in result.vehicles:
+            state = result.snapshot.vehicles[vehicle]
+            waiting = {pid: p.next_crossing for pid, p in persons.items()
+                       if p.speed < STOPPED_SPEED_MPS and p.next_crossing in state.on_crossings}
+            if state.speed >= STOPPED_SPEED_MPS or not waiting:
+                self._open.pop(vehicle, None)
+                continue
+            stretch = self._open.setdefault(
+                vehicle, _Blocking(round(result.snapshot.time, 6), vehicle))
+            stretch.steps += 1
+            stretch.crossings.update(waiting.values())
+            stretch.pedestrians.update(waiting)
+            self._steps += 1
+            if self._longest is None or stretch.steps > self._longest.steps:
+                self._longest = stretch
+
+    def value(self, recorder: RunRecorder) -> dict[str, Any]:
+        dt = self.scenario.simulation.step_length_s
+        longest = self._longest
+        at = {} if longest is None else {
+            "t": longest.t, "vehicle": longest.vehicle, "crossings": sorted(longest.crossings),
+            "pedestrians": sorted(longest.pedestrians)}
+        return {"longest_s": round(dt * (0 if longest is None else longest.steps), 6),
+                "total_s": round(dt * self._steps, 6), **at}
+
+
 MARGINS: dict[str, Callable[[Scenario], Margin]] = {
-    margin.name: margin for margin in (MovingDistance, TimeToCollision, ContainmentDepth)}
+    margin.name: margin for margin in (MovingDistance, TimeToCollision, ContainmentDepth,
+                                       CrossingBlocked)}
 
 
 def _walking_velocities(persons: Sequence[PersonState]) -> np.ndarray:

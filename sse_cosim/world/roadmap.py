@@ -149,6 +149,15 @@ class RoadMap:
         """The SUMO edge ids of the crossings."""
         return frozenset(c.id for c in self.crossings)
 
+    @functools.cached_property
+    def _crossing_tree(self) -> shapely.STRtree:
+        return shapely.STRtree([c.area for c in self.crossings])
+
+    def crossings_meeting(self, body: shapely.Geometry) -> tuple[str, ...]:
+        """The ids of the crossings whose areas meet ``body`` (a vehicle's footprint), sorted."""
+        hits = self._crossing_tree.query(body, predicate="intersects")
+        return tuple(sorted(self.crossings[int(k)].id for k in hits))
+
     def lane(self, lane_id: str) -> LaneGeometry:
         """Any lane known to the map, by id; KeyError when there is none."""
         for group in (self.driving_lanes, self.parking_lanes, self.sidewalk_lanes,

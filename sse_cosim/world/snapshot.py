@@ -78,19 +78,22 @@ class VehicleState:
     footprint: Footprint
     speed: float  # m/s
     type_id: str = ""  # its SUMO vehicle type (route-file vehicles carry sensors by type)
+    on_crossings: tuple[str, ...] = ()  # the crossings its body meets, sorted ids
 
 
 @dataclass(frozen=True)
 class PersonState:
     """One pedestrian at one step; ``position`` is its centre, shape (2,); ``heading`` the
     direction it walks (rad, CCW from east) as SUMO gives it, None while it waits beside the
-    sidewalk before its walk (on no lane)."""
+    sidewalk before its walk (on no lane); ``next_crossing`` the crossing its walk enters next
+    from the walking area it is on (None: on no walking area, or not bound for a crossing)."""
 
     id: str
     position: tuple[float, float]
     speed: float  # m/s
     on_crossing: bool = False  # on any of the network's crossings
     heading: float | None = None
+    next_crossing: str | None = None
 
 
 @dataclass(frozen=True)

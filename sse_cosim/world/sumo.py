@@ -106,7 +106,7 @@ import contextlib
 import logging
 import math
 from collections import deque
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
@@ -170,11 +170,6 @@ def sumo_version() -> str:
     if version:
         return version
     return str(libsumo.getVersion()[1]).removeprefix("SUMO ").strip()
-
-
-def vehicles_on(area: shapely.Geometry, vehicles: Iterable[VehicleState]) -> list[str]:
-    """The ids of the ``vehicles`` whose bodies meet ``area`` (a crossing's), sorted."""
-    return sorted(v.id for v in vehicles if v.footprint.polygon().intersects(area))
 
 
 def measure_walkers(net_path: Path, roadmap: RoadMap, extent: SceneExtent | None,
@@ -779,8 +774,7 @@ class SumoWorld:
     def _occupied(self, crossing: str, snapshot: Snapshot) -> str:
         """Which vehicles' bodies are on ``crossing`` now, as a clause of the message; empty
         if none is."""
-        area = next((c.area for c in self.roadmap.crossings if c.id == crossing), None)
-        on = [] if area is None else vehicles_on(area, snapshot.vehicles.values())
+        on = sorted(v.id for v in snapshot.vehicles.values() if crossing in v.on_crossings)
         return f" (on it: {', '.join(on)})" if on else ""
 
     def _check_insertions(self) -> None:
@@ -848,11 +842,12 @@ class SumoWorld:
         for vid, values in libsumo.vehicle.getAllSubscriptionResults().items():
             x, y = values[libsumo.VAR_POSITION]
             length, width, type_id = self._static(vid)
+            footprint = Footprint(Pose(float(x), float(y), heading(values[libsumo.VAR_ANGLE])),
+                                  length, width)
             vehicles[vid] = VehicleState(
-                id=vid, kind=self._kinds.get(vid, "other"),
-                footprint=Footprint(Pose(float(x), float(y), heading(values[libsumo.VAR_ANGLE])),
-                                    length, width),
-                speed=float(values[libsumo.VAR_SPEED]), type_id=type_id)
+                id=vid, kind=self._kinds.get(vid, "other"), footprint=footprint,
+                speed=float(values[libsumo.VAR_SPEED]), type_id=type_id,
+                on_crossings=self.roadmap.crossings_meeting(footprint.polygon()))
             if vid in self._automated:
                 self._automated[vid].distance = float(values[libsumo.VAR_DISTANCE])
         persons: dict[str, PersonState] = {}
@@ -871,11 +866,20 @@ class SumoWorld:
             turned = self._turned.get(pid)
             if turned is not None:  # SUMO holds it at speed 0, facing along the lane
                 speed, walking_heading = abs(turned.walker.velocity_mps), turned.heading
+            road = str(values[libsumo.VAR_ROAD_ID])
             persons[pid] = PersonState(
                 id=pid, position=self._centres[pid], speed=speed,
-                on_crossing=values[libsumo.VAR_ROAD_ID] in self.roadmap.crossing_ids,
-                heading=walking_heading)
+                on_crossing=road in self.roadmap.crossing_ids,
+                heading=walking_heading, next_crossing=self._next_crossing(pid, road))
         return Snapshot(time=self._time, vehicles=vehicles, persons=persons)
+
+    def _next_crossing(self, pid: str, road: str) -> str | None:
+        """The crossing next on person ``pid``'s walk while it is on a walking area (the
+        internal edges a person walks are walking areas and crossings); None otherwise."""
+        if not road.startswith(":") or road in self.roadmap.crossing_ids:
+            return None
+        edge = libsumo.person.getNextEdge(pid)
+        return edge if edge in self.roadmap.crossing_ids else None
 
     def _person_position(self, pid: str, values: dict[int, Any]) -> tuple[float, float]:
         """A person's centre. A walking person SUMO places by its front; a waiting one (on no

@@ -16,6 +16,7 @@ import shapely
 from sse_cosim.pipeline.result import StepResult
 from sse_cosim.reporting.margins import (
     ContainmentDepth,
+    CrossingBlocked,
     MovingDistance,
     TimeToCollision,
     time_to_contact,
@@ -108,7 +109,7 @@ def test_a_run_reports_its_margins_only_when_asked_and_the_files_agree(tmp_path:
     out = tmp_path / "asked"
     summary = run_scenario_file(S3, out, plots=False,
                                 margins=("time_to_collision", "containment_depth",
-                                         "moving_distance"))
+                                         "moving_distance", "crossing_blocked"))
     _the_time_agrees_with_the_files(summary, out)
     _the_depth_agrees_with_the_files(summary, out)
     trace = pd.read_csv(out / "trace.csv")
@@ -116,6 +117,8 @@ def test_a_run_reports_its_margins_only_when_asked_and_the_files_agree(tmp_path:
     least = summary["margins"]["moving_distance"]
     assert least["least_m"] == pytest.approx(moving["distance_bus_pedestrian"].min())
     assert least["least_m"] >= summary["min_distance_bus_pedestrian_m"]
+    # the bus stops before the zebra, never on it
+    assert summary["margins"]["crossing_blocked"] == {"longest_s": 0.0, "total_s": 0.0}
 
 
 def _the_time_agrees_with_the_files(summary: dict, out: Path) -> None:
@@ -190,6 +193,35 @@ def test_the_moving_distance_leaves_out_the_steps_a_vehicle_stood():
         "least_m": 2.5, "t": pytest.approx(0.4), "vehicle": "bus"}
     assert margin.value(SimpleNamespace(rows=rows[2:4])) == {  # type: ignore[arg-type]
         "least_m": None}
+
+
+def test_a_crossing_counts_as_blocked_while_both_stand_the_vehicle_on_it():
+    """A step counts while the vehicle stands on a crossing and a walker stands with that
+    crossing next on its walk; the longest stretch is one vehicle's, the total every one's."""
+    margin = CrossingBlocked(load_scenario(S3))
+    on_zebra, off = (":C_c0",), ()
+    steps = [  # (bus speed, its crossings, walker speed, walker's next crossing)
+        (0.0, on_zebra, 0.0, ":C_c0"),  # counts
+        (0.0, on_zebra, 0.05, ":C_c0"),  # counts (both below 0.1 m/s)
+        (0.0, on_zebra, 1.2, ":C_c0"),  # the walker walks: the stretch ends
+        (0.0, on_zebra, 0.0, ":C_c0"),  # counts, a new stretch
+        (0.0, on_zebra, 0.0, ":C_c1"),  # bound for another crossing
+        (0.0, off, 0.0, ":C_c0"),  # the bus off the crossing
+        (0.5, on_zebra, 0.0, ":C_c0"),  # the bus moves
+        (0.0, on_zebra, 0.0, None),  # the walker on no walking area
+        (0.0, on_zebra, 0.0, ":C_c0"),  # counts
+        (0.0, on_zebra, 0.0, ":C_c0"),  # counts
+        (0.0, on_zebra, 0.0, ":C_c0"),  # counts: the longest, 3 steps from 0.8 s
+    ]
+    front = Footprint(Pose(200.0, -1.6, 0.0), 12.0, 2.5)
+    for k, (v, crossings, w, bound) in enumerate(steps):
+        walker = PersonState("pedestrian", (196.0, -5.0), w, next_crossing=bound)
+        bus = VehicleState("bus", "automated", front, v, on_crossings=crossings)
+        margin(StepResult(k, Snapshot(0.1 * k, {"bus": bus}, {"pedestrian": walker}),  # type: ignore[arg-type]
+                          {}, {}, None, {}, {"bus": None}))
+    assert margin.value(None) == {  # type: ignore[arg-type]
+        "longest_s": pytest.approx(0.3), "total_s": pytest.approx(0.6), "t": pytest.approx(0.8),
+        "vehicle": "bus", "crossings": [":C_c0"], "pedestrians": ["pedestrian"]}
 
 
 def test_the_pedestrian_keeps_the_heading_sumo_walks_it_through_a_sideways_step():

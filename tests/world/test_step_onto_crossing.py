@@ -16,9 +16,8 @@ from world_helpers import REPO, run_world, scenario
 from sse_cosim.errors import SimulationError, UserError
 from sse_cosim.world import demand
 from sse_cosim.world.network import build_network
-from sse_cosim.world.roadmap import load_roadmap
-from sse_cosim.world.snapshot import Footprint, Pose, VehicleState
-from sse_cosim.world.sumo import vehicles_on
+from sse_cosim.world.roadmap import Crossing, RoadMap, load_roadmap
+from sse_cosim.world.snapshot import Footprint, Pose
 from sse_cosim.world.walk_probe import ProbeTimer
 
 pytestmark = pytest.mark.sumo
@@ -167,18 +166,23 @@ def test_a_timer_walks_the_same_walks_once(net_path: Path, monkeypatch) -> None:
     assert walk() == first and len(sessions) == 2
 
 
-def test_the_stop_names_the_vehicles_on_the_crossing() -> None:
+def test_a_vehicle_knows_the_crossings_its_body_is_on() -> None:
     """SUMO keeps a pedestrian off a crossing a vehicle occupies: the falsifier's town search
     found the bus standing with its rear on the walker's crossing, and the run stopping with
     "had not stepped onto it by 34.40 s (on it: bus)"
-    (results/falsify/town_second/standoff_cma_27.toml)."""
-    crossing = shapely.box(196.0, -8.0, 200.0, 8.0)  # a zebra across the road at x 196-200
+    (results/falsify/town_second/standoff_cma_27.toml). The world names the crossings each
+    vehicle's body meets (``VehicleState.on_crossings``), from which that stop and the
+    ``crossing_blocked`` margin read."""
+    zebra = Crossing(":C_c0", "C", shapely.box(196.0, -8.0, 200.0, 8.0))  # across x 196-200
+    other = Crossing(":D_c0", "D", shapely.box(300.0, -8.0, 304.0, 8.0))
+    roadmap = RoadMap(Path("net.net.xml"), (zebra, other), shapely.Polygon(), {}, {}, {}, {}, {})
 
-    def bus(vid: str, front_x: float) -> VehicleState:
-        return VehicleState(vid, "automated", Footprint(Pose(front_x, -1.75, 0.0), 12.0, 2.55),
-                            0.0)
+    def meets(front_x: float) -> tuple[str, ...]:
+        body = Footprint(Pose(front_x, -1.75, 0.0), 12.0, 2.55).polygon()
+        return roadmap.crossings_meeting(body)
 
-    vehicles = [bus("rear_on_it", 211.9), bus("past", 212.1), bus("before", 195.9),
-                bus("front_on_it", 196.1), bus("astride", 203.0)]
-    assert vehicles_on(crossing, vehicles) == ["astride", "front_on_it", "rear_on_it"]
-    assert vehicles_on(crossing, []) == []
+    assert meets(211.9) == (":C_c0",)  # its rear on it
+    assert meets(196.1) == (":C_c0",)  # its front on it
+    assert meets(203.0) == (":C_c0",)  # astride it
+    assert meets(212.1) == meets(195.9) == ()  # past it, before it
+    assert meets(302.0) == (":D_c0",)
