@@ -187,8 +187,24 @@ class TimeToCollision(_FailsAtCollision):
     def margin(self, summary: Mapping[str, Any]) -> float:
         if collisions(summary):
             return 0.0
-        least = summary["margins"][run_margins.TimeToCollision.name]["least_s"]
+        least = summary["margins"][self.margins[0]]["least_s"]
         return OPEN_TTC_S if least is None else min(float(least), OPEN_TTC_S)
+
+
+@dataclass(frozen=True)
+class MovingTimeToCollision(TimeToCollision):
+    """The least time to collision while the bus moves (s), capped at :data:`OPEN_TTC_S`; 0 at
+    a collision (:class:`~sse_cosim.reporting.margins.MovingTimeToCollision` measures it).
+    Where pedestrians walk along the sidewalk beside the moving bus, the moving distance is
+    the same sidewalk gap in most runs (S1-S3, the crowd: results/falsify.md) and tells the
+    search nothing; a pedestrian walking beside the bus is on no collision course, so this
+    margin draws the search to those who head into the moving bus's way, and not to those
+    who head into the standing bus (walk-ins), as ``ttc`` does."""
+
+    name: ClassVar[str] = "moving_ttc"
+    help: ClassVar[str] = (f"least time to collision of the moving bus at constant velocities "
+                           f"(s, at most {OPEN_TTC_S:g}); fails at a collision")
+    margins: ClassVar[tuple[str, ...]] = (run_margins.MovingTimeToCollision.name,)
 
 
 @dataclass(frozen=True)
@@ -237,8 +253,9 @@ class AccountedDepth(ContainmentDepth):
 
 OBJECTIVES: dict[str, Objective] = {o.name: o for o in (LeastDistance(), EmergencyBrake(),
                                                          Standstill(), CrossingBlocked(),
-                                                         TimeToCollision(), ContainmentDepth(),
-                                                         AccountedDepth())}
+                                                         TimeToCollision(),
+                                                         MovingTimeToCollision(),
+                                                         ContainmentDepth(), AccountedDepth())}
 
 
 def first_break_t(summary: Mapping[str, Any]) -> float | None:

@@ -18,6 +18,8 @@ SUMO takes between the lanes of its walking areas does not turn it). Touching is
 recorder's collision: the pedestrian's centre within its body radius of the vehicle's
 footprint, so a time of 0 is a collision.
 
+:class:`MovingTimeToCollision` is the same time over the steps a vehicle moves only.
+
 :class:`CrossingBlocked` measures liveness at crossings: how long a vehicle stood on a
 crossing while a pedestrian waited to step onto it.
 
@@ -168,11 +170,15 @@ class TimeToCollision:
                            "keep their velocity (s); 0 at a collision")
     labelled_only: ClassVar[bool] = False
 
+    moving_only: ClassVar[bool] = False  # count only the steps a vehicle moves
+
     scenario: Scenario
     least_s: float = np.inf
     at: dict[str, Any] = field(default_factory=dict)  # t, vehicle, pedestrian of the least
 
     def __call__(self, result: StepResult) -> None:
+        from sse_cosim.reporting.recorder import STOPPED_SPEED_MPS
+
         persons = result.snapshot.persons
         ids = sorted(persons)
         xy = np.array([persons[pid].position for pid in ids]).reshape(-1, 2)
@@ -180,6 +186,8 @@ class TimeToCollision:
         radius = np.array([self.scenario.person_radius_m(pid) for pid in ids])
         for vehicle in result.vehicles if ids else ():
             state = result.snapshot.vehicles[vehicle]
+            if self.moving_only and state.speed < STOPPED_SPEED_MPS:
+                continue
             footprint = state.footprint
             forward, left = footprint.front.forward, footprint.front.left
             p = _in_frame(xy - footprint.center, forward, left)
@@ -195,6 +203,20 @@ class TimeToCollision:
     def value(self, recorder: RunRecorder) -> dict[str, Any]:
         least = None if np.isinf(self.least_s) else self.least_s
         return {"least_s": least, **self.at}
+
+
+@dataclass
+class MovingTimeToCollision(TimeToCollision):
+    """The least time to collision over the steps at which the automated vehicle moves (at
+    :data:`~sse_cosim.reporting.recorder.STOPPED_SPEED_MPS` or faster), as
+    :class:`MovingDistance` is the distance: a pedestrian heading into a standing vehicle
+    does not bring it down. ``least_s`` is None when no pedestrian was ever on a collision
+    course with a moving vehicle."""
+
+    name: ClassVar[str] = "moving_time_to_collision"
+    help: ClassVar[str] = ("least time until a moving automated vehicle (0.1 m/s or faster) and "
+                           "a pedestrian touch if both keep their velocity (s)")
+    moving_only: ClassVar[bool] = True
 
 
 @dataclass
@@ -368,8 +390,8 @@ class CrossingBlocked:
 
 
 MARGINS: dict[str, Callable[[Scenario], Margin]] = {
-    margin.name: margin for margin in (MovingDistance, TimeToCollision, ContainmentDepth,
-                                       CrossingBlocked)}
+    margin.name: margin for margin in (MovingDistance, TimeToCollision, MovingTimeToCollision,
+                                       ContainmentDepth, CrossingBlocked)}
 
 
 def _walking_velocities(persons: Sequence[PersonState]) -> np.ndarray:

@@ -340,6 +340,15 @@ def test_the_time_to_collision_objective_asks_for_its_margin_and_caps_it():
     assert ttc.margin(timed(None)) == OPEN_TTC_S == ttc.margin(timed(40.0))
     hit = timed(0.0, collisions=1, first_collision_t_s=11.9)
     assert ttc.margin(hit) == 0.0 and ttc.failed(hit) and ttc.failed_at(hit) == 11.9
+    # the moving bus's: its own margin, the same cap and failure
+    moving = OBJECTIVES["moving_ttc"]
+    assert moving.margins == ("moving_time_to_collision",)
+    both = _summary(margins={"time_to_collision": {"least_s": 0.4},
+                             "moving_time_to_collision": {"least_s": 3.2}})
+    assert moving.margin(both) == 3.2 and ttc.margin(both) == 0.4
+    assert moving.margin(_summary(margins={"moving_time_to_collision": {"least_s": None}})) \
+        == OPEN_TTC_S
+    assert moving.failed(hit) and moving.margin(hit) == 0.0
 
 
 def _deep(sets, regions, accounted=0.01, **changes):

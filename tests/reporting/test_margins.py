@@ -18,6 +18,7 @@ from sse_cosim.reporting.margins import (
     ContainmentDepth,
     CrossingBlocked,
     MovingDistance,
+    MovingTimeToCollision,
     TimeToCollision,
     time_to_contact,
 )
@@ -109,7 +110,8 @@ def test_a_run_reports_its_margins_only_when_asked_and_the_files_agree(tmp_path:
     out = tmp_path / "asked"
     summary = run_scenario_file(S3, out, plots=False,
                                 margins=("time_to_collision", "containment_depth",
-                                         "moving_distance", "crossing_blocked"))
+                                         "moving_distance", "crossing_blocked",
+                                         "moving_time_to_collision"))
     _the_time_agrees_with_the_files(summary, out)
     _the_depth_agrees_with_the_files(summary, out)
     trace = pd.read_csv(out / "trace.csv")
@@ -117,6 +119,8 @@ def test_a_run_reports_its_margins_only_when_asked_and_the_files_agree(tmp_path:
     least = summary["margins"]["moving_distance"]
     assert least["least_m"] == pytest.approx(moving["distance_bus_pedestrian"].min())
     assert least["least_m"] >= summary["min_distance_bus_pedestrian_m"]
+    moving_ttc = summary["margins"]["moving_time_to_collision"]["least_s"]
+    assert moving_ttc >= summary["margins"]["time_to_collision"]["least_s"]
     # the bus stops before the zebra, never on it
     assert summary["margins"]["crossing_blocked"] == {"longest_s": 0.0, "total_s": 0.0}
 
@@ -193,6 +197,24 @@ def test_the_moving_distance_leaves_out_the_steps_a_vehicle_stood():
         "least_m": 2.5, "t": pytest.approx(0.4), "vehicle": "bus"}
     assert margin.value(SimpleNamespace(rows=rows[2:4])) == {  # type: ignore[arg-type]
         "least_m": None}
+
+
+def test_the_moving_time_to_collision_leaves_out_the_standing_bus():
+    scenario = load_scenario(S3)
+    bus = Footprint(Pose(200.0, -1.6, 0.0), 12.0, 2.5)  # front at the zebra, heading east
+    walker = PersonState("pedestrian", (196.0, -7.6), 1.0, heading=np.pi / 2)  # toward it
+    every, moving = TimeToCollision(scenario), MovingTimeToCollision(scenario)
+    for margin in (every, moving):
+        margin(_step(0, bus, walker))  # the bus stands
+    assert every.least_s < 10.0 and moving.least_s == np.inf
+    still = _step(1, bus, walker)
+    under_way = StepResult(1, Snapshot(0.1, {"bus": VehicleState("bus", "automated", bus, 0.1)},
+                                       {"pedestrian": walker}), {}, {}, None, {},  # type: ignore[arg-type]
+                           {"bus": None})
+    moving(still)
+    assert moving.least_s == np.inf
+    moving(under_way)  # at 0.1 m/s the bus moves: the walker is on a collision course
+    assert 0.0 < moving.least_s < 10.0 and moving.at["t"] == pytest.approx(0.1)
 
 
 def test_a_crossing_counts_as_blocked_while_both_stand_the_vehicle_on_it():
