@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import shlex
+import time
 from pathlib import Path
 
 import click
+from tqdm import tqdm
 
 from sse_cosim.cli.main import TargetsMissed, cli
 from sse_cosim.cli.options import check_scheduler, execution_options, writable_folder
@@ -120,9 +122,12 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
                f"{', '.join(methods)}, {setup.generations} generation(s) of "
                f"{setup.generation} each -> {out_dir}")
 
-    def progress(round_: int, rounds: int, least: dict[str, float | None]) -> None:
+    pace = _Pace()
+
+    def progress(round_: int, rounds: int, least: dict[str, float | None], ran: int) -> None:
         found = ", ".join(f"{m} {'—' if v is None else f'{v:.3f}'}" for m, v in least.items())
-        click.echo(f"  generation {round_}/{rounds}: least {objective} margin {found}")
+        click.echo(f"  generation {round_}/{rounds}: least {objective} margin {found} "
+                   f"({pace.lap(ran, rounds - round_)})")
 
     outcome = run_falsify(setup, out_dir, Execution(workers, executor, scheduler, resume,
                                                     progress=False),
@@ -141,6 +146,29 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
     if not failed.empty:
         raise RunsFailed(f"{len(failed)} run(s) failed (first: {failed.iloc[0]['key']}: "
                          f"{failed.iloc[0]['error']}) -- see {outcome.report}")
+
+
+class _Pace:
+    """The wall time of the generations that made runs, and what is left at that pace (a
+    resumed search's recorded generations take no time and do not count)."""
+
+    def __init__(self) -> None:
+        self._last = time.monotonic()
+        self._spent_s = 0.0
+        self._rounds = 0
+
+    def lap(self, ran: int, left: int) -> str:
+        """How the round just ended went, and the time ``left`` more rounds take."""
+        now = time.monotonic()
+        took, self._last = now - self._last, now
+        if not ran:
+            return "recorded"
+        self._spent_s += took
+        self._rounds += 1
+        done = f"{ran} run(s) in {tqdm.format_interval(took)}"
+        if not left:
+            return done
+        return f"{done}, about {tqdm.format_interval(self._spent_s / self._rounds * left)} left"
 
 
 def _command(scenario: Path, space_file: Path, objective: str, methods: tuple[str, ...],

@@ -35,8 +35,9 @@ from sse_cosim.runner.safety import ActorPlanner
 from sse_cosim.runner.sweep import run_key
 from sse_cosim.runner.tasks import RunTask
 
-Progress = Callable[[int, int, dict[str, float | None]], None]
-"""Told after each round: the round, the rounds, each method's least margin so far."""
+Progress = Callable[[int, int, dict[str, float | None], int], None]
+"""Told after each round: the round, the rounds, each method's least margin so far, and how
+many runs the round made (0: every evaluation was recorded, or not feasible)."""
 
 Checkpoint = Callable[[list["Evaluation"]], None]
 """Told after each round, before :data:`Progress`: every evaluation so far, in method then
@@ -125,7 +126,8 @@ def run_search(setup: SearchSetup, out_dir: Path, execution: Execution,
 
     The methods advance together, one generation each per round, so that their runs share
     each round's workers. ``checkpoint(evaluations)`` and then ``progress(round, rounds,
-    best)`` are called after each round (``best``: method -> least margin so far). A planned
+    best, ran)`` are called after each round (``best``: method -> least margin so far;
+    ``ran``: the runs made in it). A planned
     evaluation whose key is in ``recorded`` takes its outcome from there and is not run.
     """
     recorded = recorded or {}
@@ -150,7 +152,8 @@ def run_search(setup: SearchSetup, out_dir: Path, execution: Execution,
         if checkpoint is not None:
             checkpoint([e for m in setup.methods for e in done[m]])
         if progress is not None:
-            progress(round_ + 1, setup.generations, {m: _least(done[m]) for m in done})
+            progress(round_ + 1, setup.generations, {m: _least(done[m]) for m in done},
+                     len(tasks))
     return [e for m in setup.methods for e in done[m]]
 
 

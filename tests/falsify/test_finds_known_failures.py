@@ -46,7 +46,7 @@ class Killed(Exception):
 
 
 def _kill_after(rounds: int):
-    def progress(round_: int, _rounds: int, _least: object) -> None:
+    def progress(round_: int, _rounds: int, _least: object, _ran: int) -> None:
         if round_ == rounds:
             raise Killed
     return progress
