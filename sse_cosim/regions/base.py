@@ -62,8 +62,8 @@ class Region(Protocol):
         ...
 
     def coarsen(self, tolerance: float) -> Region:
-        """A region containing self, within ``2 * tolerance`` of it, simpler to compute with
-        (fewer vertices or cells; may be self)."""
+        """A region containing self, within a few times ``tolerance`` of it (each kind says
+        how far), simpler to compute with (fewer vertices or cells; may be self)."""
         ...
 
     def covers(self, other: Region) -> bool:

@@ -44,13 +44,20 @@ PARKED_VCLASS = "custom1"
 """vClass of parked vehicles; the parking strips admit it only."""
 DRIVING_VCLASSES = ("passenger", "bus")
 PROGRESS_ABOVE_BYTES = 5_000_000
+"""A network file larger than this (a town) reports its reading on stderr."""
 WALKABLE_TOL_M = 1e-9
 """How far (m) a pedestrian's centre may lie off :attr:`RoadMap.walkable` and still count as on
 it: the rounding of SUMO's positions along the edge of a walking area (a walker on the town
 cut's ``:1384946487_w1`` followed its edge 6.9e-14 m outside it), far above the rounding of a
 coordinate of a network of kilometres (about 1e-13 m) and far below the tolerance to which the
 recorder checks that every set holds its pedestrian (1e-7 m)."""
-"""A network file larger than this (a town) reports its reading on stderr."""
+WALKABLE_COARSEN_M = 1e-9
+"""The walkable ground holds the union of its parts and is kept within six times this (m) of
+it, in fewer vertices (:meth:`~sse_cosim.regions.PolygonRegion.coarsen`): a measured patch is a
+walker's positions dilated, and its union with the ground leaves corners that stray from a
+straight edge by nanometres (the town cut's ground falls to about a third of its vertices),
+which every region cut from the ground would keep, at the cost of every overlay and offset of
+the step."""
 
 
 @dataclass(frozen=True)
@@ -125,13 +132,16 @@ class RoadMap:
         """The walkable ground every consumer uses: :attr:`ground` and the measured patches,
         so it holds every position SUMO's lone walkers were measured at, and the junctions'
         ground grown by :attr:`junction_margin_m` (a mitred offset, which holds the disc's:
-        :meth:`~sse_cosim.regions.PolygonRegion.dilate`)."""
+        :meth:`~sse_cosim.regions.PolygonRegion.dilate`), coarsened by
+        :data:`WALKABLE_COARSEN_M`."""
         patches = [self.ground_patches[node] for node in sorted(self.ground_patches)]
         parts = [self.ground, *patches]
         if self.junction_margin_m > 0:
             junctions = shapely.union_all([self.walking_areas, self.crossing_area, *patches])
             parts.append(PolygonRegion(junctions).dilate(self.junction_margin_m).shape)
-        return shapely.union_all(parts) if len(parts) > 1 else self.ground
+        if len(parts) == 1:
+            return self.ground
+        return PolygonRegion(shapely.union_all(parts)).coarsen(WALKABLE_COARSEN_M).shape
 
     def with_ground_patches(self, patches: dict[str, shapely.Geometry],
                             junction_margin_m: float = 0.0) -> RoadMap:
