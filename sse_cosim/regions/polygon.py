@@ -35,6 +35,7 @@ from sse_cosim.sets import portable
 MITRE_LIMIT = 1.0  # a corner's mitre is cut at the distance from the corner
 REACH_FACTOR = math.sqrt(1.0 + MITRE_LIMIT**2)  # how far a dilation reaches, per metre
 LEAST_DILATION_M = 1e-9  # GEOS buffers by less than about 1e-16 m to nothing: dilate by this
+SHORT_EDGE_M = 1e-12  # edges shorter than this are dropped before an offset GEOS cannot make
 NO_BOUNDS = (0.0, 0.0, -1.0, -1.0)
 COARSEN_ABOVE = 64  # vertices above which a region is coarsened
 ROUND_QUAD_SEGS = 8  # chords per quarter circle of a round offset (GEOS's default)
@@ -88,9 +89,10 @@ class PolygonRegion:
     def coarsen(self, tolerance: float) -> PolygonRegion:
         """Repeated dilations and cuts leave regions with thousands of centimetre-long edges.
         Above :data:`COARSEN_ABOVE` vertices the shape is grown by ``tolerance`` (mitred
-        corners: no arcs) and simplified with the same tolerance, which moves no boundary
-        point by more than that, so the result still covers the shape; the cover is checked,
-        and self returned if it fails."""
+        corners: no arcs; GEOS's default mitre limit moves a sharp corner up to five times
+        that) and simplified with the same tolerance, which moves no boundary point by more
+        than that, so the result still covers the shape and lies within six times the
+        tolerance of it; the cover is checked, and self returned if it fails."""
         if self.shape.is_empty or shapely.get_num_coordinates(self.shape) <= COARSEN_ABOVE:
             return self
         grown = self.shape.buffer(tolerance, quad_segs=1, join_style="mitre")
@@ -134,9 +136,21 @@ class PolygonRegion:
 def _offset(shape: shapely.Geometry, distance: float) -> shapely.Geometry:
     """``shape`` offset by ``distance`` (m; outward if positive, inward if negative), mitred
     (module docstring), or, where GEOS's mitred offset is not a valid geometry, round by
-    :data:`ROUND_FACTOR` times the distance; ValueError if that is not valid either."""
-    mitred = shape.buffer(distance, cap_style="square", join_style="mitre",
-                          mitre_limit=MITRE_LIMIT)
+    :data:`ROUND_FACTOR` times the distance; ValueError if that is not valid either.
+
+    GEOS offsets an edge a few femtometres long along a normal of NaN (numpy warns: "invalid
+    value encountered in buffer"; a junction run's 360-degree view had one). Such a shape is
+    offset without its edges shorter than :data:`SHORT_EDGE_M`: dropping a vertex within that
+    of the one before moves no boundary point by more, so the offset by
+    :data:`LEAST_DILATION_M` more (further out, or further in) still holds (or lies inside)
+    the exact one."""
+    try:
+        with np.errstate(invalid="raise"):
+            mitred = _mitred(shape, distance)
+    except FloatingPointError:
+        shape = shapely.remove_repeated_points(shape, SHORT_EDGE_M)
+        distance += math.copysign(LEAST_DILATION_M, distance)
+        mitred = _mitred(shape, distance)
     if shapely.is_valid(mitred):
         return mitred
     rounded = shape.buffer(distance * ROUND_FACTOR, quad_segs=ROUND_QUAD_SEGS)
@@ -145,6 +159,11 @@ def _offset(shape: shapely.Geometry, distance: float) -> shapely.Geometry:
     raise ValueError(f"GEOS offsets a region by {distance:g} m into no valid geometry, mitred "
                      f"({shapely.is_valid_reason(mitred)}) or round "
                      f"({shapely.is_valid_reason(rounded)}): {shapely.to_wkt(shape)}")
+
+
+def _mitred(shape: shapely.Geometry, distance: float) -> shapely.Geometry:
+    return shapely.buffer(shape, distance, cap_style="square", join_style="mitre",
+                          mitre_limit=MITRE_LIMIT)
 
 
 def _overlay(operation: Callable[[shapely.Geometry, shapely.Geometry], shapely.Geometry],

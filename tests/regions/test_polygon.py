@@ -372,3 +372,19 @@ def test_a_dilation_geos_would_draw_as_nested_shells_is_valid_and_holds_the_disc
     assert region.shape.covers(shape.buffer(1.27 * (1 - 1e-9), quad_segs=64))
     eroded = PolygonRegion(region.shape).erode(1.0)
     assert shapely.is_valid(eroded.shape) and region.shape.covers(eroded.shape)
+
+
+def test_an_edge_too_short_for_geos_is_dropped_and_the_offset_still_holds_the_disc():
+    """A junction run's 360-degree view holds an edge 2e-15 m long, whose offset GEOS takes
+    along a NaN normal (numpy warns "invalid value encountered in buffer"). The dilation and
+    the erosion drop it first: no warning, and the dilation holds every point within the
+    distance, the erosion only points whose disc lies in the view."""
+    shape = shapely.from_wkt((Path(__file__).parent / "short_edge_view.wkt").read_text())
+    assert shapely.is_valid(shape)
+    with np.errstate(invalid="raise"), pytest.raises(FloatingPointError):  # the case stands
+        shape.buffer(1.2, cap_style="square", join_style="mitre", mitre_limit=1.0)
+    with np.errstate(invalid="raise"):
+        region = PolygonRegion(shape).dilate(1.2)
+        eroded = PolygonRegion(shape).erode(1.2)
+    assert region.shape.covers(shape.buffer(1.2 * (1 - 1e-9), quad_segs=64))
+    assert shape.buffer(-1.2 * (1 - 1e-9), quad_segs=64).covers(eroded.shape)
