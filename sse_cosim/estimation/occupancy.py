@@ -166,8 +166,11 @@ class OccupancyTracker:
                 # eps + reach(age) of s now (so ground nobody saw off the walkable, such as a
                 # vehicle's shadow on the road, keeps no path alive)
                 slack = eps + self.model.reach_m(item.age)
-                if _apart(path, item.region, 2.0 * self.kind.reach_of(slack)):
-                    continue  # the region cannot touch dilate(path): the cut keeps path whole
+                if _apart(path, item.region, slack) or path.distance(item.region) > slack:
+                    # the region misses path (+) disc(slack): a point of path within eps of
+                    # walkable ground has such ground, unseen, within slack of path, and the
+                    # cut keeps it; left uncut, the rest stays too (a larger region)
+                    continue
                 outside = self._on_foot(path.dilate(slack)).difference(item.region)
                 path = path.intersection(outside.dilate(slack))
             cut_path = path  # with eps = 0, cut with every region clear now (slack 0)
