@@ -72,6 +72,7 @@ from sse_cosim.control.swept import (
 )
 from sse_cosim.estimation.motion import MotionModel, Separation, unit_fan
 from sse_cosim.regions import Region, RegionKind
+from sse_cosim.regions.polygon import OFFSET_MARGIN
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
 from sse_cosim.sets import Zonotope
 from sse_cosim.world.roadmap import RoadMap
@@ -585,8 +586,10 @@ def _touched(sweep: Sequence[SweepPiece], piece: shapely.Geometry, start: float,
 
 def _widened(line: shapely.LineString, half_width: float) -> shapely.Geometry:
     """``line`` swept by a disc of radius ``half_width``, with flat ends: its bends mitred, so
-    that the polygon holds every round join it stands for."""
-    return line.buffer(half_width, cap_style="flat", join_style="mitre")
+    that the polygon holds every round join it stands for, and widened by GEOS's shortcuts'
+    margin (:data:`~sse_cosim.regions.polygon.OFFSET_MARGIN`: a route's bends of less than a
+    milliradian get no join)."""
+    return line.buffer(half_width * (1.0 + OFFSET_MARGIN), cap_style="flat", join_style="mitre")
 
 
 def _boundary_points(polygon: shapely.Geometry) -> np.ndarray:

@@ -26,6 +26,7 @@ from sse_cosim.control.speed import SpeedLevel, level_speed, paper_level
 from sse_cosim.estimation.motion import motion_model
 from sse_cosim.regions import PolygonRegion as R
 from sse_cosim.regions import kind
+from sse_cosim.regions.polygon import OFFSET_MARGIN
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.scenario.model import Estimator
 from sse_cosim.world.network import build_network
@@ -122,8 +123,9 @@ def test_the_zebra_is_the_one_conflict_zone_on_the_route(context):
     assert zone.start_m == pytest.approx(start, abs=1e-6)
     assert zone.end_m == pytest.approx(end, abs=1e-6)
     # the swept corridor: half the bus plus a pedestrian's radius either side of the lane
+    # (and the margin every offset keeps for GEOS's shortcuts)
     lane_y = context.route_line.interpolate(start).y
-    half = 0.5 * context.bus.width_m + 0.3
+    half = (0.5 * context.bus.width_m + 0.3) * (1.0 + OFFSET_MARGIN)
     assert zone.polygon.bounds[1] == pytest.approx(lane_y - half, abs=1e-6)
     assert zone.polygon.bounds[3] == pytest.approx(lane_y + half, abs=1e-6)
 
