@@ -7,7 +7,8 @@ search resumes (:mod:`sse_cosim.falsify.search`).
 
 - ``cma``: CMA-ES (Hansen's covariance matrix adaptation) from the ``cmaes`` package, the
   implementation Optuna's CMA-ES sampler uses, with the box as its bounds. Its random state
-  belongs to the object (no global NumPy state).
+  belongs to the object (no global NumPy state). It proposes the same points on every
+  machine (:class:`PortableCMA`).
 - ``random``: uniform random search with the same generation size, the baseline the report
   sets beside every search.
 
@@ -25,6 +26,10 @@ from cmaes import CMA
 
 CMA_SIGMA = 0.3
 """CMA-ES's initial step size in the unit cube: about a third of each interval."""
+POINT_DECIMALS = 6
+"""CMA-ES's points are rounded to this many decimals of the unit cube (10 us of a 10 s
+interval): its linear algebra differs from one CPU to another in the last digits, which the
+rounding removes (:class:`PortableCMA`)."""
 
 
 class Searcher(Protocol):
@@ -41,16 +46,39 @@ def generation_size(dims: int) -> int:
     return 4 + math.floor(3 * math.log(dims))
 
 
+class PortableCMA(CMA):
+    """``cmaes``'s CMA-ES, sampling N(0, C) as C^(1/2) z with the symmetric square root
+    B D B^T instead of B D z.
+
+    The eigenvectors B of C come from LAPACK, whose kernels differ by CPU (OpenBLAS picks
+    them at run time). Where C has a repeated eigenvalue (C starts as the identity, and each
+    generation's update adds a rank of at most the number of parents, so in 41 dimensions
+    most of it stays repeated for many generations), the eigenvectors of that eigenspace are
+    any basis of it, each CPU returns another, and B D z differs entirely: the searches of
+    two machines part at the first such generation. B D B^T is the same matrix whatever the
+    basis, so the samples differ only in their last digits, and rounding them to
+    :data:`POINT_DECIMALS` gives the same points (tests/falsify/test_portable_search.py, on
+    OpenBLAS's and NumPy's kernels for another CPU). The distribution is the same, N(m,
+    sigma^2 C)."""
+
+    def _sample_solution(self) -> np.ndarray:
+        b, d = self._eigen_decomposition()
+        z = self._rng.randn(self._n_dim)  # ~ N(0, I)
+        return self._mean + self._sigma * (b @ (d * (b.T @ z)))
+
+
 class CmaSearcher:
-    """CMA-ES over the unit cube, started at its centre."""
+    """CMA-ES over the unit cube, started at its centre, its points rounded to
+    :data:`POINT_DECIMALS` (the points it is told are those)."""
 
     def __init__(self, dims: int, seed: int, size: int) -> None:
-        self._cma = CMA(mean=np.full(dims, 0.5), sigma=CMA_SIGMA,
+        self._cma = PortableCMA(mean=np.full(dims, 0.5), sigma=CMA_SIGMA,
                         bounds=np.tile([0.0, 1.0], (dims, 1)), seed=seed,
                         population_size=size)
 
     def ask(self) -> np.ndarray:
-        return np.array([self._cma.ask() for _ in range(self._cma.population_size)])
+        points = [self._cma.ask() for _ in range(self._cma.population_size)]
+        return np.round(np.array(points), POINT_DECIMALS)
 
     def tell(self, points: np.ndarray, margins: Sequence[float]) -> None:
         self._cma.tell([(p, float(m)) for p, m in zip(points, margins, strict=True)])
