@@ -67,9 +67,12 @@ Cache: a JSON file per network, the built network's folder for one built from so
 (``walker_jitter.json`` beside ``road.net.xml``), else ``$XDG_CACHE_HOME/sse-cosim`` by the
 content hash of the ``.net.xml``; its entries are keyed by SUMO's version, the step length,
 the speed bound and the pedestrian's size (and a_max for the bounded-acceleration model),
-and hold each junction's jitter and the walk that needed it, and its ground patch (exact, as
-hex WKB; an entry written before patches were measured has none and is measured again). It is
-written atomically; only the junctions not measured yet are walked.
+and hold each junction's jitter and the walk that needed it, and the walk's pieces off the
+plain ground (exact, as hex WKB; an entry written before they were kept has none and is
+measured again). The cache keeps what SUMO did, not what the code makes of it: the ground
+patch is drawn from those pieces at every load, so a change to the patch's band or to the
+Region layer's dilation takes effect without a stale patch. It is written atomically; only
+the junctions not measured yet are walked.
 """
 
 from __future__ import annotations
@@ -82,7 +85,7 @@ import tempfile
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, replace
-from functools import partial
+from functools import cached_property, partial
 from pathlib import Path
 
 import numpy as np
@@ -103,11 +106,10 @@ _EPS_M = 1e-9  # steps longer than v dt by rounding only need no jitter
 GROUND_BAND_M = 0.25  # how far a ground patch reaches around a lone walker's stretch off it (m)
 
 
-def _patch_of(ground: shapely.Geometry, runs: Sequence[np.ndarray]) -> shapely.Geometry:
-    """The ground patch that holds the walk pieces ``runs`` (each (k, 2)) where they are off
-    the plain ``ground``: each stretch of consecutive positions off it, with the position
-    before and after, as a line dilated by :data:`GROUND_BAND_M` (a polygon holding the disc
-    dilation, :meth:`~sse_cosim.regions.PolygonRegion.dilate`); empty if none is off."""
+def _off_ground(ground: shapely.Geometry, runs: Sequence[np.ndarray]) -> shapely.Geometry:
+    """Where the walk pieces ``runs`` (each (k, 2)) are off the plain ``ground``: each stretch
+    of consecutive positions off it, with the position before and after, as a line (a point
+    for a single position); empty if none is off."""
     lines = []
     for xy in runs:
         off = shapely.distance(ground, shapely.points(xy.reshape(-1, 2))) > 0.0
@@ -115,9 +117,16 @@ def _patch_of(ground: shapely.Geometry, runs: Sequence[np.ndarray]) -> shapely.G
             piece = xy[max(first - 1, 0):last + 2]
             lines.append(shapely.LineString(piece) if len(piece) > 1
                          else shapely.Point(piece[0]))
-    if not lines:
+    return shapely.union_all(lines) if lines else shapely.Polygon()
+
+
+def _patch_of(off_ground: shapely.Geometry) -> shapely.Geometry:
+    """The ground patch that holds the pieces ``off_ground`` (:func:`_off_ground`): them
+    dilated by :data:`GROUND_BAND_M` (a polygon holding the disc dilation,
+    :meth:`~sse_cosim.regions.PolygonRegion.dilate`); empty if there are none."""
+    if off_ground.is_empty:
         return shapely.Polygon()
-    return PolygonRegion(shapely.union_all(lines)).dilate(GROUND_BAND_M).shape
+    return PolygonRegion(off_ground).dilate(GROUND_BAND_M).shape
 
 
 def _stretches(flags: np.ndarray) -> list[tuple[int, int]]:
@@ -131,21 +140,28 @@ def _stretches(flags: np.ndarray) -> list[tuple[int, int]]:
 class JunctionJitter:
     """The jitter (m) SUMO's walkers need at one junction, and the walk (its edges) that
     needed the most there, with the lanes of its largest step (from, to) and that step (m);
-    ``ground_patch`` the ground its walkers need beyond the plain ground (module docstring;
-    None: not measured, an old entry)."""
+    ``off_ground`` where its walkers left the plain ground (module docstring; None: not
+    measured, an old entry)."""
 
     junction: str
     jitter_m: float
     walk: tuple[str, ...]
     step_lanes: tuple[str, str]
     step_m: float
-    ground_patch: shapely.Geometry | None = None
+    off_ground: shapely.Geometry | None = None
+
+    @cached_property
+    def ground_patch(self) -> shapely.Geometry:
+        """The ground its walkers need beyond the plain ground (:func:`_patch_of`)."""
+        if self.off_ground is None:
+            raise ValueError(f"junction {self.junction!r} has no measured walk off the ground")
+        return _patch_of(self.off_ground)
 
     def as_dict(self) -> dict[str, object]:
-        patch = None if self.ground_patch is None else shapely.to_wkb(self.ground_patch, hex=True)
+        off = None if self.off_ground is None else shapely.to_wkb(self.off_ground, hex=True)
         return {"jitter_m": self.jitter_m, "walk": list(self.walk),
                 "step_lanes": list(self.step_lanes), "step_m": self.step_m,
-                "ground_patch": patch}
+                "off_ground": off}
 
 
 @dataclass(frozen=True)
@@ -183,7 +199,7 @@ class JitterCache:
 
     def junctions(self, key: str) -> dict[str, JunctionJitter]:
         return {jid: JunctionJitter(jid, e["jitter_m"], tuple(e["walk"]), tuple(e["step_lanes"]),
-                                    e["step_m"], _from_wkb(e.get("ground_patch")))
+                                    e["step_m"], _from_wkb(e.get("off_ground")))
                 for jid, e in self.entries.get(key, {}).items()}
 
     def add(self, key: str, found: Iterable[JunctionJitter]) -> None:
@@ -223,7 +239,7 @@ def measure(net_path: Path, net: sumolib.net.Net | None, extent: SceneExtent | N
     key = cache_key(sumo_version, step_s, speed_mps, radius_m, accel_mps2)
     known = cache.junctions(key)
     missing = [jid for jid in wanted
-               if jid not in known or known[jid].ground_patch is None]
+               if jid not in known or known[jid].off_ground is None]
     if missing:
         todo = [area for area in areas if _junction(area) in set(missing)]
         started = time.perf_counter()
@@ -241,8 +257,7 @@ def measure(net_path: Path, net: sumolib.net.Net | None, extent: SceneExtent | N
     return NetworkJitter(jitter_m=0.0 if worst is None else worst.jitter_m, worst=worst,
                          junctions=len(measured), speed_mps=speed_mps, step_s=step_s,
                          ground_patches={j.junction: j.ground_patch for j in measured
-                                         if j.ground_patch is not None
-                                         and not j.ground_patch.is_empty})
+                                         if not j.ground_patch.is_empty})
 
 
 def cache_key(sumo_version: str, step_s: float, speed_mps: float, radius_m: float,
@@ -250,7 +265,7 @@ def cache_key(sumo_version: str, step_s: float, speed_mps: float, radius_m: floa
     """The cache entry of measurements with these settings (``accel_mps2``: the
     bounded-acceleration model's, None for a speed-bounded model)."""
     key = (f"sumo {sumo_version}|step {step_s:.10g} s|speed {speed_mps:.10g} m/s"
-           f"|radius {radius_m:.10g} m|ground band {GROUND_BAND_M:g} m, mitred")
+           f"|radius {radius_m:.10g} m")
     return key if accel_mps2 is None else f"{key}|accel {accel_mps2:.10g} m/s2"
 
 
@@ -361,26 +376,26 @@ def _walk_junctions(net_path: Path, net: sumolib.net.Net,
         jitter_of = partial(_accel_junction_jitter,
                             bounds=AccelerationBounds(speed_mps, accel_mps2, 0.0, step_s))
     return [replace(jitter_of(j, by_junction[j]),
-                    ground_patch=_ground_patch(net, by_junction[j], ground))
+                    off_ground=_walk_off_ground(net, by_junction[j], ground))
             if j in by_junction else JunctionJitter(j, 0.0, (), ("", ""), 0.0, shapely.Polygon())
             for j in junctions]
 
 
-def _ground_patch(net: sumolib.net.Net, walks: list[tuple[tuple[str, ...], WalkTrace]],
-                  ground: shapely.Geometry) -> shapely.Geometry:
-    """The junction's ground patch (:func:`_patch_of`) beyond the plain ``ground``, over the
-    stretches its walks spent on its walking areas and crossings."""
+def _walk_off_ground(net: sumolib.net.Net, walks: list[tuple[tuple[str, ...], WalkTrace]],
+                     ground: shapely.Geometry) -> shapely.Geometry:
+    """Where the junction's walks left the plain ``ground`` (:func:`_off_ground`), over the
+    stretches they spent on its walking areas and crossings."""
     inner = {e for edges, _ in walks for e in edges
              if net.getEdge(e).getFunction() in ("walkingarea", "crossing")}
     runs = []
     for _, trace in walks:
         on = np.array([lane.rpartition("_")[0] in inner for lane in trace.lanes])
         runs.extend(trace.xy[first:last + 1] for first, last in _stretches(on))
-    return _patch_of(ground, runs)
+    return _off_ground(ground, runs)
 
 
 def _from_wkb(text: str | None) -> shapely.Geometry | None:
-    """A cached ground patch (hex WKB, exact), None for an entry without one."""
+    """A cached walk off the ground (hex WKB, exact), None for an entry without one."""
     return None if text is None else shapely.from_wkb(text)
 
 

@@ -100,16 +100,18 @@ def test_a_measurement_is_cached_with_its_settings(paper, monkeypatch) -> None:
         _measure(net_path, 2.0)
 
 
-def test_a_cache_entry_without_a_ground_patch_is_measured_again(paper, monkeypatch) -> None:
-    """Entries written before the ground patch was measured lack it: their junctions are
-    walked again (the same jitter), and the patch is kept from then on."""
+def test_a_cache_entry_without_its_walk_off_the_ground_is_measured_again(paper,
+                                                                        monkeypatch) -> None:
+    """Entries written before the walks' pieces off the ground were kept lack them (they kept
+    the drawn patch instead): their junctions are walked again (the same jitter), and the
+    pieces are kept from then on."""
     net_path, _ = paper
     first = _measure(net_path, SPEED)
     cache = walker_jitter.cache_path(net_path)
     entries = json.loads(cache.read_text("utf-8"))
     for junctions in entries.values():
         for entry in junctions.values():
-            del entry["ground_patch"]
+            entry["ground_patch"] = entry.pop("off_ground")
     cache.write_text(json.dumps(entries), "utf-8")
     walked: list[int] = []
     real = walker_jitter.walk_alone
@@ -120,10 +122,26 @@ def test_a_cache_entry_without_a_ground_patch_is_measured_again(paper, monkeypat
 
     monkeypatch.setattr(walker_jitter, "walk_alone", counted)
     assert _measure(net_path, SPEED) == first and len(walked) == 1
-    assert all(entry["ground_patch"] is not None
+    assert all(entry["off_ground"] is not None
                for junctions in json.loads(cache.read_text("utf-8")).values()
                for entry in junctions.values())
     assert _measure(net_path, SPEED) == first and len(walked) == 1  # read from the cache
+
+
+def test_the_patch_is_drawn_anew_from_the_cached_walk(paper, monkeypatch) -> None:
+    """The cache keeps where SUMO's walkers left the ground, not the patch drawn around it: a
+    wider band (or any change to the Region layer's dilation) gives the patch it draws
+    without walking again, and holds the narrower one."""
+    net_path, _ = paper
+    narrow = _measure(net_path, SPEED).ground_patches["C"]
+
+    def no_sumo(*args: object, **kwargs: object) -> None:
+        raise AssertionError("measured again")
+
+    monkeypatch.setattr(walker_jitter, "walk_alone", no_sumo)
+    monkeypatch.setattr(walker_jitter, "GROUND_BAND_M", 2.0 * walker_jitter.GROUND_BAND_M)
+    wide = _measure(net_path, SPEED).ground_patches["C"]
+    assert wide.covers(narrow) and wide.area > 1.5 * narrow.area
 
 
 def _run(tmp_path: Path, *sets: str) -> dict:
