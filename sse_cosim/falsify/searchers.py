@@ -24,6 +24,8 @@ from typing import Protocol
 import numpy as np
 from cmaes import CMA
 
+from sse_cosim.sets import portable
+
 CMA_SIGMA = 0.3
 """CMA-ES's initial step size in the unit cube: about a third of each interval."""
 POINT_DECIMALS = 6
@@ -56,7 +58,8 @@ class PortableCMA(CMA):
     most of it stays repeated for many generations), the eigenvectors of that eigenspace are
     any basis of it, each CPU returns another, and B D z differs entirely: the searches of
     two machines part at the first such generation. B D B^T is the same matrix whatever the
-    basis, so the samples differ only in their last digits, and rounding them to
+    basis, so the samples differ only as much as the last digits of its eigenpairs (the
+    products are :func:`~sse_cosim.sets.portable.matmul`'s), and rounding them to
     :data:`POINT_DECIMALS` gives the same points (tests/falsify/test_portable_search.py, on
     OpenBLAS's and NumPy's kernels for another CPU). The distribution is the same, N(m,
     sigma^2 C)."""
@@ -64,7 +67,7 @@ class PortableCMA(CMA):
     def _sample_solution(self) -> np.ndarray:
         b, d = self._eigen_decomposition()
         z = self._rng.randn(self._n_dim)  # ~ N(0, I)
-        return self._mean + self._sigma * (b @ (d * (b.T @ z)))
+        return self._mean + self._sigma * portable.matmul(b, d * portable.matmul(b.T, z))
 
 
 class CmaSearcher:

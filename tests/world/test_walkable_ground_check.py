@@ -51,7 +51,7 @@ def plain(tmp_path, monkeypatch) -> Path:
     net = tmp_path / "town.net.xml"
     shutil.copyfile(road, net)
     walker_jitter.JitterCache(net).add(key, [
-        replace(measured, ground_patch=shapely.Polygon())
+        replace(measured, off_ground=shapely.Polygon())
         for measured in walker_jitter.JitterCache(road).junctions(key).values()])
     return net
 
