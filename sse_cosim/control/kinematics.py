@@ -69,6 +69,30 @@ class BusDynamics:
             return (speed - math.sqrt(speed * speed - 2.0 * brake * distance)) / brake
         return r + self.travel_time(distance - braked, slowest, command)
 
+    def pass_profile(self, elapsed: float, speed: float, command: float) -> tuple[float, float]:
+        """``(distance, speed)`` (m, m/s) the worst case of :meth:`pass_time` has reached
+        ``elapsed`` s after ``command`` was given at ``speed``: braking at the emergency
+        deceleration through the reaction time, one step more, then the ramp to the command.
+        A bus no later and no slower than this (same command or faster) advances every
+        distance no later than :meth:`pass_time` says."""
+        r, brake = self.reaction_time, self.emergency_decel
+        if elapsed <= r:
+            braking = min(elapsed, speed / brake)
+            return speed * braking - 0.5 * brake * braking * braking, max(
+                0.0, speed - brake * elapsed)
+        slowest = max(0.0, speed - brake * r)
+        braked = (speed * speed - slowest * slowest) / (2.0 * brake)
+        ramping = elapsed - r - self.step
+        if ramping <= 0.0:
+            return braked, slowest
+        rate = self.accel if command >= slowest else -self.decel
+        ramp_time = (command - slowest) / rate
+        if ramping <= ramp_time:
+            return braked + slowest * ramping + 0.5 * rate * ramping * ramping, (
+                slowest + rate * ramping)
+        return braked + (slowest + command) * 0.5 * ramp_time + command * (
+            ramping - ramp_time), command
+
     def travel_time(self, distance: float, speed: float, command: float) -> float:
         """Time (s) to advance ``distance`` m from ``speed`` while holding ``command``.
 

@@ -40,6 +40,7 @@ from sse_cosim.control.picture import Picture, SceneContext, ZoneOutlook
 from sse_cosim.scenario.model import Controller
 
 STANDING_MPS = 1e-3  # below this the bus counts as standing
+KEPT_TOLERANCE = 1e-6  # m and m/s: a bus this close to a pass's worst case still keeps it
 SPEED_UP_LOOKAHEAD_S = 1.0  # a faster command must keep its plans this long (no chatter)
 
 
@@ -133,13 +134,36 @@ def make_policy(context: SceneContext) -> SafePolicy | PaperPolicy:
 
 
 @dataclass(frozen=True)
+class Commitment:
+    """A pass proven at ``proven_s`` (the policy's clock), the front then at ``front_s`` and
+    the bus at ``speed_mps``, holding ``command`` (m, m/s)."""
+
+    command: float
+    proven_s: float
+    front_s: float
+    speed_mps: float
+
+    def kept(self, dynamics: BusDynamics, now_s: float, front_s: float, speed: float) -> bool:
+        """Whether the bus, its front at ``front_s`` at ``speed`` now, is no later and no
+        slower than the worst case the pass was proven on (:meth:`BusDynamics.pass_profile`):
+        then, holding this command or a faster one, it clears the zone no later than proven.
+        A bus held back by the world (SUMO's right of way, a leader) is not."""
+        reached, least = dynamics.pass_profile(now_s - self.proven_s, self.speed_mps,
+                                               self.command)
+        return (front_s - self.front_s >= reached - KEPT_TOLERANCE
+                and speed >= least - KEPT_TOLERANCE)
+
+
+@dataclass(frozen=True)
 class Plan:
     """Why a command is safe for one zone: ``stop`` before it, ``stand`` still before anyone
-    can reach it, or ``pass`` it before anyone can (which commits the bus to its speed)."""
+    can reach it, or ``pass`` it before anyone can (which commits the bus to its speed:
+    ``commitment``)."""
 
     zone: int
     kind: str
     command: float
+    commitment: Commitment | None = None
 
 
 class SafePolicy:
@@ -163,7 +187,11 @@ class SafePolicy:
 
     A pass commits the bus: while it has not cleared the zone, any command at least as fast
     as the one the pass was proven with stays admissible, since the pedestrians that could
-    reach the zone in time were all inside the sets when it was proven. If no level and no
+    reach the zone in time were all inside the sets when it was proven -- as long as the bus
+    keeps to the pass's worst case (:meth:`Commitment.kept`). SUMO may hold the bus below
+    its command (a car's right of way at a junction, a leader); a pass it holds back is
+    proven again from where the bus is, or given up. ``decide`` is called once a step (its
+    clock). If no level and no
     comfortable stop keeps a plan, the bus brakes at the emergency deceleration. Under the
     assumptions of docs/controller.md, with commands acting over the next step as in SUMO,
     the plans proven at one step stay valid at the next (the comfortable stop of the previous
@@ -176,10 +204,12 @@ class SafePolicy:
         self.dynamics = dynamics
         self.nominal = nominal_mps
         self.config = config
-        self.committed: dict[int, float] = {}  # zone -> the command its pass was proven with
+        self.committed: dict[int, Commitment] = {}  # zone -> the pass it is committed to
+        self.now_s = -dynamics.step  # the policy's clock: the time of the latest decide
 
     def decide(self, picture: Picture, floor: SpeedLevel = SpeedLevel.NOMINAL) -> Decision:
         """The level and command for this step (updates the pass commitment)."""
+        self.now_s += self.dynamics.step
         # the fastest level the floor allows; failing that, the slowest faster one (only a
         # committed pass is left: hold it, the floor would break it)
         allowed = [level for level in SpeedLevel if floor <= level < SpeedLevel.EMERGENCY]
@@ -188,7 +218,8 @@ class SafePolicy:
             for command in self._commands(level):
                 plans = self._plans(picture, command)
                 if plans is not None:
-                    self.committed = {p.zone: p.command for p in plans if p.kind == "pass"}
+                    self.committed = {p.zone: p.commitment for p in plans
+                                      if p.commitment is not None}
                     return Decision(level, command)
         self.committed = {}
         return Decision(SpeedLevel.EMERGENCY, 0.0)
@@ -226,7 +257,7 @@ class SafePolicy:
         for zone in picture.zones:
             plan = self._stop_or_stand(zone, command, start, picture.speed_mps, picture.zones)
             if plan is None and passing:
-                plan = self._pass(zone, picture.speed_mps, command)
+                plan = self._pass(zone, picture, command)
                 if plan is not None:  # a later stop starts once this zone is cleared
                     # holding the command, the speed moves from the predicted one toward it
                     start = _StopStart(zone.to_clear_m, max(speed, command), dyn.pass_time(
@@ -283,15 +314,18 @@ class SafePolicy:
         return all(dyn.pass_time(z.to_clear_m, speed_now, command) + dyn.step
                    < z.in_view_arrival_s for z in entered)
 
-    def _pass(self, zone: ZoneOutlook, speed_now: float, command: float) -> Plan | None:
+    def _pass(self, zone: ZoneOutlook, picture: Picture, command: float) -> Plan | None:
         """Holding the command, the rear clears the zone a step before anyone can arrive (or a
-        pass committed earlier still holds)."""
-        dyn = self.dynamics
+        pass committed earlier still holds: this command is as fast, and the bus has kept to
+        the pass)."""
+        dyn, speed_now = self.dynamics, picture.speed_mps
         if dyn.pass_time(zone.to_clear_m, speed_now, command) + dyn.step < zone.arrival_s:
-            return Plan(zone.index, "pass", command)
+            return Plan(zone.index, "pass", command,
+                        Commitment(command, self.now_s, picture.front_s, speed_now))
         committed = self.committed.get(zone.index)
-        if committed is not None and command >= committed:
-            return Plan(zone.index, "pass", committed)
+        if committed is not None and command >= committed.command and committed.kept(
+                dyn, self.now_s, picture.front_s, speed_now):
+            return Plan(zone.index, "pass", committed.command, committed)
         return None
 
 
