@@ -1,6 +1,6 @@
 """A pass the world holds back, on the junction in SUMO.
 
-The falsifier's junction search found it (results/falsify.md, docs/controller.md): at 12.0 s
+The falsifier's junction search found it (results/falsify.md, docs/controller.md): at 11.9 s
 bus_sn proves a pass over the south zebra and the junction and goes nominal; SUMO then stops it
 at the stop line for a car's right of way. Under the old commitment the bus stayed commanded
 nominal for the 19 s SUMO held it and drove on into zones a pedestrian could already be in.
