@@ -122,7 +122,7 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
                f"{', '.join(methods)}, {setup.generations} generation(s) of "
                f"{setup.generation} each -> {out_dir}")
 
-    pace = _Pace()
+    pace = _Pace(setup.generation * len(methods))
 
     def progress(round_: int, rounds: int, least: dict[str, float | None], ran: int) -> None:
         found = ", ".join(f"{m} {'—' if v is None else f'{v:.3f}'}" for m, v in least.items())
@@ -149,26 +149,30 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
 
 
 class _Pace:
-    """The wall time of the generations that made runs, and what is left at that pace (a
-    resumed search's recorded generations take no time and do not count)."""
+    """The wall time of the runs made so far, and what is left at that pace: ``per_round``
+    runs a generation. A resumed search's recorded generations take no time and do not
+    count, and a generation that ran again only the runs that failed counts as those runs."""
 
-    def __init__(self) -> None:
+    def __init__(self, per_round: int) -> None:
+        self._per_round = per_round
         self._last = time.monotonic()
         self._spent_s = 0.0
-        self._rounds = 0
+        self._ran = 0
 
     def lap(self, ran: int, left: int) -> str:
-        """How the round just ended went, and the time ``left`` more rounds take."""
+        """How the round just ended went (``ran`` runs), and the time ``left`` more rounds
+        take."""
         now = time.monotonic()
         took, self._last = now - self._last, now
         if not ran:
             return "recorded"
         self._spent_s += took
-        self._rounds += 1
+        self._ran += ran
         done = f"{ran} run(s) in {tqdm.format_interval(took)}"
         if not left:
             return done
-        return f"{done}, about {tqdm.format_interval(self._spent_s / self._rounds * left)} left"
+        rest_s = self._spent_s / self._ran * self._per_round * left
+        return f"{done}, about {tqdm.format_interval(rest_s)} left"
 
 
 def _command(scenario: Path, space_file: Path, objective: str, methods: tuple[str, ...],

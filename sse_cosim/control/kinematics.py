@@ -62,12 +62,11 @@ class BusDynamics:
         """Time (s) to advance ``distance`` m holding ``command`` when the command acts only
         after the reaction time, during which the bus may still follow an earlier command
         that brakes it, at most at its emergency deceleration (the least progress)."""
-        r, brake = self.reaction_time, self.emergency_decel
-        slowest = max(0.0, speed - brake * r)
-        braked = (speed * speed - slowest * slowest) / (2.0 * brake)
+        braked, slowest = self._reaction_brake(speed)
         if braked >= distance:
+            brake = self.emergency_decel
             return (speed - math.sqrt(speed * speed - 2.0 * brake * distance)) / brake
-        return r + self.travel_time(distance - braked, slowest, command)
+        return self.reaction_time + self.travel_time(distance - braked, slowest, command)
 
     def pass_profile(self, elapsed: float, speed: float, command: float) -> tuple[float, float]:
         """``(distance, speed)`` (m, m/s) the worst case of :meth:`pass_time` has reached
@@ -80,13 +79,11 @@ class BusDynamics:
             braking = min(elapsed, speed / brake)
             return speed * braking - 0.5 * brake * braking * braking, max(
                 0.0, speed - brake * elapsed)
-        slowest = max(0.0, speed - brake * r)
-        braked = (speed * speed - slowest * slowest) / (2.0 * brake)
+        braked, slowest = self._reaction_brake(speed)
         ramping = elapsed - r - self.step
         if ramping <= 0.0:
             return braked, slowest
-        rate = self.accel if command >= slowest else -self.decel
-        ramp_time = (command - slowest) / rate
+        rate, ramp_time = self._ramp(slowest, command)
         if ramping <= ramp_time:
             return braked + slowest * ramping + 0.5 * rate * ramping * ramping, (
                 slowest + rate * ramping)
@@ -101,8 +98,7 @@ class BusDynamics:
         """
         if distance <= 0.0:
             return 0.0
-        rate = self.accel if command >= speed else -self.decel
-        ramp_time = (command - speed) / rate if rate else 0.0
+        rate, ramp_time = self._ramp(speed, command)
         ramp_distance = (speed + command) * 0.5 * ramp_time
         if ramp_distance >= distance:
             # reached during the ramp: distance = speed t + rate t^2 / 2
@@ -113,3 +109,15 @@ class BusDynamics:
         if command <= 0.0:
             return math.inf
         return self.step + ramp_time + (distance - ramp_distance) / command
+
+    def _reaction_brake(self, speed: float) -> tuple[float, float]:
+        """``(distance, speed)`` (m, m/s) after the reaction time braking from ``speed`` at the
+        emergency deceleration (the least progress an earlier command allows)."""
+        slowest = max(0.0, speed - self.emergency_decel * self.reaction_time)
+        return (speed * speed - slowest * slowest) / (2.0 * self.emergency_decel), slowest
+
+    def _ramp(self, speed: float, command: float) -> tuple[float, float]:
+        """``(rate, time)`` (m/s^2, s) of the ramp from ``speed`` to ``command``: up at
+        ``accel``, down at ``decel``."""
+        rate = self.accel if command >= speed else -self.decel
+        return rate, (command - speed) / rate if rate else 0.0

@@ -153,14 +153,15 @@ def _offset(shape: shapely.Geometry, distance: float) -> shapely.Geometry:
     valid either.
 
     GEOS offsets an edge a few femtometres long along a normal of NaN (numpy warns: "invalid
-    value encountered in buffer"; a junction run's 360-degree view had one). Such a shape is
+    value encountered in buffer", at some distances "divide by zero" first; junction runs'
+    views had such edges). Such a shape is
     offset without its edges shorter than :data:`SHORT_EDGE_M`: dropping a vertex within that
     of the one before moves no boundary point by more, so the offset by
     :data:`LEAST_DILATION_M` more (further out, or further in) still holds (or lies inside)
     the exact one."""
     distance *= 1.0 + OFFSET_MARGIN
     try:
-        with np.errstate(invalid="raise"):
+        with np.errstate(invalid="raise", divide="raise"):
             mitred = _mitred(shape, distance)
     except FloatingPointError:
         shape = shapely.remove_repeated_points(shape, SHORT_EDGE_M)

@@ -566,15 +566,17 @@ def test_a_case_that_is_not_method_and_number_is_one_line(case, capsys):
     assert len(err.splitlines()) == 1 and f"'{case}' is not METHOD:N" in err
 
 
-def test_the_progress_line_tells_the_pace_of_the_generations_that_ran(monkeypatch):
-    """A resumed search's recorded generations take no time: the time left is the pace of the
-    generations that made runs times those still to come."""
+def test_the_progress_line_tells_the_pace_of_the_runs_that_were_made(monkeypatch):
+    """A resumed search's recorded generations take no time, and one that ran again only a
+    failed run took that run's time: the time left is the pace of the runs made times the
+    runs still to come (30 a generation)."""
     from sse_cosim.cli import falsify_commands
 
-    clock = iter([0.0, 0.5, 60.5, 180.5, 180.5])  # start, recorded, 60 s, 120 s, the last
+    clock = iter([0.0, 0.5, 2.5, 62.5, 182.5, 182.5])  # start, recorded, 1 run, 60 s, 120 s
     monkeypatch.setattr(falsify_commands.time, "monotonic", lambda: next(clock))
-    pace = falsify_commands._Pace()
-    assert pace.lap(0, 4) == "recorded"
+    pace = falsify_commands._Pace(30)
+    assert pace.lap(0, 5) == "recorded"
+    assert pace.lap(1, 4) == "1 run(s) in 00:02, about 04:00 left"  # 2 s a run
     assert pace.lap(30, 3) == "30 run(s) in 01:00, about 03:00 left"
-    assert pace.lap(30, 2) == "30 run(s) in 02:00, about 03:00 left"  # 90 s a generation
+    assert pace.lap(30, 2) == "30 run(s) in 02:00, about 02:59 left"  # 182 s for 61 runs
     assert pace.lap(30, 0) == "30 run(s) in 00:00"
