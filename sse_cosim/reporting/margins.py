@@ -334,16 +334,18 @@ class _Blocking:
 
 @dataclass
 class CrossingBlocked:
-    """How long an automated vehicle stood on a crossing while a pedestrian stood waiting to
-    step onto it (s): a liveness measure. SUMO keeps a pedestrian off a crossing a vehicle
+    """How long an automated vehicle stood on a crossing while a pedestrian stood waiting at
+    it (s): a liveness measure. SUMO keeps a pedestrian off a crossing a vehicle
     occupies (eclipse-sumo/sumo#3138), and a bus that waits for that pedestrian waits for
     itself (the falsifier's town standoff, results/falsify.md).
 
     A step counts for a vehicle that stands (below
     :data:`~sse_cosim.reporting.recorder.STOPPED_SPEED_MPS`) with its body on a crossing
     (:attr:`~sse_cosim.world.snapshot.VehicleState.on_crossings`) while a pedestrian stands
-    (below the same speed) on a walking area with that crossing next on its walk
-    (:attr:`~sse_cosim.world.snapshot.PersonState.next_crossing`). ``longest_s`` is the
+    (below the same speed) at it: on that crossing's own lane, where SUMO stops a walker
+    short of the vehicle (:attr:`~sse_cosim.world.snapshot.PersonState.crossing`; the
+    junction's standoff), or on a walking area with that crossing next on its walk
+    (:attr:`~sse_cosim.world.snapshot.PersonState.next_crossing`; the town's). ``longest_s`` is the
     longest stretch of one vehicle's counted steps, ``total_s`` every vehicle's counted steps
     together; the longest's start ``t``, its ``vehicle``, and the ``crossings`` and
     ``pedestrians`` of its steps come with it (none: no step counted).
@@ -351,7 +353,7 @@ class CrossingBlocked:
 
     name: ClassVar[str] = "crossing_blocked"
     help: ClassVar[str] = ("longest time an automated vehicle stood on a crossing while a "
-                           "pedestrian stood waiting to step onto it (s)")
+                           "pedestrian stood waiting at it, at its kerb or on it (s)")
     labelled_only: ClassVar[bool] = False
 
     scenario: Scenario
@@ -365,8 +367,9 @@ class CrossingBlocked:
         persons = result.snapshot.persons
         for vehicle in result.vehicles:
             state = result.snapshot.vehicles[vehicle]
-            waiting = {pid: p.next_crossing for pid, p in persons.items()
-                       if p.speed < STOPPED_SPEED_MPS and p.next_crossing in state.on_crossings}
+            waiting = {pid: at for pid, p in persons.items()
+                       if p.speed < STOPPED_SPEED_MPS
+                       and (at := p.crossing or p.next_crossing) in state.on_crossings}
             if state.speed >= STOPPED_SPEED_MPS or not waiting:
                 self._open.pop(vehicle, None)
                 continue

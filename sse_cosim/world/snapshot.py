@@ -85,15 +85,21 @@ class VehicleState:
 class PersonState:
     """One pedestrian at one step; ``position`` is its centre, shape (2,); ``heading`` the
     direction it walks (rad, CCW from east) as SUMO gives it, None while it waits beside the
-    sidewalk before its walk (on no lane); ``next_crossing`` the crossing its walk enters next
-    from the walking area it is on (None: on no walking area, or not bound for a crossing)."""
+    sidewalk before its walk (on no lane); ``crossing`` the crossing it is on (None: on none
+    of the network's crossings); ``next_crossing`` the crossing its walk enters next from the
+    walking area it is on (None: on no walking area, or not bound for a crossing)."""
 
     id: str
     position: tuple[float, float]
     speed: float  # m/s
-    on_crossing: bool = False  # on any of the network's crossings
+    crossing: str | None = None
     heading: float | None = None
     next_crossing: str | None = None
+
+    @property
+    def on_crossing(self) -> bool:
+        """Whether it is on any of the network's crossings."""
+        return self.crossing is not None
 
 
 @dataclass(frozen=True)

@@ -869,7 +869,7 @@ class SumoWorld:
             road = str(values[libsumo.VAR_ROAD_ID])
             persons[pid] = PersonState(
                 id=pid, position=self._centres[pid], speed=speed,
-                on_crossing=road in self.roadmap.crossing_ids,
+                crossing=road if road in self.roadmap.crossing_ids else None,
                 heading=walking_heading, next_crossing=self._next_crossing(pid, road))
         return Snapshot(time=self._time, vehicles=vehicles, persons=persons)
 

@@ -246,6 +246,29 @@ def test_a_crossing_counts_as_blocked_while_both_stand_the_vehicle_on_it():
         "vehicle": "bus", "crossings": [":C_c0"], "pedestrians": ["pedestrian"]}
 
 
+def test_a_walker_held_on_the_crossing_itself_counts_as_waiting_at_it():
+    """SUMO may stop a walker on the crossing's own lane, short of the vehicle standing on it
+    (the junction's standoff, CMA-ES's 349th run): that counts as waiting at it, as the
+    walking area's kerb does; a walker on another crossing, or walking, does not."""
+    margin = CrossingBlocked(load_scenario(S3))
+    front = Footprint(Pose(200.0, -1.6, 0.0), 12.0, 2.5)
+    steps = [  # (walker speed, the crossing it is on)
+        (0.0, ":C_c0"),  # counts
+        (0.0, ":C_c0"),  # counts
+        (0.4, ":C_c0"),  # SUMO moves it on, jammed: the stretch ends
+        (0.0, ":C_c1"),  # on another crossing
+        (0.0, None),  # on no crossing, bound for none
+    ]
+    for k, (w, crossing) in enumerate(steps):
+        walker = PersonState("pedestrian", (196.0, -5.0), w, crossing=crossing)
+        bus = VehicleState("bus", "automated", front, 0.0, on_crossings=(":C_c0",))
+        margin(StepResult(k, Snapshot(0.1 * k, {"bus": bus}, {"pedestrian": walker}),  # type: ignore[arg-type]
+                          {}, {}, None, {}, {"bus": None}))
+    assert margin.value(None) == {  # type: ignore[arg-type]
+        "longest_s": pytest.approx(0.2), "total_s": pytest.approx(0.2), "t": pytest.approx(0.0),
+        "vehicle": "bus", "crossings": [":C_c0"], "pedestrians": ["pedestrian"]}
+
+
 def test_the_pedestrian_keeps_the_heading_sumo_walks_it_through_a_sideways_step():
     """SUMO moves a walker sideways between the lanes of a walking area in one step (0.36 m
     in the S3 falsification's worst cases) while it walks on along the sidewalk: the time to
