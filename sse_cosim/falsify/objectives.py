@@ -149,15 +149,17 @@ class Standstill:
 @dataclass(frozen=True)
 class CrossingBlocked:
     """Liveness at crossings: the target (3 s, the standstill's) less the longest a vehicle
-    stood on a crossing while a pedestrian waited to step onto it (s;
+    stood on a crossing while a pedestrian waited at it, at its kerb or on it (s;
     :class:`~sse_cosim.reporting.margins.CrossingBlocked` measures it). The ``standstill``
     objective cannot see a bus that stands on a crossing and waits for the pedestrian it
-    holds up, for its path is never clear (the town's standoff, results/falsify.md)."""
+    holds up, for its path is never clear (the town's and the junction's standoffs,
+    results/falsify.md)."""
 
     name: ClassVar[str] = "blocking"
     unit: ClassVar[str] = "s"
     help: ClassVar[str] = (f"{STANDSTILL_TARGET_S:g} s less the longest a vehicle stood on a "
-                           "crossing while a pedestrian waited to step onto it; fails beyond it")
+                           "crossing while a pedestrian waited at it (at its kerb or on it); "
+                           "fails beyond it")
     margins: ClassVar[tuple[str, ...]] = (run_margins.CrossingBlocked.name,)
 
     def margin(self, summary: Mapping[str, Any]) -> float:

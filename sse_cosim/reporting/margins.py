@@ -21,7 +21,7 @@ footprint, so a time of 0 is a collision.
 :class:`MovingTimeToCollision` is the same time over the steps a vehicle moves only.
 
 :class:`CrossingBlocked` measures liveness at crossings: how long a vehicle stood on a
-crossing while a pedestrian waited to step onto it.
+crossing while a pedestrian waited at it, at its kerb or on it.
 
 :class:`ContainmentDepth` grades the recorder's containment checks: how deep each pedestrian's
 true position lies inside every position set and refined region written for it (the
