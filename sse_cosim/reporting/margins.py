@@ -337,7 +337,7 @@ class CrossingBlocked:
     """How long an automated vehicle stood on a crossing while a pedestrian stood waiting at
     it (s): a liveness measure. SUMO keeps a pedestrian off a crossing a vehicle
     occupies (eclipse-sumo/sumo#3138), and a bus that waits for that pedestrian waits for
-    itself (the falsifier's town standoff, results/falsify.md).
+    itself (the falsifier's town and junction standoffs, results/falsify.md).
 
     A step counts for a vehicle that stands (below
     :data:`~sse_cosim.reporting.recorder.STOPPED_SPEED_MPS`) with its body on a crossing
@@ -345,10 +345,10 @@ class CrossingBlocked:
     (below the same speed) at it: on that crossing's own lane, where SUMO stops a walker
     short of the vehicle (:attr:`~sse_cosim.world.snapshot.PersonState.crossing`; the
     junction's standoff), or on a walking area with that crossing next on its walk
-    (:attr:`~sse_cosim.world.snapshot.PersonState.next_crossing`; the town's). ``longest_s`` is the
-    longest stretch of one vehicle's counted steps, ``total_s`` every vehicle's counted steps
-    together; the longest's start ``t``, its ``vehicle``, and the ``crossings`` and
-    ``pedestrians`` of its steps come with it (none: no step counted).
+    (:attr:`~sse_cosim.world.snapshot.PersonState.next_crossing`; the town's).
+    ``longest_s`` is the longest stretch of one vehicle's counted steps, ``total_s`` every
+    vehicle's counted steps together; the longest's start ``t``, its ``vehicle``, and the
+    ``crossings`` and ``pedestrians`` of its steps come with it (none: no step counted).
     """
 
     name: ClassVar[str] = "crossing_blocked"

@@ -208,9 +208,7 @@ def test_the_moving_time_to_collision_leaves_out_the_standing_bus():
         margin(_step(0, bus, walker))  # the bus stands
     assert every.least_s < 10.0 and moving.least_s == np.inf
     still = _step(1, bus, walker)
-    under_way = StepResult(1, Snapshot(0.1, {"bus": VehicleState("bus", "automated", bus, 0.1)},
-                                       {"pedestrian": walker}), {}, {}, None, {},  # type: ignore[arg-type]
-                           {"bus": None})
+    under_way = _step(1, bus, walker, speed=0.1)
     moving(still)
     assert moving.least_s == np.inf
     moving(under_way)  # at 0.1 m/s the bus moves: the walker is on a collision course
@@ -238,9 +236,7 @@ def test_a_crossing_counts_as_blocked_while_both_stand_the_vehicle_on_it():
     front = Footprint(Pose(200.0, -1.6, 0.0), 12.0, 2.5)
     for k, (v, crossings, w, bound) in enumerate(steps):
         walker = PersonState("pedestrian", (196.0, -5.0), w, next_crossing=bound)
-        bus = VehicleState("bus", "automated", front, v, on_crossings=crossings)
-        margin(StepResult(k, Snapshot(0.1 * k, {"bus": bus}, {"pedestrian": walker}),  # type: ignore[arg-type]
-                          {}, {}, None, {}, {"bus": None}))
+        margin(_step(k, front, walker, speed=v, on_crossings=crossings))
     assert margin.value(None) == {  # type: ignore[arg-type]
         "longest_s": pytest.approx(0.3), "total_s": pytest.approx(0.6), "t": pytest.approx(0.8),
         "vehicle": "bus", "crossings": [":C_c0"], "pedestrians": ["pedestrian"]}
@@ -261,9 +257,7 @@ def test_a_walker_held_on_the_crossing_itself_counts_as_waiting_at_it():
     ]
     for k, (w, crossing) in enumerate(steps):
         walker = PersonState("pedestrian", (196.0, -5.0), w, crossing=crossing)
-        bus = VehicleState("bus", "automated", front, 0.0, on_crossings=(":C_c0",))
-        margin(StepResult(k, Snapshot(0.1 * k, {"bus": bus}, {"pedestrian": walker}),  # type: ignore[arg-type]
-                          {}, {}, None, {}, {"bus": None}))
+        margin(_step(k, front, walker, on_crossings=(":C_c0",)))
     assert margin.value(None) == {  # type: ignore[arg-type]
         "longest_s": pytest.approx(0.2), "total_s": pytest.approx(0.2), "t": pytest.approx(0.0),
         "vehicle": "bus", "crossings": [":C_c0"], "pedestrians": ["pedestrian"]}
@@ -302,7 +296,11 @@ def test_the_searched_sideways_step_no_longer_reads_as_a_course_toward_the_bus(t
     assert least["least_s"] > 5.0 and least["t"] not in (12.9, 13.0)
 
 
-def _step(step: int, bus: Footprint, walker: PersonState) -> StepResult:
-    snapshot = Snapshot(0.1 * step, {"bus": VehicleState("bus", "automated", bus, 0.0)},
+def _step(step: int, bus: Footprint, walker: PersonState, speed: float = 0.0,
+          on_crossings: tuple[str, ...] = ()) -> StepResult:
+    """Step ``step`` (0.1 s each) of one automated ``bus`` at ``speed`` (m/s), its body on
+    ``on_crossings``, and one ``walker``."""
+    snapshot = Snapshot(0.1 * step, {"bus": VehicleState("bus", "automated", bus, speed,
+                                                         on_crossings=on_crossings)},
                         {walker.id: walker})
     return StepResult(step, snapshot, {}, {}, None, {}, {"bus": None})  # type: ignore[arg-type]
