@@ -36,7 +36,10 @@ Rules of one step at one node (each proof in a line or two; "X" is a track's pre
   union of them all (a hull: 2-D the exact convex hull enclosed along the sets' directions,
   else the interval hull). Sensors are taken in turn (those with a single possibility
   together, one Proposition 1 step); each proof holds for every pedestrian in the
-  prediction, so the order is free.
+  prediction, so the order is free. A sensor whose shrunk region misses X cuts nothing (all
+  of X may be hidden from it), but X still joins its candidates: a pedestrian of X it
+  detects, within the jitter of its region's edge, is in X, and the invariant below needs
+  X to say so.
 - R4 claimed detections: a track that claims nothing leaves out the possibility X ∩ d of a
   d claimed by another track: a pedestrian of X whose detection is d is d's pedestrian,
   which the claimer keeps (claimers never leave anything out: two tracks that claim each
@@ -377,7 +380,8 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
 
     Sensors with a single possibility (wholly visible, one candidate left) cut X together in
     one Proposition 1 step; the others then each replace X by the hull of their possibilities.
-    Only sensors that see part of X take part (one that sees none of it may miss them all).
+    Only sensors that see part of X cut it (one that sees none of it may miss them all);
+    X joins the candidates of the others too (R3: their pedestrians in X stay in X).
     With ``split``, the last sensor that sees X in part and has one candidate left comes last
     and its two possibilities are kept apart (R8) instead of their hull.
     """
@@ -400,7 +404,10 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
     if certain:
         estimate = _cut(scene, estimate, Strips.stack([paths[d] for d in certain]))
     estimate = _ambiguous(scene, track, estimate, view, ambiguous)
-    joined = certain + [d for _, used in ambiguous for d in used]
+    unseen = [d for sensor, candidates in view.candidates.items()
+              if sensor not in view.wholly | view.partly
+              for d in candidates if d not in left_out]
+    joined = certain + [d for _, used in ambiguous for d in used] + unseen
     if last is None:
         return _finish(scene, track, estimate, track.occupied and kept_all, joined)
     sensor, (d,) = last

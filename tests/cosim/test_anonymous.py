@@ -1,6 +1,14 @@
-"""Anonymous detections in real SUMO (``estimator.association = "anonymous"``): a shortened
-crowd stays sound and safe with no person id in the estimation, and the labelled default is
-unchanged."""
+"""Anonymous detections in real SUMO (``estimator.association = "anonymous"``): the whole
+crowd (21 pedestrians, 90 s) over three seeds stays sound and safe with no person id in the
+estimation, and the labelled default is unchanged.
+
+The crowd's seed 1 is issue #60's traced case: n4, n5 and n6 walk abreast 1 m apart at
+x = 187.5-189.5 on the south sidewalk, 0.1-0.3 m inside the edge of bus_front's view. The
+bus's tracks holding them lay wholly within the jitter (1.2 m) of that edge, where the camera
+cuts nothing, and they joined none of its three detections; the bus took its own view as
+clear of them and cut them out of every refined region at t = 7.0 and 7.1 s (12 violations;
+6 on seeds 2 and 3). A track now joins every candidate of such a sensor (rule R3 of
+:mod:`sse_cosim.estimation.association`)."""
 
 from __future__ import annotations
 
@@ -9,6 +17,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from anonymous_checks import assert_sound_in_every_set_kind
 
 from sse_cosim.runner.run import run_scenario_file
 
@@ -16,40 +25,41 @@ pytestmark = pytest.mark.sumo
 ROOT = Path(__file__).resolve().parents[2]
 CROWD = ROOT / "scenarios" / "crowd.toml"
 S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
-KEPT = {"pedestrian", "n1", "s1"}  # two cross north, one walks up to cross south
-DROPPED = {f"{wave}{i}" for wave, count in (("n", 6), ("s", 7), ("m", 7))
-           for i in range(1, count + 1)} - KEPT
-SHORT_CROWD = {"estimator.association": "anonymous", "simulation.duration_s": 18.0,
-               **{f"pedestrians.{pid}.present": False for pid in DROPPED}}
 
 
-@pytest.fixture(scope="module")
-def crowd(tmp_path_factory) -> tuple[dict, Path]:
-    out = tmp_path_factory.mktemp("anonymous_crowd")
-    return run_scenario_file(CROWD, out, SHORT_CROWD, plots=False), out
+@pytest.fixture(scope="module", params=[1, 2, 3])
+def crowd(request, tmp_path_factory) -> tuple[dict, Path]:
+    out = tmp_path_factory.mktemp(f"anonymous_crowd_{request.param}")
+    summary = run_scenario_file(CROWD, out, {"estimator.association": "anonymous",
+                                             "simulation.seed": request.param}, plots=False)
+    return summary, out
 
 
-def test_a_short_crowd_is_sound_and_safe_with_anonymous_tracks(crowd):
+def test_the_whole_crowd_is_sound_and_safe_with_anonymous_tracks(crowd):
     summary, out = crowd
-    assert set(summary["pedestrians"]) == KEPT
-    assert summary["containment_violations"] == 0, summary["violations"]
-    assert summary["collisions"] == summary["contact_steps"] == 0
+    assert len(summary["pedestrians"]) == 21
+    assert_sound_in_every_set_kind(summary, out)
+
+
+def test_the_pedestrians_abreast_at_the_views_edge_stay_accounted_for(crowd):
+    """The traced steps: n4-n6 in a refined region at 7.0 and 7.1 s (seed 1 lost all three)."""
+    _, out = crowd
     checks = pd.read_csv(out / "pedestrians.csv")
-    for column in ("contained_fused", "contained_refined"):
-        checked = checks[column].dropna()
-        assert len(checked) > 0 and checked.astype(bool).all(), column
-    assert set(checks.dropna(subset=["contained_fused"])["pedestrian"]) == KEPT
+    traced = checks[checks["t"].isin([7.0, 7.1]) & checks["pedestrian"].isin(["n4", "n5", "n6"])]
+    assert len(traced) == 6
+    assert traced["contained_refined"].astype(bool).all()
+    assert traced["accounted_for"].astype(bool).all()
 
 
 def test_no_set_is_named_after_a_pedestrian(crowd):
     """Sets are the nodes' tracks ('<node>:<id>') and the fused tracks made of them."""
-    _, out = crowd
+    summary, out = crowd
     lines = [json.loads(line) for line in (out / "sets.jsonl").open()]
     local = {line["track"] for line in lines if line["kind"] == "local"}
     fused = {line["track"] for line in lines if line["kind"] == "fused"}
     assert all(":" in track for track in local)
     assert all(set(track.split("+")) <= local for track in fused)
-    assert not (local | fused) & KEPT
+    assert not (local | fused) & set(summary["pedestrians"])
 
 
 def test_the_labelled_default_reproduces_the_published_s3_run(tmp_path):

@@ -100,3 +100,28 @@ def test_a_pedestrian_standing_in_open_view_keeps_exactly_one_track():
     path = np.tile([[-10.0, -10.0]], (30, 1))
     history = run(path, VIEW, seed=2)
     assert all(len(tracks) == 1 and tracks[0].track_id == 0 for tracks in history)
+
+
+def test_a_pedestrian_seen_within_the_jitter_of_a_views_edge_is_in_a_detected_track():
+    """The crowd's n4-n6 (issue #60): with a jitter of 1.2 m, a pedestrian 0.1 m inside a
+    camera's view is detected, but the track holding it lies wholly within the jitter of the
+    view's edge, where the camera cuts nothing (its region shrunk by the jitter misses the
+    track). The track must still join the detection: a node's view is clear of every set
+    that none of its detected tracks meets (anonymous_fusion), so a track that held the
+    pedestrian without joining let the vehicle cut the pedestrian out of every region, and
+    ended after 10 steps with the pedestrian in view (the junction's s3 at rsu_sw)."""
+    config = Estimator(state_model="position", max_pedestrian_speed_mps=SPEED,
+                       position_jitter_m=1.2)
+    motion, rng = motion_model(config, DT), np.random.default_rng(0)
+    view = box(-40.0, -40.0, 40.0, 0.0)  # the pedestrian stands 0.1 m inside its edge
+    p = np.array([0.0, -0.1])
+    tracks: tuple[LocalTrack, ...] = ()
+    next_id = 0
+    for k in range(15):
+        found = AnonymousDetection("cam", Strips(np.eye(2), p + rng.uniform(-0.1, 0.1, 2),
+                                                 np.full(2, 0.1)))
+        result = associate(motion, SETTINGS, tracks, [found], {"cam": R(view)}, k, next_id, K)
+        tracks, next_id = result.tracks, result.next_id
+        held = [t for t in tracks if bool(motion.position(t.estimate).contains(p, tol=1e-7))]
+        assert held, k
+        assert any(t.joined == (0,) for t in held), (k, [(t.track_id, t.joined) for t in held])
