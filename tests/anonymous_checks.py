@@ -12,10 +12,9 @@ CHECKS = ("contained_fused", "contained_refined", "accounted_for")
 def assert_sound_in_every_set_kind(summary: dict, out: Path) -> None:
     """0 containment violations in the nodes' tracks, the fused sets, the refined regions
     and the accounting (refined regions or the unobserved area), every check of every
-    pedestrian at every step true, no collision, every route finished."""
+    pedestrian at every step true, no collision."""
     assert summary["containment_violations"] == 0, summary["containment_violations_by_set"]
     assert summary["collisions"] == summary["contact_steps"] == 0
-    assert all(v["route_completed"] for v in summary["vehicles"].values())
     checks = pd.read_csv(out / "pedestrians.csv")
     for column in CHECKS:
         checked = checks[column].dropna()

@@ -39,6 +39,7 @@ def test_the_whole_crowd_is_sound_and_safe_with_anonymous_tracks(crowd):
     summary, out = crowd
     assert len(summary["pedestrians"]) == 21
     assert_sound_in_every_set_kind(summary, out)
+    assert summary["vehicles"]["bus"]["route_completed"]
 
 
 def test_the_pedestrians_abreast_at_the_views_edge_stay_accounted_for(crowd):
