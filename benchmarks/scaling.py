@@ -103,8 +103,11 @@ def measure(pedestrians: int, sensors: int, steps: int, warmup: int, roadmap) ->
                     if pid not in est] for pid in fused}
         possible = occupancy.update(step, fused, clear)
         unknown = unobserved.update(step, views["bus"].visible, [r for _, _, _, r in delivered])
-        assess(context, np.array([bus_x, -1.6]), 10.0, views["bus"].occluded, unknown,
-               [Source(region, fused.get(pid)) for pid, region in possible.items()])
+        paths = occupancy.paths
+        assess(context, np.array([bus_x, -1.6]), 10.0, views["bus"].occluded,
+               Source(unknown, path=unobserved.path),
+               [Source(region, fused.get(pid), paths.get(pid))
+                for pid, region in possible.items()])
         inbox = {n: (step, estimates[n], views[n].visible) for n in nodes if n != "bus"}
         people = people + velocity * DT
         if step >= warmup:

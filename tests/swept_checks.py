@@ -74,7 +74,7 @@ def assert_in_the_way(context: SceneContext, spot: shapely.Point, radius: float,
         assert any(z.start_m <= station <= z.end_m + context.bus.length_m for z in zones), station
     front = shapely.get_coordinates(context.route_line.interpolate(front_m))[0]
     nothing, here = context.kind.empty(), context.kind.outer(spot.buffer(0.05))
-    seen = assess(context, front, 6.0, nothing, nothing, [Source(here)], [Source(here)])
+    seen = assess(context, front, 6.0, nothing, Source(nothing), [Source(here)], [Source(here)])
     outlooks = [o for o in seen.zones if any(context.zones[o.index] is z for z in zones)]
     assert outlooks
     assert all(o.arrival_s == 0.0 and o.in_view_arrival_s == 0.0 for o in outlooks)

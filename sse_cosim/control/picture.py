@@ -20,13 +20,18 @@ the bus has to clear each before anyone could reach it, not the whole strip at o
 Every step the picture says, per zone ahead, the **earliest arrival**: the soonest any
 pedestrian can be in the zone, from each known pedestrian's refined region and every walkable
 place where an undetected pedestrian may be. The motion model gives it
-(:meth:`~sse_cosim.estimation.motion.MotionModel.earliest_arrival_s`); for the speed-bounded
-models (the region holds the position p = s + e, the path s moves at most v per second, and
-the position strays at most eps from it):
+(:meth:`~sse_cosim.estimation.motion.MotionModel.earliest_arrival_s`). Each source carries
+the region its motion assumption bounds, its *path region* U (where the path s may be; the
+refined regions and the unobserved area are U grown by the jitter and cut), beside its
+position region P (where p = s + e may be). For the speed-bounded models (the path moves at
+most v per second, the position strays at most eps from it):
 
-    arrival = max(0, distance(source, zone) - 2 eps) / v.
+    arrival = max( max(0, distance(U, zone) - eps), max(0, distance(P, zone) - 2 eps) ) / v,
 
-The straight-line distance never exceeds the walk on walkable ground, so the arrival is an
+each margin counted once: the path must come within eps of the zone, and from P it starts
+within eps of the path too. Both are lower bounds, so their larger one is (a source known
+only by its position region, as the ground beyond the window, has the second alone). The
+straight-line distance never exceeds the walk on walkable ground, so the arrival is an
 under-estimate: sound. A known pedestrian's source also carries its fused state set
 (:class:`Source`): a model that bounds the acceleration raises the arrival with the state's
 velocity set, from how far the region must move along each of :data:`ARRIVAL_DIRECTIONS`
@@ -86,11 +91,14 @@ FAN = unit_fan(ARRIVAL_DIRECTIONS)  # (K, 2) unit directions
 
 @dataclass(frozen=True)
 class Source:
-    """Where a pedestrian may be (``region``) and, for a known one, its fused state set
-    (``state``; None: unknown, the model's worst case)."""
+    """Where a pedestrian may be (``region``: its simulated position), for a known one its
+    fused state set (``state``; None: unknown, the model's worst case), and where its path
+    may be (``path``: the region the motion assumption bounds, which ``region`` is grown from
+    by the jitter; None: not known apart from ``region``)."""
 
     region: Region
     state: Zonotope | None = None
+    path: Region | None = None
 
 
 @dataclass(frozen=True)
@@ -273,7 +281,7 @@ def assess(
     front_xy: np.ndarray,
     speed: float,
     own_occluded: Region,
-    unobserved: Region,
+    unobserved: Source,
     pedestrian_regions: Iterable[Source],
     in_view: Iterable[Source] = (),
     in_view_beyond: bool = False,
@@ -283,7 +291,8 @@ def assess(
 
     ``front_xy`` (2,) is the bus's front bumper; ``speed`` its actual speed; ``own_occluded``
     what its sensors' shadows hide inside their fields of view; ``unobserved`` the walkable
-    area where a pedestrian nobody detected may be (every node's views, shared ones included);
+    area where a pedestrian nobody detected may be (every node's views, shared ones included),
+    with its path region;
     ``pedestrian_regions`` where each known pedestrian may be, unless outside the window, with
     its state set; ``in_view`` those among them of the pedestrians some node detects now;
     ``in_view_beyond``: whether one of those may be outside the window instead; ``floors``:
@@ -295,7 +304,7 @@ def assess(
     to_crossing = None if crossing is None else crossing.start_m - front_s
     crossing_ahead = (crossing is not None and crossing.end_m > front_s
                       and crossing.start_m - front_s <= cfg.crossing_horizon_m)
-    own_hidden = own_occluded.intersection(unobserved)
+    own_hidden = own_occluded.intersection(unobserved.region)
     reach = context.reach_radius(front_s)
     relevant = context.relevant(crossing, reach) if crossing is not None and reach > 0 \
         else context.kind.empty()
@@ -307,7 +316,7 @@ def assess(
         if sets else context.kind.empty()
     stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0) \
         if sets else context.kind.empty()
-    zones = _outlook(context, front_s, [Source(unobserved), *known],
+    zones = _outlook(context, front_s, [unobserved, *known],
                      [s for s in in_view if not s.region.is_empty], in_view_beyond, floors or {})
     return Picture(
         front_s=float(front_s),
@@ -414,27 +423,41 @@ def _meeting(sweep: Sequence[SweepPiece], piece: shapely.Geometry) -> tuple[Swee
 def _arrivals(sources: Iterable[Source], zones: Sequence[ConflictZone],
               pedestrians: MotionModel, kind: RegionKind) -> np.ndarray:
     """Earliest time (s) a pedestrian somewhere in ``sources`` can be in each of ``zones``,
-    shape (z,) (inf without a source): the soonest of the model's arrivals from each source
-    (those without a state, or all if the model uses none, from their nearest, as one)."""
+    shape (z,) (inf without a source): the soonest over the sources of each one's arrival,
+    the larger of the model's two bounds where it has a path region (from the path region,
+    the jitter counted once, at the zone; from the position region, twice), else the
+    position region's."""
     parts = [s for s in sources if not s.region.is_empty]
     if not parts or not zones:
         return np.full(len(zones), math.inf)
-    distances = kind.distances([s.region for s in parts], [zone.polygon for zone in zones])
-    with_state = [s.state is not None and pedestrians.uses_state for s in parts]
-    known = [i for i, used in enumerate(with_state) if used]
-    stateless = [i for i, used in enumerate(with_state) if not used]
-    arrival = np.full(len(zones), math.inf)
-    if stateless:
-        arrival = pedestrians.earliest_arrival_s(distances[stateless].min(axis=0))
-    if not known:
-        return arrival
+    polygons = [zone.polygon for zone in zones]
+    arrivals = _source_arrivals(parts, [s.region for s in parts], polygons, zones,
+                                pedestrians, kind, of_path=False)  # (n, z)
+    pathed = [i for i, s in enumerate(parts) if s.path is not None and not s.path.is_empty]
+    if pathed:
+        arrivals[pathed] = np.maximum(arrivals[pathed], _source_arrivals(
+            [parts[i] for i in pathed], [parts[i].path for i in pathed], polygons, zones,
+            pedestrians, kind, of_path=True))
+    return arrivals.min(axis=0)
+
+
+def _source_arrivals(sources: Sequence[Source], regions: Sequence[Region],
+                     polygons: Sequence[Region], zones: Sequence[ConflictZone],
+                     pedestrians: MotionModel, kind: RegionKind, of_path: bool) -> np.ndarray:
+    """The model's earliest arrival from each of ``regions`` (source i's region or path
+    region, ``of_path`` says which) at each zone, shape (n, z): with the source's state set
+    and the fan's separation where the model uses them, else from the distance alone (all
+    such sources in one call)."""
+    distances = kind.distances(regions, polygons)  # (n, z)
+    if not pedestrians.uses_state:
+        return pedestrians.earliest_arrival_s(distances, of_path=of_path)
+    arrival = np.empty_like(distances)
     least = np.array([zone.least_along for zone in zones])  # (z, K)
-    for i in known:
-        source = parts[i]
-        largest = source.region.support(FAN)
-        separation = Separation(FAN, least - largest[None, :])
-        arrival = np.minimum(arrival, pedestrians.earliest_arrival_s(
-            distances[i], source.state, separation))
+    for i, (source, region) in enumerate(zip(sources, regions, strict=True)):
+        separation = None if source.state is None else \
+            Separation(FAN, least - region.support(FAN)[None, :])
+        arrival[i] = pedestrians.earliest_arrival_s(distances[i], source.state, separation,
+                                                    of_path=of_path)
     return arrival
 
 

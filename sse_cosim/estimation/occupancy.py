@@ -121,6 +121,13 @@ class OccupancyTracker:
         pedestrian itself can have been (A1)."""
         return area if self._walkable is None else area.intersection(self._walkable)
 
+    @property
+    def paths(self) -> dict[str, Region]:
+        """Each pedestrian's path region at the last update (where its path s may be: the
+        region :meth:`update` returned is it grown by the jitter and cut by what is seen
+        now), what the earliest arrivals are measured from."""
+        return dict(self._paths)
+
     def forget(self) -> None:
         """Drop every pedestrian's history: the next update starts from its sets alone."""
         self._paths = {}
@@ -243,6 +250,7 @@ class UnobservedArea:
         self._own: dict[int, Region] = {}  # the bus's views not yet in the base
         self._ended: dict[int, list[Region]] = {}  # step -> path sets handed over
         self._base_moved: tuple[Region, Region] | None = None  # (base, moved)
+        self.path: Region = self._base  # where an undetected pedestrian's path may be now
 
     def update(
         self, step: int, own_view: Region, shared_views: Sequence[Region],
@@ -253,7 +261,8 @@ class UnobservedArea:
         ``own_view`` is what the bus sees now; ``shared_views`` what other nodes saw at
         ``step - latency`` (the messages delivered now); ``ended``: the tracks handed over
         now (the bus's own ended at ``step``, the senders' of the messages delivered now, each
-        ended at or before ``step - latency``; module docstring).
+        ended at or before ``step - latency``; module docstring). Its path region (U_k, which
+        the returned area is grown from) is :attr:`path` afterwards.
         """
         self._own[step] = own_view
         target = step - self.latency
@@ -272,6 +281,7 @@ class UnobservedArea:
         for later in range(target + 1, step + 1):
             current = self._advance(current, [self._own.get(later, nothing)],
                                     self._ended.get(later, []))
+        self.path = current
         return current.dilate(self.model.jitter).intersection(self.walkable).difference(own_view)
 
     def _hand_over(self, track: EndedTrack, step: int) -> None:

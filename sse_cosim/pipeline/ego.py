@@ -113,11 +113,12 @@ class Ego:
             step, mine.visible, received.fresh_views,
             [*received.ended, *(own.ended_at(step) if own is not None else ())])
         timer.lap("occupancy")
+        paths = self.known.paths
         sources = {key: Source(region, estimate.fused.get(key) if self.known.with_states
-                               else None) for key, region in possible.items()}
+                               else None, paths.get(key)) for key, region in possible.items()}
         picture = assess(
             self.context, me.footprint.front.position, me.speed,
-            mine.occluded, unknown, list(sources.values()),
+            mine.occluded, Source(unknown, path=self.unobserved.path), list(sources.values()),
             [source for key, source in sources.items() if key in estimate.in_view],
             in_view_beyond=not self.known.beyond.isdisjoint(estimate.in_view),
             floors=self.arrivals.floors(step, estimate.flags.inconsistent),

@@ -276,6 +276,12 @@ class KnownRegions(Protocol):
     beyond: frozenset[str]
     with_states: bool  # whether each region is about the fused state set of the same key
 
+    @property
+    def paths(self) -> Mapping[str, Region]:
+        """Pedestrian id -> its path region at the last update, where one is known (the
+        region the motion assumption bounds; the returned region is grown from it)."""
+        ...
+
     def update(self, step: int, observations: Observations, estimate: BusEstimate,
                clear: Mapping[str, Sequence[ClearRegion]]) -> dict[str, Region]: ...
 
@@ -307,6 +313,10 @@ class RefinedRegions:
     def beyond(self) -> frozenset[str]:
         return self.tracker.beyond
 
+    @property
+    def paths(self) -> Mapping[str, Region]:
+        return self.tracker.paths
+
 
 class KalmanRegions:
     """The baseline: each pedestrian's 3-sigma ellipse of a Kalman filter over every node's
@@ -314,6 +324,7 @@ class KalmanRegions:
 
     beyond: frozenset[str] = frozenset()  # its ellipses are not kept in a window
     with_states = False  # its ellipses are not the fused sets' (baseline, not guaranteed)
+    paths: Mapping[str, Region] = {}  # an ellipse is of positions: no path region
 
     def __init__(self, tracker: KalmanTracker, kind: RegionKind) -> None:
         self.tracker = tracker

@@ -121,9 +121,9 @@ class ParkedVehicle(StrictModel):
     edge: str = Field("WC", description="Edge it is parked on.")
     lane_index: int = Field(1, ge=0, description="Lane index on that edge (1 = parking strip).")
     end_pos_m: NonNegativeFloat = Field(
-        186.0,
-        description="Position of its front along the edge (m): a few metres before the crossing "
-        "(the crossing starts at 198 m; Swedish rules forbid parking within 10 m before it).",
+        183.0,
+        description="Position of its front along the edge (m): 15 m before the crossing (the "
+        "crossing starts at 198 m; Swedish rules forbid parking within 10 m before it).",
     )
     length_m: PositiveFloat = Field(10.0, description="Length (m).")
     width_m: PositiveFloat = Field(2.5, description="Width (m).")
@@ -151,7 +151,8 @@ class Pedestrian(StrictModel):
                           "removes an inherited one).")
     start_edge: str = Field("WC", description="Edge whose sidewalk it starts on.")
     start_pos_m: NonNegativeFloat = Field(
-        184.0, description="Start position along that edge (m), behind the truck."
+        184.0, description="Start position along that edge (m): 14 m before the crossing, "
+        "1 m past the truck's front."
     )
     end_edge: str = Field("CW", description="Edge whose sidewalk it walks to (across the zebra).")
     end_pos_m: NonNegativeFloat = Field(4.0, description="Arrival position along that edge (m).")

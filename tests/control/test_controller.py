@@ -37,6 +37,7 @@ SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "s1_pedestrian.to
 # controller's geometry is tested with a fixed one
 JITTER_M = 0.35
 K = kind("polygon")
+NOBODY = Source(K.empty())  # no undetected pedestrian anywhere
 
 
 @pytest.fixture(scope="module")
@@ -99,8 +100,8 @@ def test_a_pedestrian_in_the_lane_ahead_triggers_an_emergency_stop(context):
     in_lane = shapely.Point(front + np.array([10.0, 0.0])).buffer(0.5)
     on_far_sidewalk = shapely.Point(front[0] + 10.0, 7.0).buffer(0.5)
     empty = K.empty()
-    stop = assess(context, front, 14.0, empty, empty, [Source(R(in_lane))])
-    clear = assess(context, front, 14.0, empty, empty, [Source(R(on_far_sidewalk))])
+    stop = assess(context, front, 14.0, empty, NOBODY, [Source(R(in_lane))])
+    clear = assess(context, front, 14.0, empty, NOBODY, [Source(R(on_far_sidewalk))])
     assert stop.pedestrian_in_stopping_distance and stop.pedestrian_near_path
     assert not clear.pedestrian_near_path and not clear.pedestrian_in_stopping_distance
 
@@ -111,7 +112,7 @@ def test_hidden_area_counts_only_within_reach_of_the_crossing(context):
     near = shapely.box(196.0, -8.0, 198.0, -6.0)  # sidewalk right at the zebra
     far = shapely.box(150.0, -8.0, 152.0, -6.0)  # sidewalk 46 m before it
     for hidden, expected in ((near, True), (far, False)):
-        result = assess(context, front, 20.0, R(hidden), R(hidden), [])
+        result = assess(context, front, 20.0, R(hidden), Source(R(hidden)), [])
         assert (result.unresolved_occluded_m2 > 1.0) is expected
         assert result.own_occluded_m2 == pytest.approx(hidden.area, rel=1e-6)
 
@@ -137,7 +138,7 @@ def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
     south = zone.polygon.bounds[1]
     pedestrian = shapely.Point(200.0, south - 5.0).buffer(0.5)  # 4.5 m from the zone
     empty = K.empty()
-    result = assess(context, front, 10.0, empty, empty, [Source(R(pedestrian))])
+    result = assess(context, front, 10.0, empty, NOBODY, [Source(R(pedestrian))])
     (outlook,) = result.zones
     eps, speed = context.pedestrians.jitter, context.pedestrians.max_speed
     assert outlook.arrival_s == pytest.approx((4.5 - 2 * eps) / speed, abs=1e-3)
@@ -146,9 +147,9 @@ def test_arrival_is_the_distance_less_the_jitter_over_the_speed_bound(context):
                                                + context.bus.length_m, abs=1e-6)
     at_zebra = np.array(context.route_line.interpolate(start - 3.0).coords[0])
     # from standstill the bus needs about 5 s to clear the zebra: 1.6 s is too short
-    assert not assess(context, at_zebra, 0.0, empty, empty, [Source(R(pedestrian))]).path_clear
+    assert not assess(context, at_zebra, 0.0, empty, NOBODY, [Source(R(pedestrian))]).path_clear
     far = shapely.Point(200.0, south - 40.0).buffer(0.5)
-    assert assess(context, at_zebra, 0.0, empty, empty, [Source(R(far))]).path_clear
+    assert assess(context, at_zebra, 0.0, empty, NOBODY, [Source(R(far))]).path_clear
 
 
 def test_a_zone_counts_only_where_the_body_can_still_touch_it(context):
@@ -164,7 +165,7 @@ def test_a_zone_counts_only_where_the_body_can_still_touch_it(context):
     near_x = float(context.route_line.interpolate(zone.start_m).x)
     pedestrian = shapely.Point(near_x - 3.0, south - 1.0).buffer(0.3)
     empty = K.empty()
-    result = assess(context, front, 0.0, empty, empty, [Source(R(pedestrian))])
+    result = assess(context, front, 0.0, empty, NOBODY, [Source(R(pedestrian))])
     (outlook,) = result.zones
     ahead = shapely.intersection(zone.ground, shapely.box(rear_x, -1e3, 1e3, 1e3))
     eps, speed = context.pedestrians.jitter, context.pedestrians.max_speed
@@ -187,8 +188,8 @@ def test_a_pedestrian_in_view_who_may_be_beyond_the_window_arrives_as_early_as_f
     (zone,) = context.zones
     empty = K.empty()
     far = shapely.Point(200.0, zone.polygon.bounds[1] - 20.0).buffer(0.5)
-    inside = assess(context, front, 10.0, empty, empty, [Source(R(far))], [Source(R(far))])
-    beyond = assess(context, front, 10.0, empty, empty, [Source(R(far))], [Source(R(far))],
+    inside = assess(context, front, 10.0, empty, NOBODY, [Source(R(far))], [Source(R(far))])
+    beyond = assess(context, front, 10.0, empty, NOBODY, [Source(R(far))], [Source(R(far))],
                     in_view_beyond=True)
     assert zone.beyond_arrival_s < inside.zones[0].in_view_arrival_s < np.inf
     assert beyond.zones[0].in_view_arrival_s == zone.beyond_arrival_s
@@ -203,14 +204,14 @@ def test_an_arrival_comes_at_most_the_elapsed_time_sooner_than_the_last_picture_
     south = zone.polygon.bounds[1]
     far = shapely.Point(200.0, south - 8.0).buffer(0.5)
     near = shapely.Point(200.0, south - 2.0).buffer(0.5)  # the set grew faster than the bound
-    before = assess(context, front, 10.0, empty, empty, [Source(R(far))])
+    before = assess(context, front, 10.0, empty, NOBODY, [Source(R(far))])
     floors = arrival_floors(before, 0.1)
     assert floors == {0: pytest.approx(before.zones[0].arrival_s - 0.1)}
-    now = assess(context, front, 10.0, empty, empty, [Source(R(near))], floors=floors)
+    now = assess(context, front, 10.0, empty, NOBODY, [Source(R(near))], floors=floors)
     assert now.zones[0].arrival_s == pytest.approx(before.zones[0].arrival_s - 0.1)
-    alone = assess(context, front, 10.0, empty, empty, [Source(R(near))])
+    alone = assess(context, front, 10.0, empty, NOBODY, [Source(R(near))])
     assert alone.zones[0].arrival_s < floors[0]
-    nearer_later = assess(context, front, 10.0, empty, empty, [Source(R(far))], floors={0: 0.0})
+    nearer_later = assess(context, front, 10.0, empty, NOBODY, [Source(R(far))], floors={0: 0.0})
     assert nearer_later.zones[0].arrival_s == before.zones[0].arrival_s  # sets count too
 
 
@@ -220,7 +221,7 @@ def test_floors_come_only_from_a_picture_made_while_consistent(context):
     front = front_before_zebra(context, 40.0)
     empty = K.empty()
     far = shapely.Point(200.0, context.zones[0].polygon.bounds[1] - 8.0).buffer(0.5)
-    picture = assess(context, front, 10.0, empty, empty, [Source(R(far))])
+    picture = assess(context, front, 10.0, empty, NOBODY, [Source(R(far))])
     memory = ArrivalMemory(0.1)
     assert memory.floors(1, inconsistent=False) == {}
     memory.keep(1, picture, inconsistent=False)

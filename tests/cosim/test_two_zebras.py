@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sse_cosim.control.picture import SceneContext, assess
+from sse_cosim.control.picture import SceneContext, Source, assess
 from sse_cosim.estimation.motion import motion_model
 from sse_cosim.regions import kind
 from sse_cosim.runner.run import run_scenario_file
@@ -101,7 +101,7 @@ def test_both_zones_stay_in_the_picture_until_cleared(context: SceneContext) -> 
     length = context.bus.length_m
     for front_s, zones in ((100.0, [0, 1]), (202.0 + length + 0.1, [1]), (262.0 + length, [])):
         front = np.array(context.route_line.interpolate(front_s).coords[0])
-        picture = assess(context, front, 10.0, empty, empty, [])
+        picture = assess(context, front, 10.0, empty, Source(empty), [])
         assert [z.index for z in picture.zones] == zones
 
 
@@ -112,7 +112,7 @@ def test_the_paper_policys_crossing_is_the_nearest_not_yet_cleared(context: Scen
     assert starts == pytest.approx([198.0, 198.0, 198.0, 258.0, 258.0])
     empty = K.empty()
     front = np.array(context.route_line.interpolate(230.0).coords[0])
-    picture = assess(context, front, 10.0, empty, empty, [])
+    picture = assess(context, front, 10.0, empty, Source(empty), [])
     assert picture.crossing_ahead and picture.distance_to_crossing == pytest.approx(28.0)
     assert picture.reach_radius_m > 0.0
 
@@ -123,7 +123,7 @@ def test_a_route_without_crossings_has_no_crossing_ahead(roadmap: RoadMap) -> No
     assert context.crossing_at(10.0) is None and context.reach_radius(10.0) == 0.0
     empty = K.empty()
     front = np.array(context.route_line.interpolate(10.0).coords[0])
-    picture = assess(context, front, 10.0, empty, empty, [])
+    picture = assess(context, front, 10.0, empty, Source(empty), [])
     assert picture.distance_to_crossing is None and not picture.crossing_ahead
 
 

@@ -12,7 +12,7 @@ import shapely
 from pydantic import ValidationError
 
 from sse_cosim.control.picture import ConflictZone, Source, _arrivals
-from sse_cosim.estimation.motion import MODELS, LinearModel, motion_model
+from sse_cosim.estimation.motion import MODELS, LinearModel, Separation, motion_model
 from sse_cosim.estimation.occupancy import UnobservedArea
 from sse_cosim.regions import PolygonRegion as R
 from sse_cosim.regions import kind
@@ -70,9 +70,10 @@ class Slow(LinearModel):
     def reach_m(self, steps: int = 1, state: Zonotope | None = None) -> float:
         return 0.5 * super().reach_m(steps, state)
 
-    def earliest_arrival_s(self, distance_m: np.ndarray,
-                           state: Zonotope | None = None) -> np.ndarray:
-        return 2.0 * super().earliest_arrival_s(distance_m, state)
+    def earliest_arrival_s(self, distance_m: np.ndarray, state: Zonotope | None = None,
+                           separation: Separation | None = None,
+                           of_path: bool = False) -> np.ndarray:
+        return 2.0 * super().earliest_arrival_s(distance_m, state, separation, of_path)
 
 
 def build_slow(settings: Estimator, step_length: float, jitter: float) -> Slow:

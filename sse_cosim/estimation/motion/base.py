@@ -135,11 +135,19 @@ class MotionModel(Protocol):
         ``distance_m``."""
 
     def earliest_arrival_s(self, distance_m: np.ndarray, state: Zonotope | None = None,
-                           separation: Separation | None = None) -> np.ndarray:
-        """The earliest time (s) a pedestrian whose position is ``distance_m`` (shape (z,))
-        from each of z places can be in it; ``state``: its state set, if known;
-        ``separation``: how far its position must move along each direction of a fan to be
-        in each place."""
+                           separation: Separation | None = None,
+                           of_path: bool = False) -> np.ndarray:
+        """The earliest time (s) a pedestrian whose position is ``distance_m`` (any shape)
+        from each place can be in it; ``state``: its state set, if known; ``separation``:
+        how far its position must move along each direction of a fan to be in each place;
+        ``of_path``: the distances and the separation are measured from where its path s
+        may be (a path region), not its simulated position p."""
+
+    def path_gap_m(self, distance_m: np.ndarray, of_path: bool = False) -> np.ndarray:
+        """How far the path must move (m, same shape, >= 0) to put the simulated position
+        into a place ``distance_m`` away: the distance less the jitter once at the place
+        (a position there is within eps of its path) and, for a distance measured from a
+        position (``of_path`` false), once more at the start."""
 
 
 @dataclass(frozen=True)
@@ -245,18 +253,24 @@ class LinearModel:
         return self.max_speed * distance_m / speed_mps
 
     def earliest_arrival_s(self, distance_m: np.ndarray, state: Zonotope | None = None,
-                           separation: Separation | None = None) -> np.ndarray:
-        """max(0, d - 2 eps) / v_max for each distance d (m), shape (z,): the earliest time a
-        pedestrian whose position p = s + e lies d from a zone can be in it (``state`` and
-        ``separation`` are ignored).
+                           separation: Separation | None = None,
+                           of_path: bool = False) -> np.ndarray:
+        """:meth:`path_gap_m` / v_max for each distance d (m): the earliest time a pedestrian
+        whose path s (``of_path``), or whose position p = s + e, lies d from a zone can be in
+        it (``state`` and ``separation`` are ignored).
 
-        The path s is within eps of p, moves at most v_max per second, and the position in the
-        zone is within eps of its path, so the path covers at least d - 2 eps. The
-        straight-line distance never exceeds the walk on walkable ground, so this is an
-        under-estimate: sound (docs/controller.md, "Earliest arrival"; docs/method.md, the
-        motion model).
+        The path moves at most v_max per second and the position in the zone is within eps of
+        its path, so from a path region the path covers at least d - eps; from a position,
+        within eps of its path, at least d - 2 eps. The straight-line distance never exceeds
+        the walk on walkable ground, so this is an under-estimate: sound (docs/controller.md,
+        "Earliest arrival"; docs/method.md, the motion model).
         """
-        return np.maximum(0.0, distance_m - 2.0 * self.jitter) / self.max_speed
+        return self.path_gap_m(distance_m, of_path) / self.max_speed
+
+    def path_gap_m(self, distance_m: np.ndarray, of_path: bool = False) -> np.ndarray:
+        """max(0, d - eps) from a path region (``of_path``), max(0, d - 2 eps) from a
+        position (the protocol's :meth:`~MotionModel.path_gap_m`)."""
+        return np.maximum(0.0, distance_m - (1.0 if of_path else 2.0) * self.jitter)
 
     def predict(self, estimate: Zonotope, steps: int = 1) -> Zonotope:
         """Predicted state set after ``steps`` steps: F Z (+) Q, repeated (Definition 1)."""

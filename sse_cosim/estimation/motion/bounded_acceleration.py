@@ -29,12 +29,14 @@ the step times). A pedestrian whose state lies in a set Z, with velocity set V =
 part, has n.v <= h_V(n) (V's support function). To be in a zone, its position must move a
 gap g_n along n that the caller measures for each direction of a fan (the least n.q over the
 zone minus the largest n.p over the pedestrian's region); the position strays at most eps
-from the path at each end, so the path moves at least g_n - 2 eps along n. So
+from the path at the zone, and at the start too where the region is of positions, so the
+path moves at least g_n - eps along n from a path region, g_n - 2 eps from a position region
+(:meth:`~.base.LinearModel.path_gap_m`, written G(g) below). So
 
-    arrival >= max over n of T(g_n - 2 eps; min(v_max, h_V(n))),   T(d; u) = min t: D(t; u) >= d,
+    arrival >= max over n of T(G(g_n); min(v_max, h_V(n))),   T(d; u) = min t: D(t; u) >= d,
 
-and also >= T(d - 2 eps; max speed in V) with d the straight-line distance (any direction),
-and >= the speed-bounded arrival (d - 2 eps) / v_max. Each is a lower bound of the true
+and also >= T(G(d); max speed in V) with d the straight-line distance (any direction),
+and >= the speed-bounded arrival G(d) / v_max. Each is a lower bound of the true
 arrival, so their largest is one too (docs/controller.md, "Earliest arrival").
 """
 
@@ -109,21 +111,22 @@ class BoundedAcceleration(LinearModel):
                                           np.array([speed]))[0])
 
     def earliest_arrival_s(self, distance_m: np.ndarray, state: Zonotope | None = None,
-                           separation: Separation | None = None) -> np.ndarray:
+                           separation: Separation | None = None,
+                           of_path: bool = False) -> np.ndarray:
         """The module's bound for each distance d (m), shape (z,): the speed-bounded arrival,
-        raised by what ``state``'s velocity set and the ``separation`` fan prove."""
-        arrival = super().earliest_arrival_s(distance_m)
+        raised by what ``state``'s velocity set and the ``separation`` fan prove (both
+        measured from a path region if ``of_path``, else from a position region)."""
+        arrival = super().earliest_arrival_s(distance_m, of_path=of_path)
         if state is None:
             return arrival
-        eps2 = 2.0 * self.jitter
         speed = np.full(np.shape(distance_m), self.largest_speed(state))
-        arrival = np.maximum(arrival,
-                             self.travel_time(np.maximum(0.0, distance_m - eps2), speed))
+        arrival = np.maximum(arrival, self.travel_time(self.path_gap_m(distance_m, of_path),
+                                                       speed))
         if separation is None:
             return arrival
         toward = np.broadcast_to(self.velocity_support(state, separation.directions),
                                  separation.gaps_m.shape)  # (z, K)
-        fan = self.travel_time(np.maximum(0.0, separation.gaps_m - eps2), toward)
+        fan = self.travel_time(self.path_gap_m(separation.gaps_m, of_path), toward)
         return np.maximum(arrival, fan.max(axis=1))
 
     def velocity_support(self, state: Zonotope, directions: np.ndarray) -> np.ndarray:
