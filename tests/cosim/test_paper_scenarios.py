@@ -40,13 +40,18 @@ def fused_detection_time(summary: dict) -> float:
 
 
 def test_shared_awareness_buys_speed_without_pedestrian(summaries):
-    """S3's road-side units keep the nominal speed; S2's car clears the hidden sidewalk late:
-    with the road's measured jitter (0.646 m) too late to change a decision, so S2 keeps no
-    more of it than the bus alone (docs/results.md), and never less."""
-    speed = {name: summaries[f"{name}_no_pedestrian"]["average_speed_mps"]
-             for name in ("s1", "s2", "s3")}
-    assert speed["s3"] >= 0.99 * 20.0
-    assert speed["s1"] <= speed["s2"] < 0.99 * 20.0
+    """Table I as the paper reports it (issue #61): S2's car and S3's road-side units cover
+    the hidden sidewalk, so the bus keeps its nominal speed (S2 at least 19.5 m/s), S1 slows
+    for it; S3 >= S2 >= S1 with and without the pedestrian (equal within 0.05 m/s where the
+    pedestrian decides, docs/results.md)."""
+    for kind, slack in (("no_pedestrian", 0.0), ("pedestrian", 0.05)):
+        speed = {name: summaries[f"{name}_{kind}"]["average_speed_mps"]
+                 for name in ("s1", "s2", "s3")}
+        assert speed["s3"] >= speed["s2"] - slack and speed["s2"] >= speed["s1"] - slack, kind
+    without = {name: summaries[f"{name}_no_pedestrian"]["average_speed_mps"]
+               for name in ("s1", "s2", "s3")}
+    assert without["s2"] >= 19.5 and without["s3"] >= 0.99 * 20.0
+    assert without["s1"] < 0.99 * 20.0
 
 
 def test_pedestrian_slows_every_scenario_and_sharing_detects_it_earlier(summaries):

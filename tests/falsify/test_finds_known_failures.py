@@ -34,7 +34,7 @@ pytestmark = pytest.mark.sumo
 
 ROOT = Path(__file__).resolve().parents[2]
 SPACE = ROOT / "sweeps" / "falsify.toml"
-PAPER_S3 = ROOT / "scenarios" / "paper_policy" / "paper_s3_pedestrian.toml"
+PAPER_S3 = Path(__file__).with_name("paper_s3_pedestrian_truck_186.toml")
 LATE_ACTUATION = Path(__file__).with_name("late_actuation_s3.toml")
 
 

@@ -289,11 +289,15 @@ def test_the_pedestrian_keeps_the_heading_sumo_walks_it_through_a_sideways_step(
 def test_the_searched_sideways_step_no_longer_reads_as_a_course_toward_the_bus(tmp_path: Path):
     """The falsifier's first least time to collision in S3 (2.254 s, with the heading taken
     from the walker's last step) came from SUMO's 0.36 m sideways step onto the walking area
-    at 12.9 s; with the heading SUMO walks it the walker heads along the sidewalk there."""
+    at 12.9 s; with the heading SUMO walks it the walker heads along the sidewalk there. (Since
+    issue #61's arrival the bus of this case passes the zebra at its nominal speed before the
+    walker steps out, and no time to collision is defined at all; the case still must not read
+    the step as a course toward the bus.)"""
     summary = run_scenario_file(SIDEWAYS_STEP, tmp_path, plots=False, summary_only=True,
                                 margins=("time_to_collision",))
     least = summary["margins"]["time_to_collision"]
-    assert least["least_s"] > 5.0 and least["t"] not in (12.9, 13.0)
+    assert least["least_s"] is None or (least["least_s"] > 5.0
+                                        and least["t"] not in (12.9, 13.0))
 
 
 def _step(step: int, bus: Footprint, walker: PersonState, speed: float = 0.0,
