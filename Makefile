@@ -53,7 +53,7 @@ test: $(DEVSTAMP)
 bench: $(BENCHSTAMP)
 	$(BIN)/sse-cosim bench --out results/
 
-# The safety campaign (sweeps/safety.toml; measured on two cores: S1-S3 about 36 minutes, the
+# The safety campaign (sweeps/safety.toml; measured on two cores: S1-S3 about 31 minutes, the
 # town 44, the junction 109, the crowd 92, about 4.7 hours in all; `make bench` projects it):
 # results/safety/ and results/safety.md; exit status 4 if a safety target is missed.
 safety: $(STAMP)

@@ -40,9 +40,10 @@ def safety(campaign_file: Path, out_dir: Path | None, workers: int | None, execu
     (estimator.max_pedestrian_speed_mps), and the bus always finishes its route. The
     campaign runs every scenario of the file for every step-out time, walking speed,
     start behind the parked truck, truck position, noise bound of the shared sensors and
-    seed (2,127 runs with sweeps/safety.toml, measured on two cores: S1 to S3's 1,245
-    about 36 minutes, scenarios/town.toml's 270 about 44, scenarios/junction.toml's 114
-    about 109 and scenarios/crowd.toml's 498 about 92; sse-cosim bench projects it).
+    seed (1,917 runs with sweeps/safety.toml, measured on two cores: S1 to S3's 1,095
+    about 31 minutes, scenarios/town.toml's 270 about 44, scenarios/junction.toml's 114
+    about 109 and scenarios/crowd.toml's 438, whose 498 of before issue #61 took about
+    92; sse-cosim bench projects it).
     Combinations in which the pedestrian cannot reach the zebra by the step-out time
     (the demand planner refuses them) are not run; the report lists them.
 
