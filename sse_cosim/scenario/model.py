@@ -288,7 +288,8 @@ class Estimator(StrictModel):
         "(the default; every published result), 'anonymous' without any id, as a real "
         "perception stack reports them: each node starts, keeps and ends tracks by "
         "set-membership association, and each automated vehicle fuses only tracks that surely "
-        "hold the same pedestrians (docs/method.md). No faults, no Kalman filter.",
+        "hold the same pedestrians (docs/method.md). No faults beyond the estimator's bounds, "
+        "no Kalman filter.",
     )
 
     @field_validator("state_model", mode="before")
@@ -427,6 +428,12 @@ class SensorFault(FaultWindow):
             raise ValueError("phantom_xy_m: a phantom needs a position, e.g. [200.0, 0.0]")
         return self
 
+    @property
+    def holds_bounds(self) -> bool:
+        """Whether every strip it leaves still holds the truth (A2): a dropout loses whole
+        frames, a within-bound bias keeps its error inside the noise bound."""
+        return self.kind == "dropout" or (self.kind == "bias" and self.within_bound)
+
 
 class NodeFault(FaultWindow):
     node: str = Field(description="The misbehaving node (a connected vehicle, a unit or an "
@@ -545,19 +552,22 @@ class Scenario(StrictModel):
         return self
 
     def _anonymous_without_ids(self) -> None:
-        """Injected faults (their vote and probation) and the Kalman baseline tell pedestrians
-        apart by their id, which anonymous detections do not carry."""
+        """Faults beyond the estimator's bounds (caught by the vote and probation) and the Kalman
+        baseline tell pedestrians apart by their id, which anonymous detections do not carry;
+        faults within the bounds need no screening."""
         if self.estimator.association != "anonymous":
             return
         if self.estimator.filter == "kalman":
             raise ValueError("estimator.filter: the Kalman baseline associates detections by "
                              "person id, which estimator.association = 'anonymous' hides; use "
                              "filter = 'zonotope' or association = 'labelled'")
-        for table in ("sensor", "node", "link"):
-            for name in getattr(self.faults, table):
-                raise ValueError(f"faults.{table}.{name}: injected faults are screened per "
-                                 "person id, which estimator.association = 'anonymous' hides; "
-                                 "remove the [faults] tables or use association = 'labelled'")
+        beyond = [f"faults.sensor.{name}" for name, fault in self.faults.sensor.items()
+                  if not fault.holds_bounds] + [f"faults.node.{name}" for name in self.faults.node]
+        for name in beyond:
+            raise ValueError(f"{name}: a fault beyond the estimator's bounds is screened per "
+                             "person id, which estimator.association = 'anonymous' hides; "
+                             "remove it (faults within the bounds, a dropout, a within-bound "
+                             "bias or a link fault, are kept) or use association = 'labelled'")
 
     def _unique_ids(self) -> None:
         """An id names one actor or unit: it is its SUMO id and its node id."""
@@ -611,7 +621,7 @@ class Scenario(StrictModel):
                          "s), the delay the controller's stops allow for; set the reaction "
                          "time to at least the delay")
         for name, fault in self.faults.sensor.items():
-            if fault.kind != "dropout" and not (fault.kind == "bias" and fault.within_bound):
+            if not fault.holds_bounds:
                 _require(declared, "sensor_bounds", f"faults.sensor.{name}.kind",
                          _SENSOR_FAULT_BREAKS[fault.kind])
         for name, node_fault in self.faults.node.items():

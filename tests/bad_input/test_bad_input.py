@@ -99,10 +99,11 @@ CASES = [
                 "dropout_probability = 1.5\n"), ("faults.sensor.f.dropout_probability",)),
     Case("node fault on the bus", extend('[faults.node.n]\nnode = "bus"\nkind = "shrink"\n'),
          ("faults.node.n.node", "sends to an automated vehicle", "add a connected vehicle")),
-    Case("faults with anonymous detections",
-         extend('[estimator]\nassociation = "anonymous"\n[faults.sensor.f]\n'
-                'sensor = "bus_front"\nkind = "dropout"\n'),
-         ("faults.sensor.f", "association = 'anonymous'", "remove the [faults]")),
+    Case("a fault beyond the bounds with anonymous detections",
+         extend('breaks_assumptions = ["sensor_bounds"]\n[estimator]\n'
+                'association = "anonymous"\n[faults.sensor.f]\nsensor = "bus_front"\n'
+                'kind = "stuck"\n'),
+         ("faults.sensor.f", "beyond the estimator's bounds", "association = 'anonymous'")),
     Case("Kalman baseline with anonymous detections",
          extend('[estimator]\nassociation = "anonymous"\nfilter = "kalman"\n'),
          ("estimator.filter", "person id", "filter = 'zonotope'")),
