@@ -45,7 +45,7 @@ from sse_cosim.reporting.outputs import portable_scenario
 from sse_cosim.runner.executors import Execution, execute
 from sse_cosim.runner.safety import ActorPlanner
 from sse_cosim.runner.tasks import RunTask
-from sse_cosim.scenario.loader import load_scenario_data, validate_scenario
+from sse_cosim.scenario.loader import apply_overrides, load_scenario_data, validate_scenario
 
 SAME_SEARCH = ("scenario_file", "scenario_sha256", "objective", "seed", "dims")
 """The fields of ``falsify.json`` that must agree for a resumed search to take an earlier
@@ -90,8 +90,9 @@ def prepare(scenario: Path, spec_file: Path, objective: str, methods: Sequence[s
     data = load_scenario_data(scenario)
     space = build_space(load_falsify_file(spec_file), data, str(scenario), str(spec_file),
                         ActorPlanner().crossings)
-    check_margins(OBJECTIVES[objective].margins, validate_scenario(data, str(scenario)),
-                  str(scenario))
+    check_margins(OBJECTIVES[objective].margins,  # as every run has it: with the box's [set]
+                  validate_scenario(apply_overrides(data, space.fixed, str(scenario)),
+                                    str(scenario)), str(scenario))
     return SearchSetup(scenario, data, space, OBJECTIVES[objective], tuple(methods), budget,
                        seed)
 

@@ -223,13 +223,14 @@ class ContainmentDepth:
                            "refined regions (m); fails at a containment violation")
     margins: ClassVar[tuple[str, ...]] = (run_margins.ContainmentDepth.name,)
 
-    parts: ClassVar[tuple[str, ...]] = ("sets", "regions")  # of the margin's value
-
     def margin(self, summary: Mapping[str, Any]) -> float:
-        depth = summary["margins"][run_margins.ContainmentDepth.name]
-        found = [depth[part]["least_m"] for part in self.parts
-                 if depth[part]["least_m"] is not None]
+        found = [least for least in self.depths(summary) if least is not None]
         return min(float(min(found, default=OPEN_DEPTH_M)), OPEN_DEPTH_M)
+
+    def depths(self, summary: Mapping[str, Any]) -> list[float | None]:
+        """The least depths (m; None: nothing held a pedestrian) the margin is the least of."""
+        depth = summary["margins"][run_margins.ContainmentDepth.name]
+        return [depth[part]["least_m"] for part in ("sets", "regions")]
 
     def failed(self, summary: Mapping[str, Any]) -> bool:
         return bool(summary["containment_violations"])
@@ -242,15 +243,19 @@ class ContainmentDepth:
 @dataclass(frozen=True)
 class AccountedDepth(ContainmentDepth):
     """How deep every pedestrian lies in the area the controller accounts for pedestrians,
-    its refined regions and the unobserved area together (m; the ``accounted`` part of
-    :class:`~sse_cosim.reporting.margins.ContainmentDepth`): the margin of a pedestrian
-    nobody has detected yet. Fails at a containment violation, as ``depth``."""
+    its refined regions and the unobserved area together (m;
+    :class:`~sse_cosim.reporting.margins.AccountedDepth`): the margin of a pedestrian
+    nobody has detected yet. Fails at a containment violation, as ``depth``. It reads no
+    region's name: anonymous runs too."""
 
     name: ClassVar[str] = "accounted"
     help: ClassVar[str] = ("least depth of a pedestrian inside the refined regions and the "
                            "unobserved area together (m), within the window where they are "
                            "kept; fails at a containment violation")
-    parts: ClassVar[tuple[str, ...]] = ("accounted",)
+    margins: ClassVar[tuple[str, ...]] = (run_margins.AccountedDepth.name,)
+
+    def depths(self, summary: Mapping[str, Any]) -> list[float | None]:
+        return [summary["margins"][run_margins.AccountedDepth.name]["least_m"]]
 
 
 OBJECTIVES: dict[str, Objective] = {o.name: o for o in (LeastDistance(), EmergencyBrake(),

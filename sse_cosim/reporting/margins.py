@@ -25,7 +25,8 @@ crossing while a pedestrian waited at it, at its kerb or on it.
 
 :class:`ContainmentDepth` grades the recorder's containment checks: how deep each pedestrian's
 true position lies inside every position set and refined region written for it (the
-distance to the set's boundary; negative: outside, a containment violation).
+distance to the set's boundary; negative: outside, a containment violation);
+:class:`AccountedDepth` is its part that reads no set's name, for anonymous runs too.
 """
 
 from __future__ import annotations
@@ -251,8 +252,7 @@ class ContainmentDepth:
     def value(self, recorder: RunRecorder) -> dict[str, Any]:
         from sse_cosim.reporting.recorder import zonotope_2d_halfspaces_reference
 
-        truths = {(row["t"], row["pedestrian"]): (row["x"], row["y"])
-                  for row in recorder.truth_rows}
+        truths = _truths(recorder)
         sets = _Least()
         for t, vehicle, node, track, kind, center, generators in recorder.set_records:
             truth = truths.get((t, track))
@@ -264,6 +264,32 @@ class ContainmentDepth:
         regions, accounted = _regions_depths(recorder, truths)
         return {"sets": sets.value(), "regions": regions.value(),
                 "accounted": accounted.value()}
+
+
+@dataclass
+class AccountedDepth:
+    """The ``accounted`` part of :class:`ContainmentDepth` alone: the least depth of every
+    pedestrian inside the window in the area each automated vehicle accounts for, its refined
+    regions and unobserved area together. It reads no region's name, so it serves anonymous
+    runs as well as labelled ones."""
+
+    name: ClassVar[str] = "accounted_depth"
+    help: ClassVar[str] = ("least depth of a pedestrian inside the refined regions and the "
+                           "unobserved area together (m); negative outside; any association")
+    labelled_only: ClassVar[bool] = False
+
+    scenario: Scenario
+
+    def __call__(self, result: StepResult) -> None:
+        """Nothing to watch: the recorder keeps every region."""
+
+    def value(self, recorder: RunRecorder) -> dict[str, Any]:
+        return _regions_depths(recorder, _truths(recorder))[1].value()
+
+
+def _truths(recorder: RunRecorder) -> dict[tuple[float, str], tuple[float, float]]:
+    """(t, pedestrian) -> its true position, from the recorder's truth rows."""
+    return {(row["t"], row["pedestrian"]): (row["x"], row["y"]) for row in recorder.truth_rows}
 
 
 def _regions_depths(recorder: RunRecorder, truths: dict[tuple[float, str], tuple[float, float]]
@@ -394,7 +420,7 @@ class CrossingBlocked:
 
 MARGINS: dict[str, Callable[[Scenario], Margin]] = {
     margin.name: margin for margin in (MovingDistance, TimeToCollision, MovingTimeToCollision,
-                                       ContainmentDepth, CrossingBlocked)}
+                                       ContainmentDepth, AccountedDepth, CrossingBlocked)}
 
 
 def _walking_velocities(persons: Sequence[PersonState]) -> np.ndarray:

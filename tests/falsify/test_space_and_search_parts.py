@@ -354,7 +354,8 @@ def test_the_time_to_collision_objective_asks_for_its_margin_and_caps_it():
 def _deep(sets, regions, accounted=0.01, **changes):
     return _summary(margins={"containment_depth": {"sets": {"least_m": sets},
                                                    "regions": {"least_m": regions},
-                                                   "accounted": {"least_m": accounted}}},
+                                                   "accounted": {"least_m": accounted}},
+                             "accounted_depth": {"least_m": accounted}},
                     **changes)
 
 
@@ -371,7 +372,7 @@ def test_the_depth_objective_takes_the_shallower_of_sets_and_regions():
 
 def test_the_accounted_objective_takes_the_area_the_controller_accounts_for():
     accounted = OBJECTIVES["accounted"]
-    assert accounted.margins == ("containment_depth",)
+    assert accounted.margins == ("accounted_depth",)
     assert accounted.margin(_deep(1.2, 0.04, 0.3)) == 0.3
     assert accounted.margin(_deep(1.2, 0.04, None)) == OPEN_DEPTH_M  # nobody in the window
     lost = _deep(0.5, 0.3, -0.2, containment_violations=1, violations=[{"t": 3.0}])
@@ -387,6 +388,17 @@ def test_the_depth_objective_refuses_anonymous_detections(tmp_path: Path):
     with pytest.raises(UserError, match="containment_depth margin needs sets that name"):
         prepare(anonymous, walk_only, "depth", ("cma",), budget=4, seed=1)
     prepare(anonymous, walk_only, "distance", ("cma",), budget=4, seed=1)  # no labelled one
+    prepare(anonymous, walk_only, "accounted", ("cma",), budget=4, seed=1)  # no set's name
+
+
+def test_the_depth_objective_refuses_a_box_that_makes_the_detections_anonymous(tmp_path: Path):
+    """The falsify file's [set] is part of every run: the check sees it."""
+    box = tmp_path / "anonymous_box.toml"
+    box.write_text('[set]\n"estimator.association" = "anonymous"\n'
+                   '[step_out]\nhigh = 5.0\n[start_behind_truck]\nlow = 1.0\nhigh = 9.0\n')
+    with pytest.raises(UserError, match="containment_depth margin needs sets that name"):
+        prepare(S3, box, "depth", ("cma",), budget=4, seed=1)
+    prepare(S3, box, "accounted", ("cma",), budget=4, seed=1)
 
 
 def test_a_collision_after_the_world_broke_an_assumption_is_not_a_broken_promise():
