@@ -14,6 +14,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from benchmarks import (
+    arrivals,
     baseline,
     campaign,
     cluster,
@@ -44,6 +45,7 @@ TARGETS = {
     "throughput_speedup_2_workers": 1.8,
     "cluster_ratio_to_local": 0.9,
     "tightness_best_mean": 1.3,
+    "arrivals_ratio_of_means": 0.95,
     "soundness_node_steps": 100_000,
     "soundness_violations": 0,
 }
@@ -93,6 +95,9 @@ def run_all(out: Path, quick: bool = False, log: Callable[[str], None] = print,
         recordings, gains=("frobenius", "volume") if quick else tightness.GAINS,
         workers=1 if quick else 2))
     stage("baseline", lambda: baseline.run(recordings, summaries, quick=quick))
+    stage("arrivals", lambda: arrivals.run_all(
+        ["scenarios/s3_pedestrian.toml"] if quick else arrivals.SCENARIOS,
+        {"simulation.duration_s": 8.0} if quick else None))
     stage("soundness", lambda: soundness.run(node_steps=300 if quick else 100_000,
                                              steps=50 if quick else 200,
                                              workers=1 if quick else 2))

@@ -54,7 +54,9 @@ class EgoStep:
     ``shared``: the senders' newest messages brought to this step; ``estimate``: its screen,
     fused sets and flags; ``possible``: pedestrian id -> where that pedestrian can be (the
     fused set refined with negative information); ``unobserved``: walkable ground where an
-    undetected pedestrian may be; ``window``: where hidden ground is tracked.
+    undetected pedestrian may be; ``window``: where hidden ground is tracked; ``sources``:
+    what the picture's earliest arrivals came from, the unobserved area first, then each
+    known pedestrian (its region, state set and path region).
     """
 
     vehicle: str
@@ -65,6 +67,7 @@ class EgoStep:
     window: Region
     picture: Picture
     decision: Decision
+    sources: tuple[Source, ...]
 
 
 class Ego:
@@ -116,9 +119,10 @@ class Ego:
         paths = self.known.paths
         sources = {key: Source(region, estimate.fused.get(key) if self.known.with_states
                                else None, paths.get(key)) for key, region in possible.items()}
+        unobserved = Source(unknown, path=self.unobserved.path)
         picture = assess(
             self.context, me.footprint.front.position, me.speed,
-            mine.occluded, Source(unknown, path=self.unobserved.path), list(sources.values()),
+            mine.occluded, unobserved, list(sources.values()),
             [source for key, source in sources.items() if key in estimate.in_view],
             in_view_beyond=not self.known.beyond.isdisjoint(estimate.in_view),
             floors=self.arrivals.floors(step, estimate.flags.inconsistent),
@@ -127,4 +131,4 @@ class Ego:
         decision = self.policy.decide(
             picture, fallback_floor(estimate.flags.inconsistent, self.controller))
         return EgoStep(self.id, shared, estimate, possible, unknown, self.context.window,
-                       picture, decision)
+                       picture, decision, (unobserved, *sources.values()))

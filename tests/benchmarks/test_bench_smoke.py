@@ -36,7 +36,8 @@ def test_every_benchmark_runs_and_reports(quick):
     _, out = quick
     data = json.loads((out / "benchmarks.json").read_text())
     for key in ("machine", "gain_methods", "kernels", "loop_cost", "tightness", "baseline",
-                "soundness", "scaling", "crowd", "throughput", "cluster", "campaign"):
+                "arrivals", "soundness", "scaling", "crowd", "throughput", "cluster",
+                "campaign"):
         assert key in data, key
     assert {"cpu", "cores", "python", "sumo"} <= set(data["machine"])
     assert data["command"].endswith("--quick")
@@ -44,6 +45,7 @@ def test_every_benchmark_runs_and_reports(quick):
     assert "## Targets" in text and "bare SUMO" in text and "libsumo alone" in text
     assert "Dask cluster" in text and "many pedestrians" in text
     assert "## 8. The safety campaign, projected" in text
+    assert "| 5b earliest arrival, controller / exact reference, mean | " in text
     assert "| 8 `make safety` (the whole campaign), minutes on 2 cores, projected | " in text
 
 
@@ -73,6 +75,8 @@ def test_quick_figures_are_sane(quick):
     assert startup["imports_seconds"] > 0 and startup["first_run_seconds"] > 0
     local = results["tightness"]["local"]["volume"]
     assert local["count"] > 0 and local["mean"] >= 1.0 - 1e-9  # never below the exact set
+    arrivals = results["arrivals"]["all"]
+    assert arrivals["zone_steps"] > 0 and arrivals["later_than_reference"] == 0
 
 
 def test_independent_lp_catches_a_point_outside():

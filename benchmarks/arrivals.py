@@ -1,0 +1,246 @@
+"""Decision tightness: the controller's earliest arrivals against a slow, exact reference.
+
+Every step, each automated vehicle's picture gives, per conflict zone ahead, the earliest time
+a pedestrian can be in it (docs/controller.md, "Earliest arrival"); the speed levels are
+decided on it. The reference recomputes that time from the same inputs, with arithmetic of its
+own:
+
+- the regions the estimator handed the picture (``EgoStep.sources``: the unobserved area,
+  then each known pedestrian; each its position region and, where known, its path region), as
+  their shapely geometries;
+- the zone's walkable ground, exact (the road map's piece, not the region representation's
+  outer approximation), as far as the body can still touch it
+  (:func:`~sse_cosim.control.swept.ahead_cover`, the body's footprints);
+- the walkable ground outside the tracked window, exact, as a position region;
+- the speed bound v and the jitter eps of the scenario as run (the world's measured jitter).
+
+A pedestrian whose path moves at most v, and whose position lies within eps of its path, needs
+at least ``(d - eps) / v`` from a path region d away and ``(d - 2 eps) / v`` from a position
+region d away (the jitter once at each end; exact distances: the straight line is the
+shortest walk). The reference takes, per source, the larger of the two it can form, the least
+over the sources and the ground beyond the window, and never less than its own arrival of an
+earlier consistent step less the time since (the bound moves a pedestrian no faster; a step
+whose picture is inconsistent starts afresh, as the controller's floors do).
+
+Soundness: the controller's arrival is never later than the reference's (a later one would let
+a pedestrian be slower than the bound allows). Tightness: how much earlier, as the mean of the
+controller's arrivals over the mean of the reference's, over every zone-step where both are
+finite. Speed-bound models only: a model that reads the state set (bounded acceleration)
+proves later arrivals than a speed bound can, and its exact reference is not this one.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import shapely
+
+from sse_cosim.control.picture import SceneContext, ZoneOutlook
+from sse_cosim.control.swept import ahead_cover
+from sse_cosim.estimation.motion import motion_model
+from sse_cosim.pipeline.result import StepResult
+from sse_cosim.regions import kind as region_kind
+from sse_cosim.reporting.recorder import RunRecorder
+from sse_cosim.runner.simulation import SimulationInfo, simulate
+from sse_cosim.scenario.loader import load_scenario
+from sse_cosim.scenario.model import Scenario, present
+
+SCENARIOS = ("scenarios/s1_pedestrian.toml", "scenarios/s2_pedestrian.toml",
+             "scenarios/s3_pedestrian.toml", "scenarios/s1_no_pedestrian.toml",
+             "scenarios/s2_no_pedestrian.toml", "scenarios/s3_no_pedestrian.toml",
+             "scenarios/town.toml", "scenarios/junction.toml")
+TOLERANCE_S = 1e-6
+"""How much later than the reference a controller's arrival may be before it counts as
+unsound: rounding of two distance computations of the same geometries (m / v, far below a
+step)."""
+DECISION_HORIZON_S = 10.0
+"""Arrivals up to this (s) are those the speed levels turn on (a bus clears a zone from
+standstill within about 5 s): the tightness is also given over them alone."""
+
+
+@dataclass(frozen=True)
+class _Seen:
+    """What one vehicle's picture was made from at one step."""
+
+    step: int
+    vehicle: str
+    front_s: float
+    zones: tuple[ZoneOutlook, ...]
+    positions: tuple[shapely.Geometry, ...]  # each source's position region
+    paths: tuple[shapely.Geometry | None, ...]  # each source's path region, None if unknown
+    inconsistent: bool
+
+
+@dataclass
+class ArrivalRecorder:
+    """A step callback that keeps, per automated vehicle and step, the picture's arrivals and
+    the geometries of the sources they came from (references, no copies)."""
+
+    seen: list[_Seen] = field(default_factory=list)
+
+    def __call__(self, result: StepResult) -> None:
+        for vid, ego in result.vehicles.items():
+            parts = [s for s in ego.sources if not s.region.is_empty]
+            self.seen.append(_Seen(
+                result.step, vid, ego.picture.front_s, ego.picture.zones,
+                tuple(s.region.geometry() for s in parts),
+                tuple(None if s.path is None or s.path.is_empty else s.path.geometry()
+                      for s in parts),
+                ego.estimate.flags.inconsistent))
+
+
+@dataclass(frozen=True)
+class ZoneStep:
+    """One zone at one step of one vehicle: the controller's arrival and the reference's (s)."""
+
+    vehicle: str
+    step: int
+    zone: int
+    controller_s: float
+    reference_s: float
+
+
+class ExactArrivals:
+    """The reference's arrivals for one automated vehicle of a run (module docstring)."""
+
+    def __init__(self, context: SceneContext, walkable: shapely.Geometry, speed_mps: float,
+                 jitter_m: float, dt: float) -> None:
+        self.context = context
+        self.v, self.eps, self.dt = speed_mps, jitter_m, dt
+        self.beyond = shapely.difference(walkable, context.window.geometry())
+        self._whole = {i: self._beyond_s(z.ground) for i, z in enumerate(context.zones)}
+        self._last: tuple[int, dict[int, float]] | None = None
+
+    def _beyond_s(self, ground: shapely.Geometry) -> float:
+        if self.beyond.is_empty or ground.is_empty:
+            return math.inf
+        return max(0.0, float(shapely.distance(self.beyond, ground)) - 2.0 * self.eps) / self.v
+
+    def _zone(self, index: int, front_s: float) -> tuple[shapely.Geometry, float]:
+        """Zone ``index``'s exact ground as far as the body (front at ``front_s``) can touch
+        it, and the arrival from beyond the window there."""
+        zone = self.context.zones[index]
+        if front_s <= zone.start_m:
+            return zone.ground, self._whole[index]
+        ground = shapely.intersection(zone.ground, ahead_cover(
+            zone.sweep, front_s, self.context.bus.length_m, self.context.sweep_width_m))
+        return ground, self._beyond_s(ground)
+
+    def arrivals(self, seen: _Seen) -> dict[int, float]:
+        """Zone index -> the reference's earliest arrival (s) at ``seen``'s step."""
+        if not seen.zones:
+            out: dict[int, float] = {}
+        else:
+            grounds, beyond = zip(*(self._zone(z.index, seen.front_s) for z in seen.zones),
+                                  strict=True)
+            sets = self._from_sources(seen, np.array(grounds, dtype=object))
+            out = {z.index: min(b, float(a)) for z, b, a in zip(seen.zones, beyond, sets,
+                                                                strict=True)}
+        floors = {} if seen.inconsistent or self._last is None else {
+            i: a - (seen.step - self._last[0]) * self.dt for i, a in self._last[1].items()}
+        out = {i: max(a, floors.get(i, 0.0)) for i, a in out.items()}
+        self._last = None if seen.inconsistent else (seen.step, out)
+        return out
+
+    def _from_sources(self, seen: _Seen, grounds: np.ndarray) -> np.ndarray:
+        """The least over the sources of each one's arrival at each zone, shape (z,)."""
+        if not seen.positions:
+            return np.full(len(grounds), math.inf)
+        positions = np.array(seen.positions, dtype=object)[:, None]
+        arrival = np.maximum(0.0, shapely.distance(positions, grounds) - 2.0 * self.eps)
+        pathed = [i for i, p in enumerate(seen.paths) if p is not None]
+        if pathed:
+            paths = np.array([seen.paths[i] for i in pathed], dtype=object)[:, None]
+            arrival[pathed] = np.maximum(arrival[pathed], np.maximum(
+                0.0, shapely.distance(paths, grounds) - self.eps))
+        return arrival.min(axis=0) / self.v
+
+
+def compare(recorder: ArrivalRecorder, info: SimulationInfo) -> list[ZoneStep]:
+    """Every zone-step of a run: the controller's arrival beside the reference's."""
+    scenario = info.scenario
+    config = scenario.estimator
+    if motion_model(config, scenario.simulation.step_length_s).uses_state:
+        raise ValueError(f"estimator.state_model = {config.state_model!r} reads the state set; "
+                         "the reference bounds the speed alone")
+    references = {vid: ExactArrivals(_context(scenario, info, vid), info.roadmap.walkable,
+                                     config.max_pedestrian_speed_mps, config.position_jitter_m,
+                                     scenario.simulation.step_length_s)
+                  for vid in present(scenario.automated)}
+    rows = []
+    for seen in recorder.seen:
+        reference = references[seen.vehicle].arrivals(seen)
+        rows += [ZoneStep(seen.vehicle, seen.step, z.index, z.arrival_s, reference[z.index])
+                 for z in seen.zones]
+    return rows
+
+
+def _context(scenario: Scenario, info: SimulationInfo, vid: str) -> SceneContext:
+    """The scene as vehicle ``vid``'s controller had it (its zones and window)."""
+    dt = scenario.simulation.step_length_s
+    vehicle = scenario.automated[vid]
+    return SceneContext.build(info.roadmap, vehicle.route_edges, vehicle, scenario.controller,
+                              motion_model(scenario.estimator, dt),
+                              scenario.pedestrian_radius_m(), dt,
+                              region_kind(scenario.estimator.regions))
+
+
+def run(path: str, overrides: Mapping[str, Any] | None = None) -> tuple[list[ZoneStep], dict]:
+    """Run the scenario file ``path`` (with ``overrides``) once, recording its arrivals: every
+    zone-step and the run's summary."""
+    scenario = load_scenario(Path(path), dict(overrides or {}))
+    recorder, arrivals = RunRecorder(scenario), ArrivalRecorder()
+
+    def on_step(result: StepResult) -> None:
+        recorder(result)
+        arrivals(result)
+
+    with tempfile.TemporaryDirectory(prefix="sse-bench-arrivals-") as tmp:
+        info = simulate(scenario, Path(tmp), Path(path).stem, on_step,
+                        on_start=recorder.start)
+    return compare(arrivals, info), recorder.summary()
+
+
+def figures(rows: Sequence[ZoneStep]) -> dict[str, Any]:
+    """Soundness and tightness of some zone-steps: how many, how many later than the
+    reference (and the latest by how much), and the ratio of the means, over every finite
+    zone-step and over those the decisions turn on (:data:`DECISION_HORIZON_S`)."""
+    both = [r for r in rows if math.isfinite(r.reference_s) and math.isfinite(r.controller_s)]
+    near = [r for r in both if r.reference_s <= DECISION_HORIZON_S]
+    late = [r for r in rows if r.controller_s > r.reference_s + TOLERANCE_S]
+    return {
+        "zone_steps": len(rows),
+        "finite": len(both),
+        "later_than_reference": len(late),
+        "latest_excess_s": max((r.controller_s - r.reference_s for r in late), default=0.0),
+        "ratio_of_means": _ratio(both),
+        "ratio_of_means_within_horizon": _ratio(near),
+        "within_horizon": len(near),
+        "earliest_shortfall_s": max((r.reference_s - r.controller_s for r in both),
+                                    default=0.0),
+    }
+
+
+def _ratio(rows: Sequence[ZoneStep]) -> float | None:
+    total = sum(r.reference_s for r in rows)
+    return None if total <= 0.0 else sum(r.controller_s for r in rows) / total
+
+
+def run_all(paths: Sequence[str] = SCENARIOS,
+            overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The benchmark's row: each scenario's figures and all of them together."""
+    per_scenario, every = {}, []
+    for path in paths:
+        rows, summary = run(path, overrides)
+        per_scenario[Path(path).stem] = {**figures(rows),
+                                         "collisions": summary["collisions"],
+                                         "containment_violations":
+                                             summary["containment_violations"]}
+        every += rows
+    return {"scenarios": per_scenario, "all": figures(every)}
