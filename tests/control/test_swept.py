@@ -17,6 +17,7 @@ from swept_checks import assert_in_the_way
 
 from sse_cosim.control.picture import SceneContext, route_lanes
 from sse_cosim.control.swept import (
+    MAX_PIECE_M,
     RoutePath,
     ahead_cover,
     body_sweep,
@@ -75,6 +76,40 @@ def test_a_straight_route_sweeps_the_centre_line_widened_by_half_the_width() -> 
     ahead = ahead_cover(pieces, 150.0, LENGTH, WIDTH)
     band = shapely.box(150.0 - LENGTH, -1.75 - 0.5 * WIDTH, 300.0, -1.75 + 0.5 * WIDTH)
     assert shapely.symmetric_difference(ahead, band).area < 1e-9
+
+
+@pytest.mark.parametrize("offset", [(0.0, 0.0), (6_700.0, 8_800.0), (500_000.0, 5_600_000.0)])
+@pytest.mark.parametrize("heading", [0.0, 0.3, 1.0, 2.5])
+def test_a_straight_route_anywhere_at_any_heading_keeps_its_exact_zone(
+        offset: tuple[float, float], heading: float) -> None:
+    """The same route moved to a town's coordinates and to UTM-sized ones, turned to any
+    heading: one rounding step there (9e-13 m at 6,700 m, 9e-10 m at 5,600 km) is more than
+    the straight test's 1e-12 m, yet the pieces are worked out about a point of the route, so
+    a piece on one lane stays straight and every piece that does not is cut to at most
+    MAX_PIECE_M; the zebra's touch extent and the cover ahead are those at the origin.
+    Before, a 88.8 m piece at (6,700, 8,800) counted as turning uncut, and the zones around
+    it stretched over its whole length (issue: live on real streets)."""
+    c, s_ = np.cos(heading), np.sin(heading)
+    turn = np.array([[c, -s_], [s_, c]])
+    at = np.asarray(offset)
+
+    def place(xy: np.ndarray) -> np.ndarray:
+        return np.asarray(xy, dtype=float) @ turn.T + at
+
+    def placed(geometry: shapely.Geometry) -> shapely.Geometry:
+        return shapely.transform(geometry, place)
+
+    path = RoutePath.of_lanes([(place([[0.0, -1.75], [100.0, -1.75]]), 100.0),
+                               (place([[100.0, -1.75], [300.0, -1.75]]), 200.0)])
+    pieces = body_sweep(path, LENGTH, WIDTH)
+    assert all(p.straight or p.end_m - p.start_m <= MAX_PIECE_M + 1e-9 for p in pieces)
+    assert sum(p.end_m - p.start_m for p in pieces if p.straight) > 280.0  # all but joints
+    zebra = placed(shapely.box(198.0, -6.0, 202.0, 6.0))
+    assert touch_extent(pieces, zebra, LENGTH) == pytest.approx((198.0, 202.0), abs=1e-6)
+    ahead = ahead_cover(pieces, 150.0, LENGTH, WIDTH)
+    band = placed(shapely.box(150.0 - LENGTH, -1.75 - 0.5 * WIDTH, 300.0,
+                              -1.75 + 0.5 * WIDTH))
+    assert shapely.symmetric_difference(ahead, band).area < 1e-4
 
 
 def test_the_straight_routes_of_the_junction_keep_their_zones(roadmap: RoadMap) -> None:
