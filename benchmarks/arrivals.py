@@ -9,8 +9,7 @@ own:
   then each known pedestrian; each its position region and, where known, its path region), as
   their shapely geometries;
 - the zone's walkable ground, exact (the road map's piece, not the region representation's
-  outer approximation), as far as the body can still touch it
-  (:func:`~sse_cosim.control.swept.ahead_cover`, the body's footprints);
+  outer approximation), as far as the body can still touch it (``ZoneOutlook.ground``);
 - the walkable ground outside the tracked window, exact, as a position region;
 - the speed bound v and the jitter eps of the scenario as run (the world's measured jitter).
 
@@ -42,7 +41,6 @@ import numpy as np
 import shapely
 
 from sse_cosim.control.picture import SceneContext, ZoneOutlook
-from sse_cosim.control.swept import ahead_cover
 from sse_cosim.estimation.motion import motion_model
 from sse_cosim.pipeline.result import StepResult
 from sse_cosim.regions import kind as region_kind
@@ -122,26 +120,22 @@ class ExactArrivals:
             return math.inf
         return max(0.0, float(shapely.distance(self.beyond, ground)) - 2.0 * self.eps) / self.v
 
-    def _zone(self, index: int, front_s: float) -> tuple[shapely.Geometry, float]:
-        """Zone ``index``'s exact ground as far as the body (front at ``front_s``) can touch
-        it, and the arrival from beyond the window there."""
-        zone = self.context.zones[index]
-        if front_s <= zone.start_m:
-            return zone.ground, self._whole[index]
-        ground = shapely.intersection(zone.ground, ahead_cover(
-            zone.sweep, front_s, self.context.bus.length_m, self.context.sweep_width_m))
-        return ground, self._beyond_s(ground)
+    def _beyond_at(self, zone: ZoneOutlook, front_s: float) -> float:
+        """The arrival from beyond the window at ``zone``'s ground as far as the body (front
+        at ``front_s``) can touch it: the whole zone's until the front reaches it."""
+        whole = self.context.zones[zone.index]
+        return self._whole[zone.index] if front_s <= whole.start_m \
+            else self._beyond_s(zone.ground)
 
     def arrivals(self, seen: _Seen) -> dict[int, float]:
         """Zone index -> the reference's earliest arrival (s) at ``seen``'s step."""
         if not seen.zones:
             out: dict[int, float] = {}
         else:
-            grounds, beyond = zip(*(self._zone(z.index, seen.front_s) for z in seen.zones),
-                                  strict=True)
-            sets = self._from_sources(seen, np.array(grounds, dtype=object))
-            out = {z.index: min(b, float(a)) for z, b, a in zip(seen.zones, beyond, sets,
-                                                                strict=True)}
+            sets = self._from_sources(seen, np.array([z.ground for z in seen.zones],
+                                                     dtype=object))
+            out = {z.index: min(self._beyond_at(z, seen.front_s), float(a))
+                   for z, a in zip(seen.zones, sets, strict=True)}
         floors = {} if seen.inconsistent or self._last is None else {
             i: a - (seen.step - self._last[0]) * self.dt for i, a in self._last[1].items()}
         out = {i: max(a, floors.get(i, 0.0)) for i, a in out.items()}

@@ -246,7 +246,9 @@ class ZoneOutlook:
     ``arrival_s``: the earliest time any pedestrian, known or not, can be in it;
     ``in_view_arrival_s``: the earliest time a pedestrian in view (some node detects it now)
     can be in it, infinite if none can; ``index``: the zone's place in
-    ``SceneContext.zones``.
+    ``SceneContext.zones``; ``clear_s``: the time the bus needs from standstill to clear it
+    (:meth:`SceneContext.standstill_clear_time`); ``ground``: its walkable ground as far as
+    the body can still touch it (:func:`_ahead_of_body`; a check's, the recorder's).
     """
 
     index: int
@@ -254,6 +256,8 @@ class ZoneOutlook:
     to_clear_m: float
     arrival_s: float
     in_view_arrival_s: float = math.inf
+    clear_s: float = 0.0
+    ground: shapely.Geometry | None = None
 
 
 @dataclass(frozen=True)
@@ -330,7 +334,7 @@ def assess(
         pedestrian_near_path=any(s.intersects(near_path) for s in sets),
         pedestrian_in_stopping_distance=any(s.intersects(stopping) for s in sets),
         zones=zones,
-        path_clear=all(z.arrival_s > context.standstill_clear_time(z.to_clear_m) for z in zones),
+        path_clear=all(z.arrival_s > z.clear_s for z in zones),
     )
 
 
@@ -392,7 +396,8 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
         ZoneOutlook(index, zone.start_m - front_s, to_clear,
                     max(min(zone.beyond_arrival_s, float(arrival)), floors.get(index, 0.0)),
                     min(zone.beyond_arrival_s if in_view_beyond else math.inf,
-                        float(in_view_arrival)))
+                        float(in_view_arrival)),
+                    context.standstill_clear_time(to_clear), zone.ground)
         for (index, zone, to_clear), arrival, in_view_arrival
         in zip(ahead, arrivals, in_view_arrivals, strict=True))
 
@@ -410,7 +415,8 @@ def _ahead_of_body(context: SceneContext, zone: ConflictZone, front_s: float) ->
     if front_s <= zone.start_m or zone.ground is None:
         return zone
     ahead = ahead_cover(zone.sweep, front_s, context.bus.length_m, context.sweep_width_m)
-    return replace(zone, polygon=context.kind.outer(shapely.intersection(zone.ground, ahead)))
+    ground = shapely.intersection(zone.ground, ahead)
+    return replace(zone, polygon=context.kind.outer(ground), ground=ground)
 
 
 def _meeting(sweep: Sequence[SweepPiece], piece: shapely.Geometry) -> tuple[SweepPiece, ...]:

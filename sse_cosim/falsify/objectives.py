@@ -125,19 +125,21 @@ class EmergencyBrake:
 
 @dataclass(frozen=True)
 class Standstill:
-    """Liveness: the target (3 s) less the longest standstill on a clear path (s); a route
-    never finished fails."""
+    """Liveness, from the truth: the target (3 s) less the longest time a vehicle was held
+    (told to creep, stop or brake) while no pedestrian in the scene could have reached a zone
+    ahead before it cleared them (``longest_needless_hold_s``, s); a route never finished
+    fails."""
 
     name: ClassVar[str] = "standstill"
     unit: ClassVar[str] = "s"
-    help: ClassVar[str] = (f"{STANDSTILL_TARGET_S:g} s less the longest standstill after the "
-                           "path is clear; fails beyond it or on an unfinished route")
+    help: ClassVar[str] = (f"{STANDSTILL_TARGET_S:g} s less the longest hold while the truth "
+                           "left the path clear; fails beyond it or on an unfinished route")
     margins: ClassVar[tuple[str, ...]] = ()
 
     def margin(self, summary: Mapping[str, Any]) -> float:
         if not summary["route_completed"]:
             return -float(summary["travel_time_s"])
-        return STANDSTILL_TARGET_S - float(summary["longest_standstill_after_clear_s"])
+        return STANDSTILL_TARGET_S - float(summary["longest_needless_hold_s"])
 
     def failed(self, summary: Mapping[str, Any]) -> bool:
         return self.margin(summary) < 0

@@ -57,6 +57,9 @@ FUSED = "fused"
 REFINED = "refined"  # a known pedestrian's zonotope refined with negative information
 UNOBSERVED = "unobserved"  # walkable ground where an undetected pedestrian may be
 STOPPED_SPEED_MPS = 0.1  # the bus counts as stopped below this actual speed
+HOLDING = frozenset(level.label for level in (SpeedLevel.CREEP, SpeedLevel.STOP,
+                                              SpeedLevel.EMERGENCY))
+"""The levels that hold a vehicle back: told to crawl, stand or brake."""
 UNACCOUNTED = "unaccounted"  # a pedestrian in no refined region and not in the unobserved area
 CONTAINMENT_TOL_M = 1e-7  # slack of a set's containment check (m)
 
@@ -353,6 +356,7 @@ class RunRecorder:
             self.pedestrian_rows.append({"t": t, "vehicle": vehicle, **check.row()})
         row["accounted_for"] = _all(c.accounted_for for c in checks.values())
         row["path_clear"] = ego.picture.path_clear
+        row["truly_clear"] = self._truly_clear(ego, points)
         row["unresolved_occluded_m2"] = ego.picture.unresolved_occluded_m2
         row["own_occluded_m2"] = ego.picture.own_occluded_m2
         row["distance_to_crossing"] = ego.picture.distance_to_crossing
@@ -372,6 +376,23 @@ class RunRecorder:
                        {key: z.zonotope for key, z in fused.items()}, truths)
         self.scenes += [frame] * wanted
         self.key_moments.frames.update(dict.fromkeys(moments, frame))
+
+    def _truly_clear(self, ego: EgoStep, points: _TruePoints) -> bool:
+        """Whether the truth left the vehicle's path clear: from standstill it would have
+        cleared every zone ahead (each zone's ``clear_s``) before any pedestrian in the scene
+        could be in it. A pedestrian whose true position lies d from the zone's ground is
+        there no sooner than (d - 2 eps) / v (A1: its path, within eps of it, moves at most
+        v), whatever anyone knows of it. The controller's picture is not read (its zones
+        are the route's geometry, their clear times the bus's dynamics)."""
+        zones = [z for z in ego.picture.zones if z.ground is not None]
+        if not zones or not len(points.array):
+            return True
+        estimator = self.scenario.estimator
+        grounds = np.array([z.ground for z in zones], dtype=object)[:, None]
+        distance = shapely.distance(grounds, points.array[None, :]).min(axis=1)  # (z,)
+        arrival = np.maximum(0.0, distance - 2.0 * estimator.position_jitter_m) \
+            / estimator.max_pedestrian_speed_mps
+        return bool(all(a > z.clear_s for a, z in zip(arrival, zones, strict=True)))
 
     def _check_labelled(self, t: float, ego: EgoStep, truths: dict[str, np.ndarray],
                         held: _HeldRegions, checks: dict[str, _PedestrianCheck]
@@ -674,6 +695,9 @@ class RunRecorder:
             "longest_standstill_after_clear_s": round(dt * _longest_run(
                 [r["path_clear"] and r["bus_speed"] < STOPPED_SPEED_MPS
                  and r["commanded_speed"] < STOPPED_SPEED_MPS for r in rows]), 6),
+            # liveness from the truth: told to creep, stop or brake while the path was clear
+            "longest_needless_hold_s": round(dt * _longest_run(
+                [r["truly_clear"] and r["level"] in HOLDING for r in rows]), 6),
             "level_share": {
                 level.label: levels.get(level.label, 0) / max(len(rows), 1)
                 for level in SpeedLevel

@@ -51,6 +51,7 @@ FIGURES: dict[str, tuple[str, ...]] = {
     "contact_steps": ("contact_steps",),
     "time_stopped_s": ("time_stopped_s",),
     "longest_standstill_after_clear_s": ("longest_standstill_after_clear_s",),
+    "longest_needless_hold_s": ("longest_needless_hold_s",),
     "route_completed": ("route_completed",),
     "steps": ("steps",),
 }

@@ -282,7 +282,7 @@ def test_a_falsify_file_with_a_bad_field_is_one_line_naming_it(tmp_path: Path):
 def _summary(**changes):
     base = {"collisions": 0, "contact_steps": 0, "min_distance_bus_pedestrian_m": 2.5,
             "containment_violations": 0, "violations": [], "route_completed": True,
-            "longest_standstill_after_clear_s": 0.5, "travel_time_s": 30.0, "steps": 300,
+            "longest_needless_hold_s": 0.5, "travel_time_s": 30.0, "steps": 300,
             "level_share": {"emergency": 0.0},
             "margins": {"moving_distance": {"least_m": 2.5}}}
     return {**base, **changes}
@@ -303,7 +303,7 @@ def test_the_objectives_read_their_margins_and_failures():
     assert emergency.margin(braking) == pytest.approx(-0.3)
     assert emergency.failed(braking) and not emergency.failed(_summary())
     assert standstill.margin(_summary()) == pytest.approx(2.5)
-    assert standstill.failed(_summary(longest_standstill_after_clear_s=3.5))
+    assert standstill.failed(_summary(longest_needless_hold_s=3.5))
     assert standstill.failed(_summary(route_completed=False))
 
 

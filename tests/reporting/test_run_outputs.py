@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -20,19 +21,23 @@ DONE, NOT_DONE = {"bus": True}, {"bus": False}  # whether the bus reached its ro
 
 
 def recorder_with(speeds: list[float], contact: list[bool], clear: list[bool] | None = None,
-                  commanded: list[float] | None = None) -> RunRecorder:
+                  commanded: list[float] | None = None, levels: list[str] | None = None,
+                  truly_clear: list[bool] | None = None) -> RunRecorder:
     """A recorder whose rows hold the bus's speed, contact with the pedestrian, whether its
-    path was clear (default: always) and its commanded speed (default: its speed), every
+    path was clear in its picture (default: always) and in truth (default: as in the
+    picture), its commanded speed (default: its speed) and level (default: nominal), every
     0.1 s; the pedestrian is in the scene from the second step on."""
     recorder = RunRecorder(load_scenario(SCENARIO))
-    steps = list(enumerate(zip(speeds, contact, clear or [True] * len(speeds),
-                               commanded or speeds, strict=True)))
+    clear = clear or [True] * len(speeds)
+    steps = list(enumerate(zip(speeds, contact, clear, commanded or speeds,
+                               levels or ["nominal"] * len(speeds), truly_clear or clear,
+                               strict=True)))
     recorder.rows = [
         {"t": round(0.1 * i, 6), "vehicle": "bus", "bus_x": 2.0 * i, "bus_y": -1.75,
-         "bus_speed": v, "commanded_speed": u, "level": "nominal",
+         "bus_speed": v, "commanded_speed": u, "level": level,
          "distance_bus_pedestrian": None, "inconsistent": False, "collision": c,
-         "path_clear": p}
-        for i, (v, c, p, u) in steps
+         "path_clear": p, "truly_clear": truly}
+        for i, (v, c, p, u, level, truly) in steps
     ]
     recorder.truth_rows = [{"t": round(0.1 * i, 6), "pedestrian": "pedestrian",
                             "x": 183.123456789, "y": -7.6, "speed": 1.3,
@@ -41,7 +46,7 @@ def recorder_with(speeds: list[float], contact: list[bool], clear: list[bool] | 
         {"t": round(0.1 * i, 6), "vehicle": "bus", "pedestrian": "pedestrian",
          "contained_fused": None, "contained_refined": None, "accounted_for": True,
          "distance": 0.0 if c else 5.0}
-        for i, (_, c, _, _) in steps
+        for i, (_, c, *_) in steps
     ]
     return recorder
 
@@ -59,6 +64,36 @@ def test_a_bus_told_to_go_that_sumo_holds_is_not_a_standstill_of_the_controller(
     summary = recorder_with(speeds, [False] * 6, None, commanded).summary()
     assert summary["longest_standstill_after_clear_s"] == pytest.approx(0.2)
     assert summary["time_stopped_s"] == pytest.approx(0.6)
+
+
+def test_the_needless_hold_counts_held_steps_in_a_row_while_the_truth_left_the_path_clear():
+    """Liveness from the truth: a creep, a stop or an emergency brake counts while no true
+    pedestrian could have reached a zone before the bus cleared it; the controller's own
+    picture (here never clear) does not matter."""
+    levels = ["stop", "stop", "creep", "emergency", "nominal", "stop", "stop", "slow"]
+    truly = [False, True, True, True, True, True, True, True]
+    summary = recorder_with([0.0] * 8, [False] * 8, [False] * 8, levels=levels,
+                            truly_clear=truly).summary()
+    assert summary["longest_needless_hold_s"] == pytest.approx(0.3)
+    assert summary["longest_standstill_after_clear_s"] == 0.0  # the picture's: blind to it
+
+
+def test_the_truth_leaves_the_path_clear_while_nobody_can_reach_a_zone_in_its_clear_time():
+    """(d - 2 eps) / v against the zone's clear time, for every zone and true pedestrian."""
+    from sse_cosim.reporting.recorder import _TruePoints
+
+    recorder = RunRecorder(load_scenario(SCENARIO, {"estimator.position_jitter_m": 0.5}))
+    zone = SimpleNamespace(ground=shapely.box(0.0, 0.0, 4.0, 4.0), clear_s=2.0)
+    ego = SimpleNamespace(picture=SimpleNamespace(zones=(zone,)))
+    v = recorder.scenario.estimator.max_pedestrian_speed_mps
+
+    def clear_with_one_at(distance: float) -> bool:
+        return recorder._truly_clear(ego, _TruePoints.of({"p": np.array([4.0 + distance,
+                                                                         2.0])}))
+
+    assert clear_with_one_at(2.0 * v + 1.0 + 0.01)  # arrives 0.004 s after it clears
+    assert not clear_with_one_at(2.0 * v + 1.0 - 0.01)
+    assert recorder._truly_clear(ego, _TruePoints.of({}))  # nobody in the scene
 
 
 def test_collisions_count_entries_into_contact_and_contact_steps_every_step():

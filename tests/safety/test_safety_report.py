@@ -24,7 +24,7 @@ from sse_cosim.runner.sweep import PlannedRun
 
 SAFE = {
     "collisions": 0, "containment_violations": 0, "containment_violations_by_set": {},
-    "route_completed": True, "longest_standstill_after_clear_s": 1.0,
+    "route_completed": True, "longest_needless_hold_s": 1.0,
     "min_distance_bus_pedestrian_m": 5.0, "average_speed_mps": 12.0, "time_stopped_s": 1.0,
     "pedestrians": {"pedestrian": {"min_distance_m": 5.0}, "other": {"min_distance_m": 6.0}},
 }
@@ -91,7 +91,7 @@ def test_missed_targets_name_the_runs_that_break_them(tmp_path):
         3: {"collisions": 2},
         5: {"collisions": 1, "containment_violations": 4,
             "containment_violations_by_set": {"fused": 3, "region": 1}},
-        7: {"route_completed": False, "longest_standstill_after_clear_s": 4.5},
+        7: {"route_completed": False, "longest_needless_hold_s": 4.5},
     }
     out = campaign_folder(tmp_path, lambda i, run: {**SAFE, **broken.get(i, {})})
     report = write_safety_report(out)
