@@ -147,6 +147,7 @@ class SceneContext:
     zones: tuple[ConflictZone, ...]
     kind: RegionKind
     sweep_width_m: float  # the body's sweep: its width and a pedestrian's radius each side
+    planned: shapely.Geometry  # the ground that sweep covers along the planned lanes (prepared)
     _relevant: dict[tuple[int, float], Region] = field(default_factory=dict, repr=False)
 
     @classmethod
@@ -162,7 +163,9 @@ class SceneContext:
         corridor = _widened(route_line, 0.5 * bus.width_m + pedestrian_radius)
         sweep = body_sweep(RoutePath.of_lanes(route_lanes(roadmap, route_edges)), bus.length_m,
                            bus.width_m + 2.0 * pedestrian_radius)
-        corridor = _with_sweep(corridor, _from_start(swept_region(sweep), route_line), walkable)
+        planned = swept_region(sweep)
+        shapely.prepare(planned)
+        corridor = _with_sweep(corridor, _from_start(planned, route_line), walkable)
         crossings = _route_crossings(route_line, corridor, [c.area for c in roadmap.crossings],
                                      kind)
         swept = [(piece, kind.outer(piece), *_touched(sweep, piece, start, end, bus.length_m))
@@ -178,7 +181,22 @@ class SceneContext:
             for piece, region, start, end in swept)
         return cls(route_line, ground, crossings, bus, config, pedestrians,
                    BusDynamics.of(bus, config, step_length), window, zones, kind,
-                   bus.width_m + 2.0 * pedestrian_radius)
+                   bus.width_m + 2.0 * pedestrian_radius, planned)
+
+    def off_plan_m(self, corners: np.ndarray) -> float:
+        """How far (m) the body with its footprint ``corners`` (4, 2), counter-clockwise
+        from the rear right, widened to each side by a pedestrian's radius as the sweep is,
+        lies outside the ground its sweep covers along the planned lanes (:attr:`planned`):
+        the largest distance of its corners and the middles of its sides (0: on the plan).
+        The zones, the arrivals and the along-route position all assume the body there."""
+        right, left = corners[0] - corners[3], corners[3] - corners[0]
+        width = math.hypot(float(left[0]), float(left[1]))
+        grow = 0.5 * (self.sweep_width_m - width) / width
+        wide = corners + grow * np.array([right, right, left, left])  # (4, 2)
+        points = np.vstack([wide, 0.5 * (wide + np.roll(wide, -1, axis=0))])  # (8, 2)
+        if shapely.contains_xy(self.planned, points[:, 0], points[:, 1]).all():
+            return 0.0
+        return float(shapely.distance(self.planned, shapely.points(points)).max())
 
     def crossing_at(self, front_s: float) -> RouteCrossing | None:
         """The nearest crossing on the route that the bus (front at ``front_s``) has not

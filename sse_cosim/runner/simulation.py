@@ -100,7 +100,8 @@ def simulate(
         kind = regions.kind(config.regions)
         observers = first_level(config.association, scenario.node_ids(), model, settings, kind)
         n_steps = round(scenario.simulation.duration_s / dt)
-        egos = [Ego(vid, scenario, world.roadmap, model, settings, specs, rng, kind)
+        egos = [Ego(vid, scenario, world.roadmap, model, settings, specs, rng, kind,
+                    scenario_name)
                 for vid, rng in zip(automated, [first_link_rng, *link_rngs], strict=True)]
         for step in range(n_steps):
             timer.start()
