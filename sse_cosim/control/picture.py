@@ -582,16 +582,9 @@ def _cut_along(part: shapely.Geometry, route_line: shapely.LineString,
 
 
 def route_lanes(roadmap: RoadMap, route_edges: Sequence[str]) -> list[tuple[np.ndarray, float]]:
-    """The lanes a vehicle drives along ``route_edges``, as ``RoadMap.route_line`` joins
-    them: each lane's centre line (k, 2) and its length (m)."""
-    lanes = []
-    for i, edge_id in enumerate(route_edges):
-        lane = roadmap.edge_driving_lane(edge_id)
-        lanes.append((lane.shape, lane.length))
-        if i + 1 < len(route_edges):
-            lanes.extend((roadmap.internal_lanes[via].shape, roadmap.internal_lanes[via].length)
-                         for via in roadmap.junction_passage(edge_id, route_edges[i + 1]))
-    return lanes
+    """The lanes a vehicle drives along ``route_edges`` (``RoadMap.route_lanes``): each lane's
+    centre line (k, 2) and its length (m)."""
+    return [(lane.shape, lane.length) for lane in roadmap.route_lanes(route_edges)]
 
 
 def _with_sweep(corridor: shapely.Geometry, sweep: shapely.Geometry,

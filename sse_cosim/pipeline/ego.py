@@ -154,6 +154,7 @@ class Ego:
                 f"automated vehicle {self.id!r} at t={time_s:.2f} s has its body {off:.3f} m "
                 "outside the lanes its controller plans on (the route's edges, each on one "
                 "driving lane); the run stops before it decides on a picture of other lanes",
-                "the controller plans on each edge's innermost driving lane: on streets with "
-                "several driving lanes each way, route the vehicle where SUMO keeps it on that "
-                "lane, or over streets with one (docs/own_network.md)")
+                "the controller plans on each edge's rightmost driving lane that leads on "
+                "(RoadMap.route_lanes) and does not follow lane changes yet: keep other traffic "
+                "from making SUMO overtake or change lanes, or route the vehicle over streets "
+                "with one driving lane each way (docs/own_network.md)")

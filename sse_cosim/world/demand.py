@@ -152,7 +152,7 @@ def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: st
     walking the speed ramp of the scenario's motion model if it bounds the acceleration: the
     safety campaign's feasibility is the run's)."""
     net = net_of(net_path, roadmap)  # read once
-    lanes = {vid: _check_automated(net, vid, av, source)
+    lanes = {vid: _check_automated(net, roadmap, vid, av, source)
              for vid, av in present(scenario.automated).items()}
     for vid, parked in present(scenario.parked).items():
         _check_parked(net, vid, parked, source)
@@ -373,14 +373,6 @@ def _route_lanes(net: sumolib.net.Net, edges: list[str],
     return lanes
 
 
-def _vehicle_lane(net: sumolib.net.Net, edge_id: str, vclass: str, field: str, source: str) -> int:
-    lanes = [lane.getIndex() for lane in net.getEdge(edge_id).getLanes() if lane.allows(vclass)]
-    if not lanes:
-        raise UserError(source, field, f"edge {edge_id!r} has no lane for vClass {vclass}",
-                        "route the vehicle over driving lanes")
-    return max(lanes)
-
-
 def _check_lane(net: sumolib.net.Net, edge_id: str, index: int, vclass: str, field: str,
                 source: str) -> None:
     lanes = net.getEdge(edge_id).getLanes()
@@ -393,15 +385,18 @@ def _check_lane(net: sumolib.net.Net, edge_id: str, index: int, vclass: str, fie
                         f"vClass {vclass}", f"use lane {', '.join(map(str, allowed)) or '-'}")
 
 
-def _check_automated(net: sumolib.net.Net, vid: str, av: AutomatedVehicle, source: str) -> int:
-    """Check an automated vehicle's route, speed and departure; its departure lane."""
+def _check_automated(net: sumolib.net.Net, roadmap: RoadMap, vid: str, av: AutomatedVehicle,
+                     source: str) -> int:
+    """Check an automated vehicle's route, speed and departure; its departure lane: the first
+    of the lanes its controller plans on (``RoadMap.route_lanes``), one that leads on along
+    the route."""
     field, vclass = f"automated.{vid}", av.vehicle_class
     _check_route(net, av.route_edges, vclass, f"{field}.route_edges", source)
     _check_driving_lanes(net, av.route_edges, f"{field}.route_edges", source)
     _check_speed(net, av.route_edges, vclass, av.nominal_speed_mps,
                  f"{field}.nominal_speed_mps", source)
     _check_pos(net, av.route_edges[0], av.depart_pos_m, f"{field}.depart_pos_m", source)
-    return _vehicle_lane(net, av.route_edges[0], vclass, f"{field}.route_edges", source)
+    return roadmap.route_lanes(av.route_edges)[0].index
 
 
 def _check_driving_lanes(net: sumolib.net.Net, edges: list[str], field: str,

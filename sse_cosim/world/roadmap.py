@@ -24,8 +24,9 @@ import functools
 import os
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from itertools import pairwise
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -58,6 +59,11 @@ walker's positions dilated, and its union with the ground leaves corners that st
 straight edge by nanometres (the town cut's ground falls to about a third of its vertices),
 which every region cut from the ground would keep, at the cost of every overlay and offset of
 the step."""
+
+
+LaneLink = tuple[int, int, str]
+"""A connection between the driving lanes of two consecutive edges: the index of its lane on
+the first, on the second, and the internal lane between them ("" for none)."""
 
 
 @dataclass(frozen=True)
@@ -95,8 +101,9 @@ class RoadMap:
     holds the lanes of normal edges that road vehicles use, ``parking_lanes`` the parking
     strips, ``sidewalk_lanes`` the sidewalks, ``internal_lanes`` the vehicle lanes inside
     junctions (ids start with ':'). ``edge_lengths`` covers the normal edges;
-    ``junction_lanes[(from_edge, to_edge)]`` is the internal driving lane that leads through the
-    junction between two consecutive edges of a vehicle route. A road map built for a
+    ``lane_links[(from_edge, to_edge)]`` lists the connections between the driving lanes of
+    two edges (:data:`LaneLink`: from which lane index to which, and the internal lane between).
+    A road map built for a
     scene (:func:`load_scene_roadmap`) holds the edges near it only
     (:mod:`sse_cosim.world.extent`), and ``net`` the network it was read from.
     ``ground_patches[node]`` is the ground SUMO's lone walkers were measured to need beyond
@@ -113,7 +120,7 @@ class RoadMap:
     sidewalk_lanes: dict[str, LaneGeometry]
     internal_lanes: dict[str, LaneGeometry]
     edge_lengths: dict[str, float]
-    junction_lanes: dict[tuple[str, str], str] = field(default_factory=dict)
+    lane_links: dict[tuple[str, str], tuple[LaneLink, ...]] = field(default_factory=dict)
     # an internal lane -> the internal lane it leads into (a passage split at an internal
     # junction: a left turn waiting inside the junction)
     internal_next: dict[str, str] = field(default_factory=dict)
@@ -181,47 +188,53 @@ class RoadMap:
         return self.lane(lane_id).polygon()
 
     def route_length(self, edge_ids: Sequence[str]) -> float:
-        """Length (m) of a vehicle route: its edges and the junction passages between them."""
-        total = 0.0
-        for i, edge_id in enumerate(edge_ids):
-            self.edge_driving_lane(edge_id)  # refuses an edge no vehicle drives on
-            total += self.edge_lengths[edge_id]
-            if i + 1 < len(edge_ids):
-                total += sum(self._internal(via).length
-                             for via in self.junction_passage(edge_id, edge_ids[i + 1]))
-        return total
+        """Length (m) of a vehicle route: the lanes it drives (:meth:`route_lanes`)."""
+        return sum(lane.length for lane in self.route_lanes(edge_ids))
 
     def route_line(self, edge_ids: Sequence[str]) -> shapely.LineString:
-        """The centre line a vehicle drives along a route: each edge's driving lane and the
-        junction passages between them, from the start of the first edge (its length is
-        ``route_length``)."""
-        points: list[np.ndarray] = []
-        for i, edge_id in enumerate(edge_ids):
-            points.append(self.edge_driving_lane(edge_id).shape)
-            if i + 1 < len(edge_ids):
-                points.extend(self._internal(via).shape
-                              for via in self.junction_passage(edge_id, edge_ids[i + 1]))
-        coords = np.concatenate(points)
+        """The centre line a vehicle drives along a route (:meth:`route_lanes`), from the
+        start of the first edge (its length is ``route_length``)."""
+        coords = np.concatenate([lane.shape for lane in self.route_lanes(edge_ids)])
         keep = np.r_[True, np.any(np.abs(np.diff(coords, axis=0)) > 1e-9, axis=1)]
         return shapely.LineString(coords[keep])
 
-    def junction_passage(self, from_edge: str, to_edge: str) -> list[str]:
-        """The internal driving lanes a vehicle drives from ``from_edge`` to ``to_edge``, in
-        order: ``junction_lanes``'s, then each one it leads into (none without a passage)."""
-        via = self.junction_lanes.get((from_edge, to_edge))
-        passage = []
-        while via is not None and via not in passage:
-            passage.append(via)
-            via = self.internal_next.get(via)
-        return passage
+    def route_lanes(self, edge_ids: Sequence[str]) -> list[LaneGeometry]:
+        """The lanes a vehicle drives along a route, in order: on each edge the rightmost
+        driving lane from which the rest of the route can be driven lane to lane
+        (:func:`lane_chain`: where SUMO keeps a vehicle on an empty road, keeping right on
+        a lane that leads on), and the junction passages between them."""
+        for edge_id in edge_ids:
+            if not self._edge_lanes.get(edge_id):
+                raise self._missing(edge_id, "normal edge" if edge_id in self.edge_lengths
+                                    else "edge", "a driving lane")
+        chain = lane_chain(edge_ids, lambda e: [g.index for g in self._edge_lanes[e]],
+                           self.lane_links)
+        if chain is None:
+            raise UserError(str(self.net_path), f"route {' '.join(edge_ids)!r}",
+                            "has no lane of one edge that leads on to the next on a driving "
+                            "lane", "list consecutive edges that a bus can drive lane to lane")
+        lanes = []
+        for edge_id, (index, via) in zip(edge_ids, chain, strict=True):
+            lanes.append(next(g for g in self._edge_lanes[edge_id] if g.index == index))
+            lanes.extend(self._internal(lane) for lane in self._passage(via))
+        return lanes
 
-    def edge_driving_lane(self, edge_id: str) -> LaneGeometry:
-        """The driving lane of a normal edge (the innermost one if it has several)."""
-        lanes = [g for g in self.driving_lanes.values() if g.edge_id == edge_id]
-        if not lanes:
-            raise self._missing(edge_id, "normal edge" if edge_id in self.edge_lengths
-                                else "edge", "a driving lane")
-        return max(lanes, key=lambda g: g.index)
+    @functools.cached_property
+    def _edge_lanes(self) -> dict[str, list[LaneGeometry]]:
+        """Each normal edge's driving lanes, rightmost first (made once)."""
+        lanes: dict[str, list[LaneGeometry]] = {}
+        for lane in sorted(self.driving_lanes.values(), key=lambda g: g.index):
+            lanes.setdefault(lane.edge_id, []).append(lane)
+        return lanes
+
+    def _passage(self, via: str) -> list[str]:
+        """The internal driving lanes from ``via`` on, in order: it, then each one it leads
+        into (none for "": a connection without a passage)."""
+        passage: list[str] = []
+        while via and via not in passage:
+            passage.append(via)
+            via = self.internal_next.get(via, "")
+        return passage
 
     def _internal(self, lane_id: str) -> LaneGeometry:
         """The internal driving lane ``lane_id`` (a junction passage of a route)."""
@@ -397,7 +410,7 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
         sidewalk_lanes=sidewalk,
         internal_lanes=internal,
         edge_lengths=edge_lengths,
-        junction_lanes=_junction_lanes(net, extent),
+        lane_links=_lane_links(net, extent),
         internal_next=internal_next,
         walking_areas=walking_area_union,
         net=None if extent is None else net,
@@ -411,19 +424,42 @@ def _crossing(edge: sumolib.net.edge.Edge) -> Crossing:
     return Crossing(edge.getID(), edge.getFromNode().getID(), area)
 
 
-def _junction_lanes(net: sumolib.net.Net,
-                    extent: SceneExtent | None = None) -> dict[tuple[str, str], str]:
-    """For consecutive normal edges (of ``extent``): the internal driving lane between them
-    (the innermost)."""
-    result: dict[tuple[str, str], str] = {}
+def _lane_links(net: sumolib.net.Net, extent: SceneExtent | None = None
+                ) -> dict[tuple[str, str], tuple[LaneLink, ...]]:
+    """For consecutive normal edges (of ``extent``): the connections between their driving
+    lanes, sorted."""
+    result: dict[tuple[str, str], tuple[LaneLink, ...]] = {}
     for edge in net.getEdges(withInternal=False):
         if extent is not None and not extent.holds(edge):
             continue
         for to_edge, conns in edge.getOutgoing().items():
             if to_edge.getFunction():  # walking areas and crossings
                 continue
-            vias = [c for c in conns if c.getViaLaneID() and is_driving_lane(c.getFromLane())]
-            if vias:
-                best = max(vias, key=lambda c: c.getFromLane().getIndex())
-                result[(edge.getID(), to_edge.getID())] = best.getViaLaneID()
+            links = sorted((c.getFromLane().getIndex(), c.getToLane().getIndex(),
+                            c.getViaLaneID() or "") for c in conns
+                           if is_driving_lane(c.getFromLane()) and is_driving_lane(c.getToLane()))
+            if links:
+                result[(edge.getID(), to_edge.getID())] = tuple(links)
     return result
+
+
+def lane_chain(edges: Sequence[str], lanes: Callable[[str], Sequence[int]],
+               links: Mapping[tuple[str, str], Sequence[LaneLink]]
+               ) -> list[tuple[int, str]] | None:
+    """Per edge of a route its lane index and the internal lane into the next edge ("" for
+    the last edge, or a connection without one): on each edge the rightmost lane (the least
+    index of ``lanes(edge)``) from which the rest of the route can be driven lane to lane
+    over ``links``; None if none can. Pure: no network here."""
+    able = [set(lanes(edges[-1]))]  # the lanes of each edge the rest can be driven from
+    for a, b in reversed(list(pairwise(edges))):
+        able.insert(0, {i for i, j, _ in links.get((a, b), ()) if j in able[0]}
+                    & set(lanes(a)))
+    if not able[0]:
+        return None
+    chain, lane = [], min(able[0])
+    for k, (a, b) in enumerate(pairwise(edges)):
+        _, lane_b, via = min(link for link in links[(a, b)]
+                             if link[0] == lane and link[1] in able[k + 1])
+        chain.append((lane, via))
+        lane = lane_b
+    return [*chain, (lane, "")]

@@ -64,7 +64,7 @@ def test_vehicles_pass_in_every_direction(roadmap: RoadMap) -> None:
     ins = ("WJ", "EJ", "SJ", "NJ")
     outs = ("JW", "JE", "JS", "JN")
     turns = {(a, b) for a in ins for b in outs if a[0] != b[1]}
-    assert set(roadmap.junction_lanes) == turns
+    assert set(roadmap.lane_links) == turns
 
 
 def test_the_background_traffic_is_deterministic() -> None:

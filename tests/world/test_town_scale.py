@@ -50,7 +50,7 @@ def _same(a: RoadMap, b: RoadMap) -> None:
         assert list(left) == list(right)
         assert all((left[k].shape == right[k].shape).all() for k in left)
     assert a.edge_lengths == b.edge_lengths
-    assert a.junction_lanes == b.junction_lanes
+    assert a.lane_links == b.lane_links
 
 
 @pytest.mark.parametrize("name", ["s1_pedestrian", "s3_pedestrian", "s2_no_pedestrian"])
@@ -89,7 +89,7 @@ def test_a_short_scene_leaves_the_far_end_of_the_road_out() -> None:
     assert set(scene.edge_lengths) == {"WC", "CW", "CD", "DC"} < set(whole.edge_lengths)
     assert [c.id for c in scene.crossings] == [":C_c0"]
     assert scene.route_length(["WC"]) == whole.route_length(["WC"])
-    assert (scene.edge_driving_lane("WC").shape == whole.edge_driving_lane("WC").shape).all()
+    assert (scene.route_lanes(["WC"])[0].shape == whole.route_lanes(["WC"])[0].shape).all()
 
 
 @pytest.fixture(scope="module")
