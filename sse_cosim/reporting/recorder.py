@@ -8,9 +8,11 @@ and in a refined region or the unobserved area; each miss is a violation, counte
 pedestrian. With anonymous tracks (``estimator.association = "anonymous"``) no set names a
 pedestrian, so the checks are per pedestrian over all sets: one that some node holds (it has
 detected it, and not handed it over since) lies in some track set of that node; a node hands
-a pedestrian over at a step where it lies in none of the node's tracks but in one the node
-ended then (:class:`~sse_cosim.estimation.occupancy.EndedTrack`), and it must lie in one or
-the other (a pedestrian the node detects now, in one of its tracks). One that an automated
+a pedestrian it does not detect over at a step where it lies in a track the node ended then
+(:class:`~sse_cosim.estimation.occupancy.EndedTrack`), whether or not a kept track holds it
+too (the node's claim is "in a kept track or in an ended one": a kept track that holds its
+position then need not keep holding it), and it must lie in one or the other (a pedestrian
+the node detects now, in one of its tracks). One that an automated
 vehicle holds, or that a sender held at the step of its newest message to that vehicle, lies
 in some fused set and some refined region of that vehicle; every pedestrian, handed over or
 never detected, lies in a refined region or the unobserved area (the ``unaccounted`` check).
@@ -472,11 +474,11 @@ class RunRecorder:
                     truth: np.ndarray) -> None:
         """A pedestrian ``node`` holds lies in one of its track sets (``positions``), or, if
         the node does not detect it now, in one of the tracks it ended now (``ended``): then
-        the node has handed it over."""
+        the node has handed it over, even if a kept track holds it too (module docstring;
+        the unobserved areas take it over, which the ``unaccounted`` check checks)."""
         detected = any(o.node == node and pid in o.detections
                        for o in result.observations.values())
-        if not detected and any(z.contains(truth) for z in ended) \
-                and not any(z.contains(truth) for z in positions):
+        if not detected and any(z.contains(truth) for z in ended):
             self._note_custody(node, pid, result.step, False)
             return
         self._check(t, node, pid, positions, truth)
