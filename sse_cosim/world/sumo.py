@@ -487,20 +487,23 @@ class SumoWorld:
                                  diagnose=not self._motion_declared)
 
     def _with_jitter(self, measured: walker_jitter.NetworkJitter) -> Scenario:
-        """The scenario with the position jitter its network needs: the ``measured`` one where
-        it sets none; one below the measured one is a UserError, unless the study lists
-        ``pedestrian_speed`` (then its own is kept)."""
+        """The scenario with the position jitter its network needs: its own where it sets one
+        at least the ``measured`` one (or the study lists ``pedestrian_speed``), else the
+        measured one up to :data:`MAX_MEASURED_JITTER_M`; a UserError otherwise, whose advice
+        the next run accepts."""
         estimator = self.scenario.estimator
         configured = estimator.position_jitter_m
-        if configured is not None and self._motion_declared:
+        if configured is not None and (self._motion_declared
+                                       or configured >= measured.jitter_m):
             return self.scenario
         if measured.jitter_m > MAX_MEASURED_JITTER_M:
             raise UserError(self.scenario_name, "estimator.position_jitter_m",
                             f"SUMO's walkers need {measured.jitter_m:.3f} m on this network "
                             f"({measured.where()}), more than the {MAX_MEASURED_JITTER_M:g} m "
-                            "a measured jitter may be",
-                            "set estimator.position_jitter_m to at least that, or smooth the "
-                            "walking areas of the network")
+                            "a measured jitter may be without being asked for",
+                            f"set estimator.position_jitter_m = {measured.jitter_m:.3f} (or more; "
+                            "every metre of it costs the bus speed near hidden ground), or "
+                            "smooth the walking areas of the network")
         if configured is None:
             return _with_estimator(self.scenario, position_jitter_m=measured.jitter_m)
         if configured < measured.jitter_m:
