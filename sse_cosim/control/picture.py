@@ -188,7 +188,14 @@ class SceneContext:
         from the rear right, widened to each side by a pedestrian's radius as the sweep is,
         lies outside the ground its sweep covers along the planned lanes (:attr:`planned`):
         the largest distance of its corners and the middles of its sides (0: on the plan).
-        The zones, the arrivals and the along-route position all assume the body there."""
+        The zones, the arrivals and the along-route position all assume the body there.
+        0 while the front is less than a body length along the route: the sweep puts a back
+        that is not yet on the route at its start, where SUMO puts it on the lane before the
+        route's first one where there is one (turned by up to 2 degrees on the whole town),
+        so the body is checked once it lies on the route's lanes."""
+        front = 0.5 * (corners[1] + corners[2])
+        if self.route_line.project(shapely.Point(front)) < self.bus.length_m:
+            return 0.0
         right, left = corners[0] - corners[3], corners[3] - corners[0]
         width = math.hypot(float(left[0]), float(left[1]))
         grow = 0.5 * (self.sweep_width_m - width) / width

@@ -132,3 +132,26 @@ def test_the_whole_town_maps_the_scene_and_plans_the_walk_in_seconds(
     assert roadmap.route_length(ROUTE) > 190.0
     err = capsys.readouterr().err
     assert "reading network town.net.xml" in err and "edges near the scene" in err
+
+
+@pytest.mark.sumo
+def test_a_bus_on_a_straight_lane_of_the_whole_town_drives_through(town: Path,
+                                                                   tmp_path: Path) -> None:
+    """Issue "live on real streets": on the straight 100.8 m lane 157537322#0_1 at (6,700,
+    8,800) the bus braked as an emergency at t = 0 and stood 25 of 30 s with nobody in the
+    scene (one rounding step there is more than the sweep's straightness test allowed: the
+    88.8 m piece counted as turning, uncut, and three zones stretched along it), and the
+    controller's own liveness figure read 0. It keeps its nominal speed now, and the truth's
+    figure would have seen it."""
+    from sse_cosim.runner.run import run_scenario_file
+
+    overrides = {"network.net_file": str(town), "parked.truck.present": False,
+                 "automated.bus.route_edges": ["157537322#0", "157537322#1"],
+                 "automated.bus.depart_pos_m": 0.0, "automated.bus.nominal_speed_mps": 8.33,
+                 "simulation.duration_s": 30.0}
+    summary = run_scenario_file(REPO / "scenarios" / "s1_no_pedestrian.toml", tmp_path,
+                                overrides, plots=False)
+    bus = summary["vehicles"]["bus"]
+    assert bus["route_completed"] and bus["time_stopped_s"] == 0.0
+    assert bus["level_share"]["nominal"] == 1.0
+    assert bus["longest_needless_hold_s"] == 0.0
