@@ -26,7 +26,8 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
 
     A crash or exception at any moment leaves either the old ``target`` or the new one,
     never a half-written file. The temporary name starts with ``.`` and ends in ``.part``
-    (plus the target's suffix, so that writers that look at suffixes still work).
+    (plus the target's suffix, so that writers that look at suffixes still work). The file
+    gets the mode a plain ``open`` gives (0666 less the umask), not the temporary file's 0600.
     """
     target = Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
@@ -39,10 +40,18 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
         yield tmp
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
+        tmp.chmod(0o666 & ~_umask())
         os.replace(tmp, target)
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def _umask() -> int:
+    """The process's umask (read by setting it and setting it back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def write_text_atomic(target: str | os.PathLike[str], text: str) -> Path:
