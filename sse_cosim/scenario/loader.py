@@ -10,6 +10,7 @@ alternatives: a file (or a ``--set`` override) that sets one drops the other inh
 from __future__ import annotations
 
 import copy
+import difflib
 import tomllib
 import types
 import typing
@@ -22,6 +23,7 @@ from pydantic import ValidationError
 
 from sse_cosim.errors import UserError
 from sse_cosim.scenario.base import TAG_MARK
+from sse_cosim.scenario.fields import field_docs
 from sse_cosim.scenario.model import Scenario
 
 EXTENDS_KEY = "extends"
@@ -224,10 +226,11 @@ _FIXES = {
 
 
 def _user_error(exc: ValidationError, source: str) -> UserError:
-    """The first validation problem as a one-line error naming file, field and fix."""
-    err = exc.errors(include_url=False)[0]
-    # a tagged union (sensor kinds) puts its tag, e.g. "kind=range", in the path: drop it
-    field = ".".join(str(part) for part in err["loc"] if TAG_MARK not in str(part))
+    """The first validation problem as a one-line error naming file, field and fix (a
+    misspelt field's nearest name; the fields of any further problems)."""
+    errors = exc.errors(include_url=False)
+    err = errors[0]
+    field = _dotted(err)
     message = str(err["msg"]).removeprefix("Value error, ")
     head, _, rest = message.partition(": ")
     if err["type"] == "value_error" and rest and " " not in head:
@@ -235,8 +238,32 @@ def _user_error(exc: ValidationError, source: str) -> UserError:
         # when the root validates, relative to the model otherwise).
         field, message = (f"{field}.{head}" if field else head), rest
     fix = _FIXES.get(err["type"], "")
+    if err["type"] == "extra_forbidden":
+        fix = f"{_nearest(field)}{fix}"
     if "input" in err and err["type"] not in ("missing", "extra_forbidden", "value_error"):
         message += f" (got {err['input']!r})"
-    if len(exc.errors()) > 1:
-        fix = f"{fix}; {len(exc.errors()) - 1} more problem(s) after this one".lstrip("; ")
+    if len(errors) > 1:
+        others = ", ".join(dict.fromkeys(_dotted(e) or "(the file)" for e in errors[1:]))
+        fix = f"{fix}; {len(errors) - 1} more problem(s) after this one: {others}".lstrip("; ")
     return UserError(source, field, message, fix)
+
+
+def _dotted(err: Mapping[str, Any]) -> str:
+    """A validation problem's field, dotted (a tagged union, the sensor kinds, puts its tag,
+    e.g. "kind=range", in the path: dropped)."""
+    return ".".join(str(part) for part in err["loc"] if TAG_MARK not in str(part))
+
+
+def _nearest(field: str) -> str:
+    """"did you mean <field>? " for the schema's field nearest in spelling to an unknown
+    ``field`` among those beside it (tables keyed by name match any name), else ""."""
+    parts = field.split(".")
+    beside = set()
+    for doc in field_docs():
+        known = doc.path.rstrip(".").split(".")
+        if len(known) >= len(parts) and all(
+                k == p or k.startswith("<") for k, p in zip(known, parts[:-1], strict=False)):
+            beside.add(known[len(parts) - 1])
+    close = difflib.get_close_matches(parts[-1], sorted(b for b in beside
+                                                        if not b.startswith("<")), n=1)
+    return f"did you mean {'.'.join([*parts[:-1], close[0]])}? " if close else ""

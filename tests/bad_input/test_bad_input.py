@@ -55,7 +55,12 @@ CASES = [
     # --- the scenario file: syntax and schema ---
     Case("syntax", 'name = "x"\n[bus\n', ("syntax",)),
     Case("unknown key", extend("[automated.bus]\nnominal_speed = 3\n"),
-         ("automated.bus.nominal_speed", "remove")),
+         ("automated.bus.nominal_speed", "did you mean automated.bus.nominal_speed_mps?",
+          "remove")),
+    Case("misspelt keys in a named table and a table",
+         extend("[sensors.bus_front]\nrangee_m = 50\n[simulaton]\nseed = 2\n"),
+         ("sensors.bus_front.rangee_m", "did you mean sensors.bus_front.range_m?",
+          "1 more problem(s) after this one: simulaton")),
     Case("wrong type", extend('[automated.bus]\nnominal_speed_mps = "fast"\n'),
          ("automated.bus.nominal_speed_mps", "number")),
     Case("negative noise bound", extend("[sensors.bus_front]\nnoise_bound_m = [-0.5, 0.5]\n"),
