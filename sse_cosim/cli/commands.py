@@ -89,9 +89,11 @@ def _echo_summary(summary: dict, out_dir: Path) -> None:
     from sse_cosim.reporting.recorder import walk_ins
 
     standing = walk_ins(summary)
+    least = summary["min_distance_bus_pedestrian_m"]
     click.echo(
         f"{summary['scenario']}: average speed {summary['average_speed_mps']:.2f} m/s, "
-        f"containment violations {summary['containment_violations']}, "
+        + ("no pedestrian in the scene" if least is None else f"least distance {least:.2f} m")
+        + f", containment violations {summary['containment_violations']}, "
         f"collisions {summary['collisions']}"
         + (f" ({standing} with the bus standing)" if standing else "") + f" -> {out_dir}"
     )
