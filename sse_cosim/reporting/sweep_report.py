@@ -152,11 +152,18 @@ def sweep_table(sweep: SweepFolder) -> pd.DataFrame:
 def summary_table(table: pd.DataFrame, columns: Sequence[str]) -> pd.DataFrame:
     """Runs of each scenario x parameter combination combined: counts and key figures."""
     keys = ["scenario", *columns]
-    figures = {f: (f, how) for f, how in SUMMARY_COLUMNS.items() if f in table}
+    figures = {f: (f, _total if how == "sum" else how)
+               for f, how in SUMMARY_COLUMNS.items() if f in table}
     grouped = table.groupby(keys, sort=False, dropna=False)
     return grouped.agg(
         runs=("key", "size"), failed=("status", lambda s: int((s != "ok").sum())), **figures
     ).reset_index()
+
+
+def _total(values: pd.Series) -> float:
+    """The sum of the finished runs' counts; NaN where none finished (a failed run counted
+    nothing, which is not 0 collisions)."""
+    return values.sum(min_count=1)
 
 
 def write_sweep_report(folder: Path) -> list[Path]:
