@@ -81,6 +81,7 @@ from sse_cosim.regions.polygon import OFFSET_MARGIN
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
 from sse_cosim.sets import Zonotope
 from sse_cosim.world.roadmap import RoadMap
+from sse_cosim.world.signals import STOP_FOR, Signal, SignalState
 
 ZONE_PIECE_M = 4.0  # conflict zones are cut into pieces about this long along the route (m)
 _CUT_OVERLAP_M = 0.5  # consecutive pieces overlap by twice this along the route (m)
@@ -133,6 +134,15 @@ class RouteCrossing:
 
 
 @dataclass(frozen=True)
+class StopLine:
+    """A signalised stop line on the route: how far along it (m; the end of the lane before a
+    junction) and the traffic light link that lets the route on there."""
+
+    at_m: float
+    signal: Signal
+
+
+@dataclass(frozen=True)
 class SceneContext:
     """What does not change during a run: the route, walkable ground, the conflict zones."""
 
@@ -148,6 +158,7 @@ class SceneContext:
     kind: RegionKind
     sweep_width_m: float  # the body's sweep: its width and a pedestrian's radius each side
     planned: shapely.Geometry  # the ground that sweep covers along the planned lanes (prepared)
+    stop_lines: tuple[StopLine, ...] = ()  # the route's signalised stop lines, nearest first
     _relevant: dict[tuple[int, float], Region] = field(default_factory=dict, repr=False)
 
     @classmethod
@@ -181,7 +192,8 @@ class SceneContext:
             for piece, region, start, end in swept)
         return cls(route_line, ground, crossings, bus, config, pedestrians,
                    BusDynamics.of(bus, config, step_length), window, zones, kind,
-                   bus.width_m + 2.0 * pedestrian_radius, planned)
+                   bus.width_m + 2.0 * pedestrian_radius, planned,
+                   _stop_lines(roadmap, route_edges, route_line))
 
     def off_plan_m(self, corners: np.ndarray) -> float:
         """How far (m) the body with its footprint ``corners`` (4, 2), counter-clockwise
@@ -204,6 +216,11 @@ class SceneContext:
         if shapely.contains_xy(self.planned, points[:, 0], points[:, 1]).all():
             return 0.0
         return float(shapely.distance(self.planned, shapely.points(points)).max())
+
+    def next_stop_line(self, front_s: float) -> StopLine | None:
+        """The nearest signalised stop line the front (at ``front_s``) has not passed; None
+        if none is left."""
+        return next((line for line in self.stop_lines if line.at_m >= front_s), None)
 
     def crossing_at(self, front_s: float) -> RouteCrossing | None:
         """The nearest crossing on the route that the bus (front at ``front_s``) has not
@@ -303,6 +320,10 @@ class Picture:
     pedestrian_in_stopping_distance: bool
     zones: tuple[ZoneOutlook, ...] = ()  # conflict zones not yet cleared, nearest first
     path_clear: bool = True  # from standstill the bus would clear every zone before anyone
+    # the nearest signalised stop line ahead: its link, and how far ahead (m) it is while its
+    # light tells traffic to stop (STOP_FOR; None while it lets the bus on, or without one)
+    light: Signal | None = None
+    stop_line_m: float | None = None
 
 
 def assess(
@@ -315,6 +336,7 @@ def assess(
     in_view: Iterable[Source] = (),
     in_view_beyond: bool = False,
     floors: Mapping[int, float] | None = None,
+    signals: Mapping[str, SignalState] | None = None,
 ) -> Picture:
     """The picture at one step.
 
@@ -325,7 +347,9 @@ def assess(
     ``pedestrian_regions`` where each known pedestrian may be, unless outside the window, with
     its state set; ``in_view`` those among them of the pedestrians some node detects now;
     ``in_view_beyond``: whether one of those may be outside the window instead; ``floors``:
-    zone index -> an earliest arrival known from earlier steps (:func:`arrival_floors`).
+    zone index -> an earliest arrival known from earlier steps (:func:`arrival_floors`);
+    ``signals``: the scene's traffic lights by id, as they show now (the bus's own stop
+    lines read them).
     """
     cfg = context.config
     front_s = context.route_line.project(shapely.Point(front_xy))
@@ -345,6 +369,7 @@ def assess(
         if sets else context.kind.empty()
     stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0) \
         if sets else context.kind.empty()
+    line = context.next_stop_line(front_s)
     zones = _outlook(context, front_s, [unobserved, *known],
                      [s for s in in_view if not s.region.is_empty], in_view_beyond, floors or {})
     return Picture(
@@ -360,7 +385,16 @@ def assess(
         pedestrian_in_stopping_distance=any(s.intersects(stopping) for s in sets),
         zones=zones,
         path_clear=all(z.arrival_s > z.clear_s for z in zones),
+        light=None if line is None else line.signal,
+        stop_line_m=None if line is None or _shows(signals or {}, line.signal) not in STOP_FOR
+        else float(line.at_m - front_s),
     )
+
+
+def _shows(signals: Mapping[str, SignalState], signal: Signal) -> str:
+    """What ``signal``'s light shows on its link now ("" for a light not in ``signals``)."""
+    light, link = signal
+    return signals[light].shows(link) if light in signals else ""
 
 
 def arrival_floors(previous: Picture, elapsed_s: float) -> dict[int, float]:
@@ -586,6 +620,17 @@ def _cut_along(part: shapely.Geometry, route_line: shapely.LineString,
     if shapely.difference(part, shapely.union_all(cuts)).area > _CUT_COVER_M2:
         return [(part, first, last)]
     return [(cut, *_extent(cut, route_line)) for cut in cuts]
+
+
+def _stop_lines(roadmap: RoadMap, route_edges: Sequence[str],
+                route_line: shapely.LineString) -> tuple[StopLine, ...]:
+    """The signalised stop lines of a route: the end of each lane of it whose connection
+    into the next edge a traffic light controls (RoadMap.link_signals), along ``route_line``."""
+    lanes = [lane for lane in roadmap.route_lanes(route_edges) if not lane.id.startswith(":")]
+    lines = [StopLine(float(route_line.project(shapely.Point(a.shape[-1]))),
+                      roadmap.link_signals[(a.id, b.id)])
+             for a, b in pairwise(lanes) if (a.id, b.id) in roadmap.link_signals]
+    return tuple(sorted(lines, key=lambda line: line.at_m))
 
 
 def route_lanes(roadmap: RoadMap, route_edges: Sequence[str]) -> list[tuple[np.ndarray, float]]:

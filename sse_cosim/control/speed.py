@@ -185,6 +185,12 @@ class SafePolicy:
     The candidates are the levels, fastest first, then creep speeds below very slow in steps
     of one step's acceleration (``accel * dt``), then a stop.
 
+    A traffic light of the route that tells traffic to stop (red, yellow or red-yellow) binds
+    every command while the bus can still stop before its stop line: the command's
+    comfortable stop must end before the line (:meth:`_stops_for_light`), so the controller
+    never commands more than it can stop for at its own red, and a stop ordered now always
+    does. Where the bus no longer can (yellow too close), it drives on, as SUMO's vehicles do.
+
     A pass commits the bus: while it has not cleared the zone, any command at least as fast
     as the one the pass was proven with stays admissible, since the pedestrians that could
     reach the zone in time were all inside the sets when it was proven -- as long as the bus
@@ -253,6 +259,8 @@ class SafePolicy:
         for _ in range(steps):
             position, speed = dyn.advance(position, speed, command)
         start = _StopStart(position, speed, steps * dyn.step)
+        if not self._stops_for_light(picture, start):
+            return None
         plans, passing = [], True
         for zone in picture.zones:
             plan = self._stop_or_stand(zone, command, start, picture.speed_mps, picture.zones)
@@ -267,6 +275,19 @@ class SafePolicy:
             passing = passing and plan.kind == "pass"
             plans.append(plan)
         return plans
+
+    def _stops_for_light(self, picture: Picture, start: _StopStart) -> bool:
+        """Whether a comfortable stop ordered at ``start`` ends before the route's stop line
+        ahead while its light tells traffic to stop (``picture.stop_line_m``) -- wherever the
+        bus can still stop before it from where it is now; a bus that no longer can (the
+        light turned yellow too close) drives on, as SUMO's vehicles do."""
+        line = picture.stop_line_m
+        if line is None:
+            return True
+        dyn = self.dynamics
+        if dyn.stopping_distance(picture.speed_mps) > line + KEPT_TOLERANCE:
+            return True
+        return start.position + dyn.stopping_distance(start.speed) <= line + KEPT_TOLERANCE
 
     def _stop_or_stand(self, zone: ZoneOutlook, command: float, start: _StopStart,
                        speed_now: float, zones: Sequence[ZoneOutlook]) -> Plan | None:

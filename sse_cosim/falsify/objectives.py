@@ -21,6 +21,7 @@ from typing import Any, ClassVar, Protocol
 
 from sse_cosim.reporting import margins as run_margins
 from sse_cosim.reporting.recorder import collisions, first_collision_t, walk_ins
+from sse_cosim.world.checks import CHECKS
 
 STANDSTILL_TARGET_S = 3.0
 """The safety campaign's liveness target: the bus stands at most this long on a clear path."""
@@ -268,9 +269,10 @@ OBJECTIVES: dict[str, Objective] = {o.name: o for o in (LeastDistance(), Emergen
 
 
 def first_break_t(summary: Mapping[str, Any]) -> float | None:
-    """When the simulated world first broke an assumption the run counted (s): a walker off
-    the model (``assumption_breaks``) or off the walkable ground (``ground_breaks``)."""
-    times = [entry["t"] for key in ("assumption_breaks", "ground_breaks")
+    """When the simulated world first broke an assumption the run counted (s): the first break
+    under any checked assumption's summary key (a walker off the model, ``assumption_breaks``;
+    off the walkable ground, ``ground_breaks``; ... :mod:`sse_cosim.world.checks`)."""
+    times = [entry["t"] for key in (check.summary_key for check in CHECKS.values())
              for entry in (summary.get(key) or {}).get("first", [])[:1]]
     return min(times, default=None)
 

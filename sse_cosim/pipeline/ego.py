@@ -135,6 +135,7 @@ class Ego:
             [source for key, source in sources.items() if key in estimate.in_view],
             in_view_beyond=not self.known.beyond.isdisjoint(estimate.in_view),
             floors=self.arrivals.floors(step, estimate.flags.inconsistent),
+            signals=snapshot.signals,
         )
         self.arrivals.keep(step, picture, estimate.flags.inconsistent)
         decision = self.policy.decide(

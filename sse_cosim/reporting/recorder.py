@@ -50,6 +50,7 @@ from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors.faults import FaultLog
 from sse_cosim.sets import Zonotope
 from sse_cosim.sets.zonotope import generator_volume
+from sse_cosim.world.signals import STOP_FOR
 
 if TYPE_CHECKING:  # only the type: a report that reads folders loads no estimation
     from sse_cosim.pipeline.ego import EgoStep
@@ -64,6 +65,17 @@ HOLDING = frozenset(level.label for level in (SpeedLevel.CREEP, SpeedLevel.STOP,
 """The levels that hold a vehicle back: told to crawl, stand or brake."""
 UNACCOUNTED = "unaccounted"  # a pedestrian in no refined region and not in the unobserved area
 CONTAINMENT_TOL_M = 1e-7  # slack of a set's containment check (m)
+
+
+def _told_to_stop(ego: EgoStep, result: StepResult) -> bool:
+    """Whether the vehicle's next signalised stop line (the route's geometry:
+    ``picture.light``) shows red, yellow or red-yellow in the world's snapshot: a vehicle held
+    there is held by the law, not needlessly."""
+    if ego.picture.light is None:
+        return False
+    light, link = ego.picture.light
+    state = result.snapshot.signals.get(light)
+    return state is not None and state.shows(link) in STOP_FOR
 
 
 HalfSpace = tuple[float, float, float]  # (d_x, d_y, b): the points x with |d·(x − c)| <= b
@@ -358,7 +370,7 @@ class RunRecorder:
             self.pedestrian_rows.append({"t": t, "vehicle": vehicle, **check.row()})
         row["accounted_for"] = _all(c.accounted_for for c in checks.values())
         row["path_clear"] = ego.picture.path_clear
-        row["truly_clear"] = self._truly_clear(ego, points)
+        row["truly_clear"] = self._truly_clear(ego, points) and not _told_to_stop(ego, result)
         row["unresolved_occluded_m2"] = ego.picture.unresolved_occluded_m2
         row["own_occluded_m2"] = ego.picture.own_occluded_m2
         row["distance_to_crossing"] = ego.picture.distance_to_crossing

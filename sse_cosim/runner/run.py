@@ -59,9 +59,7 @@ def run_scenario(
             watch(result)
 
     info = simulate(scenario, out_dir / "sumo", source, on_step, on_start=recorder.start)
-    extra = {key: breaks for key, breaks in (("assumption_breaks", info.motion_breaks),
-                                             ("ground_breaks", info.ground_breaks))
-             if breaks is not None}
+    extra: dict[str, Any] = dict(info.breaks)
     if watchers:
         extra["margins"] = {watch.name: watch.value(recorder) for watch in watchers}
     return write_run(out_dir, info.scenario, recorder, info.roadmap, source, info.arrived,

@@ -27,7 +27,7 @@ the links of further automated vehicles from the next ones. SUMO is touched thro
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -45,23 +45,20 @@ from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sensors import specs_from_scenario
 from sse_cosim.sensors.faults import FaultInjector
 from sse_cosim.world.roadmap import RoadMap
-from sse_cosim.world.sumo import GROUND_ASSUMPTION, MOTION_ASSUMPTION, SumoWorld
+from sse_cosim.world.sumo import SumoWorld
 
 
 @dataclass(frozen=True)
 class SimulationInfo:
     """How a run ended (steps recorded; per automated vehicle whether it reached the end of
-    its route), the road map and the scenario it ran with, and -- for a study that lists
-    ``pedestrian_speed`` in ``breaks_assumptions`` -- the pedestrians' motion breaks it ran on
-    (``SumoWorld.motion_breaks``; None otherwise), and for one that lists ``walkable_ground``
-    the steps pedestrians were off the walkable ground (``SumoWorld.ground_breaks``)."""
+    its route), the road map and the scenario it ran with, and the breaks of the assumptions
+    its study lists in ``breaks_assumptions``, by summary key (``SumoWorld.breaks``)."""
 
     steps: int
     arrived: dict[str, bool]
     roadmap: RoadMap
     scenario: Scenario  # as run: with what the world resolved (the measured jitter)
-    motion_breaks: dict[str, Any] | None = None
-    ground_breaks: dict[str, Any] | None = None
+    breaks: dict[str, Any] = field(default_factory=dict)
 
 
 def simulate(
@@ -80,7 +77,7 @@ def simulate(
     :class:`SimulationInfo` returns. A pedestrian that leaves the estimator's motion model
     stops the run (:class:`~sse_cosim.errors.AssumptionBroken`, raised by ``world.step()``
     before the step's snapshot reaches the estimator) unless the scenario lists
-    ``pedestrian_speed``.
+    ``pedestrian_speed``; so does any other checked assumption (:mod:`sse_cosim.world.checks`).
     """
     timer = timer or NoTimer()
     with SumoWorld(scenario, run_dir, scenario_name) as world:
@@ -108,7 +105,7 @@ def simulate(
             snapshot = world.step()
             if world.all_arrived:  # (world.step() refuses a vehicle missing at its departure)
                 return SimulationInfo(step, _arrivals(world, automated), world.roadmap,
-                                      scenario, *_breaks(world))
+                                      scenario, world.breaks)
             active = [ego for ego in egos if ego.id in snapshot.vehicles]
             timer.lap("sumo")
             observations = sense(snapshot, specs, faults, noise_rng, kind)
@@ -130,14 +127,7 @@ def simulate(
                                results))
             timer.end_step("output")
         return SimulationInfo(n_steps, _arrivals(world, automated), world.roadmap, scenario,
-                              *_breaks(world))
-
-
-def _breaks(world: SumoWorld) -> tuple[dict[str, Any] | None, dict[str, Any] | None]:
-    """The motion and the ground breaks a study ran on (None where it does not list them)."""
-    declared = world.scenario.breaks_assumptions
-    return (world.motion_breaks if MOTION_ASSUMPTION in declared else None,
-            world.ground_breaks if GROUND_ASSUMPTION in declared else None)
+                              world.breaks)
 
 
 def _arrivals(world: SumoWorld, automated: list[str]) -> dict[str, bool]:

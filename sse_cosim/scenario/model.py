@@ -26,8 +26,8 @@ from sse_cosim.sets.reduction import REDUCTION_METHODS
 
 __all__ = ["NonNegativeFloat", "PositiveFloat", "Sensor", "SensorMount", "StrictModel"]
 
-Assumption = Literal["pedestrian_speed", "walkable_ground", "sensor_bounds",
-                     "shared_estimates", "reaction_time"]
+Assumption = Literal["pedestrian_speed", "walkable_ground", "pedestrian_lights",
+                     "sensor_bounds", "shared_estimates", "reaction_time"]
 
 
 class Simulation(StrictModel):
@@ -531,6 +531,10 @@ class Scenario(StrictModel):
         "'walkable_ground': a pedestrian's centre leaves the walkable ground (sidewalks, "
         "walking areas and crossings, each junction's grown by the margin SUMO's lone walkers "
         "were measured to need there; the run counts these steps and goes on); "
+        "'pedestrian_lights': a walker steps onto a signalised crossing while its light "
+        "shows red before the network's signal program could change it, a light runs another "
+        "program than the network's, or a walker on a crossing lies outside its area (the run "
+        "counts these and goes on; the controller's arrivals rely on it); "
         "'sensor_bounds': sensors whose measurements leave "
         "their noise bounds or report what is not there (bias beyond the bound, stuck, phantom); "
         "'shared_estimates': connected nodes send estimates that do not hold their bounds "

@@ -37,6 +37,7 @@ import sumolib
 from sse_cosim.errors import UserError
 from sse_cosim.regions.polygon import PolygonRegion
 from sse_cosim.world.extent import SceneExtent, scene_extent
+from sse_cosim.world.signals import Phase, Program, Signal
 
 if TYPE_CHECKING:
     from sse_cosim.scenario.model import Scenario
@@ -61,6 +62,9 @@ which every region cut from the ground would keep, at the cost of every overlay 
 the step."""
 
 
+IN_ORDER = frozenset({"static", "actuated", "delay_based"})
+"""Signal program types whose phases run in order (unless a phase names its successor)."""
+
 LaneLink = tuple[int, int, str]
 """A connection between the driving lanes of two consecutive edges: the index of its lane on
 the first, on the second, and the internal lane between them ("" for none)."""
@@ -84,12 +88,14 @@ class LaneGeometry:
 
 @dataclass(frozen=True)
 class Crossing:
-    """One pedestrian crossing: its SUMO edge ``id``, the junction ``node`` it lies in and its
-    ``area`` (the crossing lane widened to its width)."""
+    """One pedestrian crossing: its SUMO edge ``id``, the junction ``node`` it lies in, its
+    ``area`` (the crossing lane widened to its width) and the ``signals`` of the links that let
+    walkers onto it (none: no pedestrian light)."""
 
     id: str
     node: str
     area: shapely.Polygon
+    signals: tuple[Signal, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -121,6 +127,8 @@ class RoadMap:
     internal_lanes: dict[str, LaneGeometry]
     edge_lengths: dict[str, float]
     lane_links: dict[tuple[str, str], tuple[LaneLink, ...]] = field(default_factory=dict)
+    link_signals: dict[tuple[str, str], Signal] = field(default_factory=dict)
+    programs: dict[tuple[str, str], Program] = field(default_factory=dict)
     # an internal lane -> the internal lane it leads into (a passage split at an internal
     # junction: a left turn waiting inside the junction)
     internal_next: dict[str, str] = field(default_factory=dict)
@@ -160,6 +168,12 @@ class RoadMap:
     def crossing_area(self) -> shapely.Geometry:
         """The union of every crossing's area (empty without crossings)."""
         return shapely.union_all([c.area for c in self.crossings])
+
+    @functools.cached_property
+    def lights(self) -> tuple[str, ...]:
+        """The traffic lights of its signalised driving links and crossings, sorted."""
+        return tuple(sorted({light for light, _ in self.link_signals.values()}
+                            | {light for c in self.crossings for light, _ in c.signals}))
 
     @functools.cached_property
     def crossing_ids(self) -> frozenset[str]:
@@ -348,7 +362,8 @@ def _read_net(path: Path, progress: _Progress) -> sumolib.net.Net:
         print(f"reading network {path.name} ({progress.size / 1e6:.0f} MB)...",
               file=sys.stderr, flush=True)
     try:
-        net = sumolib.net.readNet(str(path), withInternal=True, withPedestrianConnections=True)
+        net = sumolib.net.readNet(str(path), withInternal=True, withPedestrianConnections=True,
+                                   withPrograms=True)
     except Exception as exc:  # sumolib raises plain exceptions on broken XML
         raise UserError(str(path), "", f"cannot read the network ({exc})",
                         "rebuild it from the sources (delete sumo_net/build/)") from None
@@ -365,16 +380,21 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
     internal: dict[str, LaneGeometry] = {}
     internal_next: dict[str, str] = {}
     edge_lengths: dict[str, float] = {}
-    crossings: list[Crossing] = []
+    crossings: list[sumolib.net.edge.Edge] = []
     walking_areas: list[shapely.Polygon] = []
+    entries: dict[str, list[Signal]] = {}  # crossing -> the signals of the links onto it
     for edge in net.getEdges(withInternal=True):
         if extent is not None and not extent.holds(edge):
             continue
         function = edge.getFunction()
         if function == "crossing":
-            crossings.append(_crossing(edge))
+            crossings.append(edge)
             continue
         if function == "walkingarea":
+            for conn in edge.getLane(0).getOutgoing():
+                if conn.getTLSID() and conn.getToLane().getEdge().getFunction() == "crossing":
+                    entries.setdefault(conn.getToLane().getEdge().getID(), []).append(
+                        (conn.getTLSID(), int(conn.getTLLinkIndex())))
             ring = np.asarray(edge.getLane(0).getShape(), dtype=float)[:, :2]
             if len(ring) >= 3:
                 poly = shapely.make_valid(shapely.Polygon(ring))
@@ -403,7 +423,8 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
                  f"{'in all' if extent is None else 'near the scene'}")
     return RoadMap(
         net_path=path,
-        crossings=tuple(sorted(crossings, key=lambda c: c.id)),
+        crossings=tuple(sorted((_crossing(edge, entries.get(edge.getID(), ()))
+                                for edge in crossings), key=lambda c: c.id)),
         sidewalks=sidewalk_union,
         driving_lanes=driving,
         parking_lanes=parking,
@@ -411,17 +432,53 @@ def _build(path: Path, net: sumolib.net.Net, extent: SceneExtent | None,
         internal_lanes=internal,
         edge_lengths=edge_lengths,
         lane_links=_lane_links(net, extent),
+        link_signals=_link_signals(net, extent),
+        programs=_programs(net),
         internal_next=internal_next,
         walking_areas=walking_area_union,
         net=None if extent is None else net,
     )
 
 
-def _crossing(edge: sumolib.net.edge.Edge) -> Crossing:
-    """A crossing edge as a :class:`Crossing`."""
+def _crossing(edge: sumolib.net.edge.Edge, signals: Sequence[Signal]) -> Crossing:
+    """A crossing edge as a :class:`Crossing`, with the ``signals`` of the links onto it."""
     lane = edge.getLane(0)
     area = lane_area(np.asarray(lane.getShape(), dtype=float)[:, :2], float(lane.getWidth()))
-    return Crossing(edge.getID(), edge.getFromNode().getID(), area)
+    return Crossing(edge.getID(), edge.getFromNode().getID(), area, tuple(sorted(signals)))
+
+
+def _link_signals(net: sumolib.net.Net, extent: SceneExtent | None = None
+                  ) -> dict[tuple[str, str], Signal]:
+    """The traffic light link of each signalised connection between the driving lanes of
+    two normal edges (of ``extent``), by (from lane, to lane)."""
+    result: dict[tuple[str, str], Signal] = {}
+    for edge in net.getEdges(withInternal=False):
+        if extent is not None and not extent.holds(edge):
+            continue
+        for lane in edge.getLanes():
+            for conn in lane.getOutgoing():
+                if conn.getTLSID() and is_driving_lane(lane):
+                    result[(lane.getID(), conn.getToLane().getID())] = (
+                        conn.getTLSID(), int(conn.getTLLinkIndex()))
+    return result
+
+
+def _programs(net: sumolib.net.Net) -> dict[tuple[str, str], Program]:
+    """Every signal program the network defines, by (traffic light, program id): each
+    phase's state and shortest duration (``minDur`` where the program is actuated); the
+    phases of a static, actuated or delay-based program that names no successor phase run in
+    order (:class:`~sse_cosim.world.signals.Program`)."""
+    result: dict[tuple[str, str], Program] = {}
+    for light in net.getTrafficLights():
+        for program_id, program in light.getPrograms().items():
+            phases = program.getPhases()
+            actuated = program.getType() != "static"
+            result[(light.getID(), program_id)] = Program(
+                program_id,
+                tuple(Phase(p.state, float(p.minDur if actuated and p.minDur >= 0
+                                           else p.duration)) for p in phases),
+                in_order=program.getType() in IN_ORDER and not any(p.next for p in phases))
+    return result
 
 
 def _lane_links(net: sumolib.net.Net, extent: SceneExtent | None = None

@@ -12,6 +12,7 @@ import numpy as np
 import shapely
 
 from sse_cosim.sets import portable
+from sse_cosim.world.signals import SignalState
 
 
 @dataclass(frozen=True)
@@ -104,8 +105,10 @@ class PersonState:
 
 @dataclass(frozen=True)
 class Snapshot:
-    """The world at time ``time`` (s): every vehicle and person by id."""
+    """The world at time ``time`` (s): every vehicle and person by id, and every traffic light
+    of the scene (those of the road map's signalised links and crossings) by id."""
 
     time: float
     vehicles: dict[str, VehicleState] = field(default_factory=dict)
     persons: dict[str, PersonState] = field(default_factory=dict)
+    signals: dict[str, SignalState] = field(default_factory=dict)

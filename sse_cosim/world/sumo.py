@@ -89,9 +89,16 @@ crossings, and the patches where SUMO's lone walkers were measured to leave them
 its own jitter and breaks ``pedestrian_speed``), the junctions' ground grown by
 ``estimator.junction_ground_margin_m``. The world fills the road map's patches before
 anything reads the road map, and ``step()`` checks every pedestrian's
-true centre against that ground: one off it stops the run with :class:`AssumptionBroken`
-(``walkable_ground``, exit status 5), unless the study lists ``walkable_ground`` in
-``breaks_assumptions``; then it counts the steps (:attr:`SumoWorld.ground_breaks`) and runs on.
+true centre against that ground.
+
+Checked assumptions. After each step the world runs every check of
+:mod:`sse_cosim.world.checks` on the snapshot (the motion model, the walkable ground, the
+pedestrian lights): a break stops the run with :class:`~sse_cosim.errors.AssumptionBroken`
+(exit status 5, one line), unless the study lists that assumption in ``breaks_assumptions``;
+then it is counted (:attr:`SumoWorld.breaks`) and the run goes on.
+
+Traffic lights. Each snapshot carries the scene's traffic lights (the road map's
+:attr:`~sse_cosim.world.roadmap.RoadMap.lights`): program, phase, state and time in the phase.
 
 Determinism. Every vehicle and person type has ``speedDev=0`` and ``sigma=0`` (the route
 files' too, or they are refused), pedestrians do not dawdle (``pedestrian.striping.dawdling
@@ -114,22 +121,22 @@ from typing import Any
 
 import shapely
 
-from sse_cosim.errors import AssumptionBroken, SimulationError, UserError
+from sse_cosim.errors import SimulationError, UserError
 from sse_cosim.estimation.motion import acceleration_bound
 from sse_cosim.scenario.model import AutomatedVehicle, Scenario, present
-from sse_cosim.world import demand, walker_jitter
-from sse_cosim.world.acceleration_assumption import AccelerationBounds, AccelerationCheck
-from sse_cosim.world.assumptions import MotionBounds, MotionBreak, PedestrianMotionCheck
+from sse_cosim.world import checks, demand, walker_jitter
+from sse_cosim.world.checks import CheckSetup, StepFacts
+from sse_cosim.world.checks.motion import MotionCheck
 from sse_cosim.world.demand import ActorPlan, PedestrianPlan
 from sse_cosim.world.extent import MAX_MEASURED_JITTER_M, SceneExtent, scene_extent
 from sse_cosim.world.network import NetworkBuildError, scenario_net_path
 from sse_cosim.world.roadmap import (
-    WALKABLE_TOL_M,
     RoadMap,
     load_scene_roadmap,
     require_pedestrian_ground,
 )
 from sse_cosim.world.route_files import RouteFiles, read_route_files
+from sse_cosim.world.signals import SignalState
 from sse_cosim.world.snapshot import Footprint, PersonState, Pose, Snapshot, VehicleState
 from sse_cosim.world.sumo_setup import (
     CONFIG_FILE_NAME as CONFIG_FILE_NAME,  # re-exported: where a run's configuration is
@@ -156,9 +163,6 @@ _AUTOMATED_VARS = (*_VEHICLE_VARS, libsumo.VAR_DISTANCE)
 _PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libsumo.VAR_ROAD_ID,
                 libsumo.VAR_LANE_ID)
 
-MOTION_ASSUMPTION = "pedestrian_speed"  # what breaks_assumptions lists for a motion break
-GROUND_ASSUMPTION = "walkable_ground"  # ... for a pedestrian off the walkable ground
-KEPT_BREAKS = 5  # the first breaks a study that lists an assumption keeps (all counted)
 TURN_MARGIN_M = 0.05  # how far from its lane's ends a turned walker's centre and front stay
 
 _open_world: SumoWorld | None = None
@@ -259,18 +263,12 @@ class SumoWorld:
         self._collisions: list[Collision] = []
         self._statics: dict[str, tuple[float, float, str]] = {}
         self._person_length: dict[str, float] = {}
-        self._motion_declared = MOTION_ASSUMPTION in scenario.breaks_assumptions
+        self._motion_declared = MotionCheck.name in scenario.breaks_assumptions
         self._accel = acceleration_bound(scenario.estimator, self._dt)
         self._ramp = None if self._accel is None else SpeedRamp(self._accel, self._dt)
         self._walking_speeds: dict[str, float] = {}  # each person's own speed (ramped walkers)
         self._person_speeds: dict[str, float] = {}  # each person's speed at the latest snapshot
-        # once the jitter is known
-        self._motion: PedestrianMotionCheck | AccelerationCheck | None = None
-        self._motion_breaks: list[tuple[MotionBreak, str, str]] = []
-        self._motion_break_count = 0
-        self._ground_declared = GROUND_ASSUMPTION in scenario.breaks_assumptions
-        self._ground_breaks: list[dict[str, Any]] = []
-        self._ground_break_count = 0
+        self._ledger = checks.Ledger((), (), scenario_name)  # every check, once resolved
         self._person_lanes: dict[str, str] = {}  # each person's lane at the latest snapshot
         self._previous_lanes: dict[str, str] = {}
         self._stepped_on: dict[str, float] = {}  # pedestrian -> when it stepped onto its crossing
@@ -281,6 +279,7 @@ class SumoWorld:
         self._turned: dict[str, _Turned] = {}  # placed by the world every step
         self._centres: dict[str, tuple[float, float]] = {}  # at the latest snapshot
         self._previous_centres: dict[str, tuple[float, float]] = {}
+        self._lights: tuple[str, ...] = ()  # the scene's traffic lights (the road map's)
 
     # --- context manager ------------------------------------------------------------------
 
@@ -317,7 +316,9 @@ class SumoWorld:
         self._roadmap = self._roadmap.with_ground_patches(
             measured.ground_patches, self.scenario.estimator.junction_ground_margin_m)
         shapely.prepare(self._roadmap.walkable)
-        self._motion = self._motion_check()
+        self._lights = self._roadmap.lights
+        self._ledger = checks.ledger(CheckSetup(self.scenario, self._roadmap, self._accel),
+                                     self.scenario_name)
         config = self._write_files()
         try:
             libsumo.start(["sumo", "-c", str(config)])
@@ -353,8 +354,8 @@ class SumoWorld:
 
         Raises :class:`UserError` when a vehicle is not on the road at its departure (SUMO
         found no room to insert it where the scenario places it), and
-        :class:`AssumptionBroken` when a pedestrian's position leaves the estimator's motion
-        model (:meth:`_check_motion`) and the scenario does not list ``pedestrian_speed`` in
+        :class:`AssumptionBroken` when the world breaks an assumption of the estimator or the
+        controller (:mod:`sse_cosim.world.checks`) that the scenario does not list in
         ``breaks_assumptions``.
         """
         self._require_open()
@@ -369,9 +370,14 @@ class SumoWorld:
                                   f"{message(exc)}") from exc
         self._check_insertions()
         self._check_steps_onto_crossings(snapshot)
-        self._check_motion(snapshot)
-        self._check_ground(snapshot)
+        self._ledger.step(snapshot, StepFacts(self._previous_lanes, self._person_lanes))
         return snapshot
+
+    @property
+    def breaks(self) -> dict[str, dict[str, Any]]:
+        """The breaks of the assumptions the study lists in ``breaks_assumptions``, by their
+        summary key (:attr:`~sse_cosim.world.checks.Ledger.summary`)."""
+        return self._ledger.summary
 
     def _set_walking_speeds(self) -> None:
         """Each walker's speed for the next step: its own, or a pausing pedestrian's
@@ -472,20 +478,6 @@ class SumoWorld:
                                self.scenario.estimator.max_pedestrian_speed_mps, self._dt,
                                self.scenario.pedestrian_radius_m(), self._accel)
 
-    def _motion_check(self) -> PedestrianMotionCheck | AccelerationCheck:
-        """The check of the estimator's motion model (its jitter resolved): a speed-bounded
-        path within the jitter (:mod:`sse_cosim.world.assumptions`), or for a model that bounds
-        the acceleration one path that keeps both bounds within it
-        (:mod:`sse_cosim.world.acceleration_assumption`; it keeps the speed bound too)."""
-        estimator = self.scenario.estimator
-        assert estimator.position_jitter_m is not None
-        speed, jitter = estimator.max_pedestrian_speed_mps, estimator.position_jitter_m
-        if self._accel is None:
-            return PedestrianMotionCheck(MotionBounds(speed, jitter, self._dt),
-                                         needed_jitter=not self._motion_declared)
-        return AccelerationCheck(AccelerationBounds(speed, self._accel, jitter, self._dt),
-                                 diagnose=not self._motion_declared)
-
     def _with_jitter(self, measured: walker_jitter.NetworkJitter) -> Scenario:
         """The scenario with the position jitter its network needs: its own where it sets one
         at least the ``measured`` one (or the study lists ``pedestrian_speed``), else the
@@ -514,114 +506,9 @@ class SumoWorld:
                 f"({measured.where()})",
                 f"leave estimator.position_jitter_m out to take the measured "
                 f"{measured.jitter_m:.3f} m or set at least that (or list "
-                f"'{MOTION_ASSUMPTION}' in breaks_assumptions in a study that breaks it on "
+                f"'{MotionCheck.name}' in breaks_assumptions in a study that breaks it on "
                 "purpose)")
         return self.scenario
-
-    def _check_motion(self, snapshot: Snapshot) -> None:
-        """Every pedestrian's true position keeps the estimator's motion model: a path with
-        steps of at most max_pedestrian_speed_mps * step length plus a jitter of at most
-        position_jitter_m (:mod:`sse_cosim.world.assumptions`), and for a model that bounds
-        the acceleration one path that also changes its mean velocity by at most
-        max_pedestrian_accel_mps2 * step length per step
-        (:mod:`sse_cosim.world.acceleration_assumption`). A break stops the run, naming the
-        pedestrian, the time, its lanes before and after, what it broke and the fix -- unless
-        the study lists ``pedestrian_speed``: then it is counted (:attr:`motion_breaks`) and
-        the run goes on."""
-        assert self._motion is not None
-        found = self._motion.step(snapshot.time, {pid: person.position
-                                                  for pid, person in snapshot.persons.items()})
-        for brk in found:
-            before = self._previous_lanes.get(brk.person, "")
-            after = self._person_lanes.get(brk.person, "")
-            if self._motion_declared:
-                self._motion_break_count += 1
-                if len(self._motion_breaks) < KEPT_BREAKS:
-                    self._motion_breaks.append((brk, before, after))
-                continue
-            estimator = self.scenario.estimator
-            raise AssumptionBroken(
-                self.scenario_name, MOTION_ASSUMPTION,
-                f"pedestrian {brk.person!r} at t={brk.time:.2f} s moved {brk.step_m:.3f} m in "
-                f"one step{self._velocity_change(brk)} (lane {_lane(before)} -> "
-                f"{_lane(after)}), to {brk.distance_m:.3f} m from every path point the model "
-                f"admits, {brk.beyond_m:.3f} m beyond estimator.position_jitter_m = "
-                f"{estimator.position_jitter_m:g} m ({self._path_bounds(brk)}); the run stops "
-                "before the estimator's sets are checked against a truth outside its model",
-                f"raise estimator.position_jitter_m to at least {brk.needed_jitter_m:.3f} m "
-                "(what its walk so far needs), "
-                f"or list '{MOTION_ASSUMPTION}' in breaks_assumptions")
-
-    def _velocity_change(self, brk: MotionBreak) -> str:
-        """How much the walk's mean velocity changed in the break's step, for its message
-        (the acceleration's check measures it)."""
-        if brk.velocity_change_mps is None:
-            return ""
-        return f", its mean velocity changing by {brk.velocity_change_mps:.2f} m/s"
-
-    def _path_bounds(self, brk: MotionBreak) -> str:
-        """The model's path bounds for a break's message, and which the walk broke."""
-        speed = self.scenario.estimator.max_pedestrian_speed_mps
-        if self._accel is None:
-            return f"path steps of at most {speed:g} m/s x {self._dt:g} s"
-        return (f"no path keeps both the speed bound {speed:g} m/s and the acceleration bound "
-                f"{self._accel:g} m/s² in steps of {self._dt:g} s within it: its walk breaks "
-                f"{brk.broke}")
-
-    def _check_ground(self, snapshot: Snapshot) -> None:
-        """Every pedestrian's true centre lies on the walkable ground (the road map's
-        :attr:`~sse_cosim.world.roadmap.RoadMap.walkable`, measured patches included), to
-        :data:`~sse_cosim.world.roadmap.WALKABLE_TOL_M`. One off
-        it stops the run, naming the pedestrian, the time, its lane, how far off it is and the
-        fix -- unless the study lists ``walkable_ground``: then it is counted
-        (:attr:`ground_breaks`) and the run goes on."""
-        walkable = self.roadmap.walkable
-        for pid, person in snapshot.persons.items():
-            x, y = person.position
-            if shapely.intersects_xy(walkable, x, y):
-                continue
-            off_m = float(shapely.distance(walkable, shapely.Point(x, y)))
-            if off_m <= WALKABLE_TOL_M:
-                continue  # on its edge, to the rounding of SUMO's positions
-            lane = self._person_lanes.get(pid, "")
-            if self._ground_declared:
-                self._ground_break_count += 1
-                if len(self._ground_breaks) < KEPT_BREAKS:
-                    self._ground_breaks.append({"pedestrian": pid, "t": snapshot.time,
-                                                "off_m": round(off_m, 3), "lane": lane})
-                continue
-            raise AssumptionBroken(
-                self.scenario_name, GROUND_ASSUMPTION,
-                f"pedestrian {pid!r} at t={snapshot.time:.2f} s (lane {_lane(lane)}) is "
-                f"{off_m:.3f} m off the walkable ground (sidewalks, walking areas and "
-                "crossings, and the patches where SUMO's lone walkers were measured to leave "
-                "them); the run stops before the estimator's sets are "
-                "checked against a truth outside its model",
-                "keep the pedestrian's walk (or the route file's person) on sidewalks, walking "
-                "areas and crossings -- SUMO's walkers were measured there alone, not in a "
-                "crowd or turning back -- or, for walkers that push each other off a walking "
-                f"area, set estimator.junction_ground_margin_m (now "
-                f"{self.roadmap.junction_margin_m:g} m) to at least how far off it was, or list "
-                f"'{GROUND_ASSUMPTION}' in breaks_assumptions in a study that breaks it on "
-                "purpose")
-
-    @property
-    def ground_breaks(self) -> dict[str, Any]:
-        """The steps a pedestrian was off the walkable ground in a study that lists
-        ``walkable_ground``: ``{"count", "first"}``, the first :data:`KEPT_BREAKS` as
-        ``{"pedestrian", "t", "off_m", "lane"}`` (metres rounded to 1 mm)."""
-        return {"count": self._ground_break_count, "first": list(self._ground_breaks)}
-
-    @property
-    def motion_breaks(self) -> dict[str, Any]:
-        """The motion breaks of a study that lists ``pedestrian_speed``: ``{"count", "first"}``,
-        the first :data:`KEPT_BREAKS` as ``{"pedestrian", "t", "distance_m", "beyond_m",
-        "step_m", "lane_before", "lane_after"}`` (metres rounded to 1 mm)."""
-        return {"count": self._motion_break_count, "first": [
-            {"pedestrian": brk.person, "t": brk.time, "distance_m": round(brk.distance_m, 3),
-             "beyond_m": round(brk.beyond_m, 3), "step_m": round(brk.step_m, 3),
-             "lane_before": before, "lane_after": after}
-            for brk, before, after in self._motion_breaks]}
 
     def set_speed(self, vehicle_id: str, commanded_mps: float, emergency: bool = False) -> None:
         """Command automated vehicle ``vehicle_id``'s speed (m/s); ``emergency`` brakes at its
@@ -874,7 +761,8 @@ class SumoWorld:
                 id=pid, position=self._centres[pid], speed=speed,
                 crossing=road if road in self.roadmap.crossing_ids else None,
                 heading=walking_heading, next_crossing=self._next_crossing(pid, road))
-        return Snapshot(time=self._time, vehicles=vehicles, persons=persons)
+        return Snapshot(time=self._time, vehicles=vehicles, persons=persons,
+                        signals={light: _signal_state(light) for light in self._lights})
 
     def _next_crossing(self, pid: str, road: str) -> str | None:
         """The crossing next on person ``pid``'s walk while it is on a walking area (the
@@ -926,6 +814,8 @@ def _with_estimator(scenario: Scenario, **changes: Any) -> Scenario:
     return scenario.model_copy(update={"estimator": estimator})
 
 
-def _lane(lane_id: str) -> str:
-    """A person's lane id for a message; a person on no lane waits at its start."""
-    return repr(lane_id) if lane_id else "(none: waiting at its start)"
+def _signal_state(light: str) -> SignalState:
+    """Traffic light ``light`` as SUMO runs it now."""
+    lights = libsumo.trafficlight
+    return SignalState(lights.getProgram(light), lights.getPhase(light),
+                       lights.getRedYellowGreenState(light), lights.getSpentDuration(light))

@@ -28,8 +28,8 @@ def test_help_explains_every_command(command, capsys):
 @pytest.mark.parametrize(("path", "values"), [
     ("sensors.<sensor name>.noise", ["uniform", "worst-case"]),
     ("estimator.state_model", ["position", "constant-velocity", "bounded-acceleration"]),
-    ("breaks_assumptions", ["pedestrian_speed", "walkable_ground", "sensor_bounds",
-                            "shared_estimates", "reaction_time"]),
+    ("breaks_assumptions", ["pedestrian_speed", "walkable_ground", "pedestrian_lights",
+                            "sensor_bounds", "shared_estimates", "reaction_time"]),
 ])
 def test_field_table_names_the_accepted_values_of_enumerated_fields(path, values):
     """Read from the field's type: the README never goes stale on, e.g., `worst-case`."""

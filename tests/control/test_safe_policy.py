@@ -9,6 +9,7 @@ the bus is standing or its body is clear of the zone.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 from hypothesis import example, given, settings
@@ -369,3 +370,30 @@ def test_a_creep_toward_a_pedestrian_closing_in_at_the_bound_ends_in_a_comfortab
         s, v = DYN.advance(s, v, decision.command_mps)
     assert SpeedLevel.CREEP in levels and SpeedLevel.EMERGENCY not in levels
     assert v == 0.0
+
+
+# --- the route's own traffic lights ----------------------------------------------------------
+
+
+@given(st.floats(0.0, 14.0), st.floats(0.0, 80.0))
+def test_at_its_red_the_command_can_stop_before_the_stop_line(speed, line):
+    """Wherever the bus can still stop before a red stop line, the command keeps it able to:
+    its comfortable stop, ordered after the command's step, ends before the line; where it
+    can no longer (yellow too close), the light does not bind."""
+    with_light = replace(picture(speed, ()), stop_line_m=line)
+    decision = policy().decide(with_light)
+    if DYN.stopping_distance(speed) > line:
+        assert decision == policy().decide(picture(speed, ()))
+        return
+    command = decision.command_mps
+    steps = 0 if command == 0.0 else 1 if command <= speed else round(1.0 / DT)
+    position, v = 0.0, speed
+    for _ in range(steps):
+        position, v = DYN.advance(position, v, command)
+    assert position + DYN.stopping_distance(v) <= line + 1e-6
+    assert decision.level is not SpeedLevel.EMERGENCY
+
+
+def test_a_green_light_or_none_leaves_the_command_alone():
+    assert policy().decide(replace(picture(10.0, ()), light=("J", 2))).command_mps == \
+        BUS.nominal_speed_mps

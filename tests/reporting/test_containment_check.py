@@ -52,7 +52,7 @@ def scripted_step(step: int, truth: tuple[float, float], estimate: Zonotope,
                                  inputs={PEDESTRIAN: {NODE: estimate}}, flags=flags),
         possible={}, unobserved=K.empty(), window=K.empty(),
         picture=SimpleNamespace(path_clear=True, zones=(), unresolved_occluded_m2=0.0,
-                                own_occluded_m2=0.0, distance_to_crossing=90.0),
+                                own_occluded_m2=0.0, distance_to_crossing=90.0, light=None),
         decision=SimpleNamespace(command_mps=10.0, level=SpeedLevel.NOMINAL))
     track = Track(PEDESTRIAN, estimate, step, detected=True)
     return StepResult(step=step, snapshot=snapshot, observations={},  # type: ignore[arg-type]

@@ -136,7 +136,7 @@ def test_a_break_stops_the_run_in_one_line_or_is_counted(tmp_path, paper) -> Non
     with SumoWorld(declared, tmp_path / "counted", "counted") as world:
         for _ in range(110):
             world.step()
-        breaks = world.motion_breaks
+        breaks = world.breaks["assumption_breaks"]
     assert breaks["count"] >= 1 and breaks["first"][0]["pedestrian"] == "pedestrian"
     assert breaks["first"][0]["beyond_m"] > 0.0
 
