@@ -80,12 +80,14 @@ from sse_cosim.regions import Region, RegionKind
 from sse_cosim.regions.polygon import OFFSET_MARGIN
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
 from sse_cosim.sets import Zonotope
+from sse_cosim.world.checks.lights import AREA_TOL_M
 from sse_cosim.world.roadmap import RoadMap
-from sse_cosim.world.signals import STOP_FOR, Signal, SignalState
+from sse_cosim.world.signals import STOP_FOR, CrossingLights, Signal, SignalState
 
 ZONE_PIECE_M = 4.0  # conflict zones are cut into pieces about this long along the route (m)
 _CUT_OVERLAP_M = 0.5  # consecutive pieces overlap by twice this along the route (m)
 _CUT_COVER_M2 = 1e-9  # what the cut pieces may leave of a zone uncovered, by rounding (m²)
+LIT_AREA_M2 = 1e-9  # a zone's ground off the red crossings' own ground by less lies on it (m²)
 ARRIVAL_DIRECTIONS = 32  # fan of directions along which a known pedestrian's gap is measured
 FAN = unit_fan(ARRIVAL_DIRECTIONS)  # (K, 2) unit directions
 
@@ -95,11 +97,14 @@ class Source:
     """Where a pedestrian may be (``region``: its simulated position), for a known one its
     fused state set (``state``; None: unknown, the model's worst case), and where its path
     may be (``path``: the region the motion assumption bounds, which ``region`` is grown from
-    by the jitter; None: not known apart from ``region``)."""
+    by the jitter; None: not known apart from ``region``); ``off_s``: per signalised crossing
+    of ``SceneContext.lit``, how long from now its pedestrian surely stays off that crossing
+    (:class:`LightClaims`; 0 or none: nothing known)."""
 
     region: Region
     state: Zonotope | None = None
     path: Region | None = None
+    off_s: tuple[float, ...] = ()  # per SceneContext.lit: how long it surely stays off (s)
 
 
 @dataclass(frozen=True)
@@ -115,12 +120,30 @@ class ConflictZone:
     beyond_arrival_s: float
     ground: shapely.Geometry | None = None  # the piece of walkable ground ``polygon`` holds
     sweep: tuple[SweepPiece, ...] = ()  # the pieces of the body's sweep that meet it
+    lit: tuple[int, ...] = ()  # the signalised crossings (SceneContext.lit) it lies on
 
     @cached_property
     def least_along(self) -> np.ndarray:
         """min over the zone of n.q for each direction n of :data:`FAN`, shape (K,) (computed
         once)."""
         return -self.polygon.support(-FAN)
+
+
+@dataclass(frozen=True)
+class LitCrossing:
+    """A signalised crossing whose own ground the route's zones meet: its ``id``, its
+    ``lights``, its ``own`` ground (RoadMap.own_grounds: where a walker's centre is only while
+    it is on that crossing) and its area grown by the lights check's tolerance, as regions:
+    ``near`` (outer: holds every walker on the crossing) and ``within`` (inner: a walker
+    outside it is off the crossing). ``beyond_off``: the ground beyond the tracked window
+    lies off the crossing."""
+
+    id: str
+    lights: CrossingLights
+    own: shapely.Geometry
+    near: Region
+    within: Region
+    beyond_off: bool
 
 
 @dataclass(frozen=True)
@@ -159,6 +182,7 @@ class SceneContext:
     sweep_width_m: float  # the body's sweep: its width and a pedestrian's radius each side
     planned: shapely.Geometry  # the ground that sweep covers along the planned lanes (prepared)
     stop_lines: tuple[StopLine, ...] = ()  # the route's signalised stop lines, nearest first
+    lit: tuple[LitCrossing, ...] = ()  # the signalised crossings the zones meet
     _relevant: dict[tuple[int, float], Region] = field(default_factory=dict, repr=False)
 
     @classmethod
@@ -186,14 +210,16 @@ class SceneContext:
         window = _window(crossings, [(region, start, end) for _, region, start, end in swept],
                          config.interest_radius_m, kind)
         beyond = Source(ground.difference(window))
+        lit = _lit_crossings(roadmap, [piece for piece, *_ in swept], beyond.region, kind)
         zones = tuple(
             ConflictZone(region, start, end, _arrival(beyond, region, pedestrians, kind), piece,
-                         _meeting(sweep, piece))
+                         _meeting(sweep, piece),
+                         tuple(k for k, c in enumerate(lit) if _meets(piece, c.own)))
             for piece, region, start, end in swept)
         return cls(route_line, ground, crossings, bus, config, pedestrians,
                    BusDynamics.of(bus, config, step_length), window, zones, kind,
                    bus.width_m + 2.0 * pedestrian_radius, planned,
-                   _stop_lines(roadmap, route_edges, route_line))
+                   _stop_lines(roadmap, route_edges, route_line), lit)
 
     def off_plan_m(self, corners: np.ndarray) -> float:
         """How far (m) the body with its footprint ``corners`` (4, 2), counter-clockwise
@@ -216,6 +242,11 @@ class SceneContext:
         if shapely.contains_xy(self.planned, points[:, 0], points[:, 1]).all():
             return 0.0
         return float(shapely.distance(self.planned, shapely.points(points)).max())
+
+    def releases(self, signals: Mapping[str, SignalState]) -> list[float]:
+        """Per crossing of :attr:`lit`, the least time (s) until its light can let its walkers
+        on (0: it does now), from the lights as ``signals`` show them."""
+        return [crossing.lights.release_s(signals) for crossing in self.lit]
 
     def next_stop_line(self, front_s: float) -> StopLine | None:
         """The nearest signalised stop line the front (at ``front_s``) has not passed; None
@@ -290,7 +321,9 @@ class ZoneOutlook:
     can be in it, infinite if none can; ``index``: the zone's place in
     ``SceneContext.zones``; ``clear_s``: the time the bus needs from standstill to clear it
     (:meth:`SceneContext.standstill_clear_time`); ``ground``: its walkable ground as far as
-    the body can still touch it (:func:`_ahead_of_body`; a check's, the recorder's).
+    the body can still touch it (:func:`_ahead_of_body`; a check's, the recorder's);
+    ``lit``: the signalised crossings whose own ground it meets, each its id, that own ground
+    and its lights (the route's geometry and the network's programs, for the checks).
     """
 
     index: int
@@ -300,6 +333,7 @@ class ZoneOutlook:
     in_view_arrival_s: float = math.inf
     clear_s: float = 0.0
     ground: shapely.Geometry | None = None
+    lit: tuple[tuple[str, shapely.Geometry, CrossingLights], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -370,8 +404,10 @@ def assess(
     stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0) \
         if sets else context.kind.empty()
     line = context.next_stop_line(front_s)
+    releases = context.releases(signals or {})
     zones = _outlook(context, front_s, [unobserved, *known],
-                     [s for s in in_view if not s.region.is_empty], in_view_beyond, floors or {})
+                     [s for s in in_view if not s.region.is_empty], in_view_beyond, floors or {},
+                     releases)
     return Picture(
         front_s=float(front_s),
         speed_mps=float(speed),
@@ -434,14 +470,50 @@ class ArrivalMemory:
         self._last = None if inconsistent else (step, picture)
 
 
+class LightClaims:
+    """Which known pedestrians a red light keeps off its crossing, and until when: labelled
+    detections only (a key is one pedestrian all run long).
+
+    At a step where a signalised crossing's light holds its walkers (the release ``R > 0``,
+    :meth:`SceneContext.releases`) and a pedestrian's region misses the crossing's area
+    (``LitCrossing.near``), that pedestrian is off the crossing, so it stays off until now +
+    R (the ``pedestrian_lights`` assumption). The claim holds while it lasts, whatever the
+    region does later: a walker waiting at the kerb, its region reaching onto the crossing by
+    its noise, is known to wait. A step whose picture is inconsistent (a flagged source may
+    have misled the regions) drops every claim and makes none, as :class:`ArrivalMemory`
+    does."""
+
+    def __init__(self, context: SceneContext) -> None:
+        self.context = context
+        self._until: dict[tuple[str, int], float] = {}  # (key, crossing) -> off until (s)
+
+    def update(self, now_s: float, regions: Mapping[str, Region], releases: Sequence[float],
+               inconsistent: bool) -> dict[str, tuple[float, ...]]:
+        """Each key's ``off_s`` (see :class:`Source`) at ``now_s``, its claims renewed from
+        ``regions`` (key -> the pedestrian's region) and ``releases`` (per crossing)."""
+        if inconsistent:
+            self._until = {}
+            return {}
+        lit = self.context.lit
+        for key, region in regions.items():
+            for i, (crossing, release) in enumerate(zip(lit, releases, strict=True)):
+                if release > 0.0 and not region.intersects(crossing.near):
+                    self._until[(key, i)] = max(self._until.get((key, i), 0.0), now_s + release)
+        self._until = {claim: until for claim, until in self._until.items() if until > now_s}
+        return {key: tuple(self._until.get((key, i), now_s) - now_s for i in range(len(lit)))
+                for key in regions}
+
+
 def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
              in_view: Sequence[Source], in_view_beyond: bool,
-             floors: Mapping[int, float]) -> tuple[ZoneOutlook, ...]:
+             floors: Mapping[int, float], releases: Sequence[float]) -> tuple[ZoneOutlook, ...]:
     """The zones the bus has not yet cleared, as far as its body can still touch them
     (:func:`_ahead_of_body`), with the earliest arrival from ``sources`` (and from beyond the
     window; never before its ``floors``) and from the pedestrians in view alone: their regions
     ``in_view``, and beyond the window if ``in_view_beyond`` (every source to every such zone
-    in one distance call)."""
+    in one distance call). A zone on the own ground of a signalised crossing whose light
+    holds its walkers (``releases``: per ``context.lit`` the least time until it can let them
+    on, 0 if it does now) gets the later arrival its lights allow (:func:`_lit_arrival`)."""
     ahead = [(index, zone, zone.end_m + context.bus.length_m - front_s)
              for index, zone in enumerate(context.zones)]
     ahead = [(index, _ahead_of_body(context, zone, front_s), to_clear)
@@ -449,16 +521,84 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
     ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead
              if not zone.polygon.is_empty]
     zones = [zone for _, zone, _ in ahead]
-    arrivals = _arrivals(sources, zones, context.pedestrians, context.kind)
-    in_view_arrivals = _arrivals(in_view, zones, context.pedestrians, context.kind)
+    beyond = np.array([zone.beyond_arrival_s for zone in zones])
+    arrivals = np.minimum(beyond, _arrivals(sources, zones, context.pedestrians, context.kind))
+    in_view_arrivals = np.minimum(beyond if in_view_beyond else math.inf, _arrivals(
+        in_view, zones, context.pedestrians, context.kind))
+    for k, zone in enumerate(zones):
+        held = [(context.lit[i], releases[i]) for i in zone.lit if releases[i] > 0.0]
+        if held and zone.ground is not None:
+            arrivals[k] = _lit_arrival(context, zone, held, sources, True)
+            in_view_arrivals[k] = _lit_arrival(context, zone, held, in_view, in_view_beyond)
     return tuple(
         ZoneOutlook(index, zone.start_m - front_s, to_clear,
-                    max(min(zone.beyond_arrival_s, float(arrival)), floors.get(index, 0.0)),
-                    min(zone.beyond_arrival_s if in_view_beyond else math.inf,
-                        float(in_view_arrival)),
-                    context.standstill_clear_time(to_clear), zone.ground)
+                    max(float(arrival), floors.get(index, 0.0)), float(in_view_arrival),
+                    context.standstill_clear_time(to_clear), zone.ground,
+                    tuple((c.id, c.own, c.lights) for c in (context.lit[i] for i in zone.lit)))
         for (index, zone, to_clear), arrival, in_view_arrival
         in zip(ahead, arrivals, in_view_arrivals, strict=True))
+
+
+def _lit_arrival(context: SceneContext, zone: ConflictZone,
+                 held: Sequence[tuple[LitCrossing, float]], sources: Sequence[Source],
+                 with_beyond: bool) -> float:
+    """The earliest arrival in ``zone`` from ``sources`` (and from beyond the window if
+    ``with_beyond``) where its lights hold the walkers of some signalised crossings it lies
+    on (``held``: each crossing and how long at least its light holds them, s).
+
+    The zone splits into its ground on each such crossing's own ground and the rest. On the
+    rest, the arrival is the usual one. On a crossing's own ground, a walker's centre is only
+    while it walks on that crossing, and a walker off the crossing now does not step on before
+    the release (the ``pedestrian_lights`` assumption, checked by the world every step); a
+    walker on it has its centre in its area (checked too). So each source splits into its part
+    near the crossing's area (walkers that may be on it: the usual arrival) and its part off
+    the area (walkers off it: no sooner than the release), and its arrival there is the
+    smaller of the two, never less than the usual one (:func:`_held_arrivals`)."""
+    kind, ground = context.kind, zone.ground
+    red = shapely.union_all([crossing.own for crossing, _ in held])
+    rest = shapely.difference(ground, red)
+    beyond = zone.beyond_arrival_s if with_beyond else math.inf
+    best = math.inf
+    if rest.area > LIT_AREA_M2:  # less: the overlay's rounding along the own ground's edge
+        best = min(beyond, float(_arrivals(sources, [_target(rest, kind)], context.pedestrians,
+                                           kind)[0]))
+    for crossing, release in held:
+        piece = shapely.intersection(ground, crossing.own)
+        if piece.area <= 0.0:
+            continue
+        from_beyond = max(release, beyond) if crossing.beyond_off else beyond
+        best = min(best, from_beyond, _held_arrivals(
+            sources, _target(piece, kind), context.lit.index(crossing), crossing, release,
+            context.pedestrians, kind))
+    return best
+
+
+def _held_arrivals(sources: Sequence[Source], target: ConflictZone, index: int,
+                   crossing: LitCrossing, release: float, pedestrians: MotionModel,
+                   kind: RegionKind) -> float:
+    """The earliest arrival at ``target`` (on ``crossing``, ``SceneContext.lit[index]``'s
+    own ground) from ``sources`` while the crossing's light holds its walkers at least
+    ``release`` (s): per source the larger of its usual arrival and the smaller of its part
+    near the crossing's area and (no sooner than the release) its part off it -- or, for a
+    pedestrian known to stay off the crossing a while (``Source.off_s``), no sooner than that
+    and the release."""
+    parts = [s for s in sources if not s.region.is_empty]
+    if not parts:
+        return math.inf
+    usual = _source_matrix(parts, [target], pedestrians, kind)[:, 0]  # (n,)
+    on = _source_matrix([Source(s.region.intersection(crossing.near), s.state) for s in parts],
+                        [target], pedestrians, kind)[:, 0]
+    off = _source_matrix([Source(s.region.difference(crossing.within), s.state)
+                          for s in parts], [target], pedestrians, kind)[:, 0]
+    held = np.array([s.off_s[index] if s.off_s else 0.0 for s in parts])  # (n,)
+    split = np.where(held > 0.0, np.maximum(release, held), np.minimum(on, np.maximum(release,
+                                                                                     off)))
+    return float(np.maximum(usual, split).min())
+
+
+def _target(ground: shapely.Geometry, kind: RegionKind) -> ConflictZone:
+    """A piece of a zone's ground as a zone to arrive at (its region contains the piece)."""
+    return ConflictZone(kind.outer(ground), 0.0, 0.0, math.inf, ground)
 
 
 def _ahead_of_body(context: SceneContext, zone: ConflictZone, front_s: float) -> ConflictZone:
@@ -488,22 +628,29 @@ def _meeting(sweep: Sequence[SweepPiece], piece: shapely.Geometry) -> tuple[Swee
 def _arrivals(sources: Iterable[Source], zones: Sequence[ConflictZone],
               pedestrians: MotionModel, kind: RegionKind) -> np.ndarray:
     """Earliest time (s) a pedestrian somewhere in ``sources`` can be in each of ``zones``,
-    shape (z,) (inf without a source): the soonest over the sources of each one's arrival,
-    the larger of the model's two bounds where it has a path region (from the path region,
-    the jitter counted once, at the zone; from the position region, twice), else the
-    position region's."""
+    shape (z,) (inf without a source): the soonest over the sources of each one's arrival
+    (:func:`_source_matrix`)."""
     parts = [s for s in sources if not s.region.is_empty]
     if not parts or not zones:
         return np.full(len(zones), math.inf)
+    return _source_matrix(parts, zones, pedestrians, kind).min(axis=0)
+
+
+def _source_matrix(sources: Sequence[Source], zones: Sequence[ConflictZone],
+                   pedestrians: MotionModel, kind: RegionKind) -> np.ndarray:
+    """Each source's earliest arrival at each zone, shape (n, z) (inf from an empty region):
+    the larger of the model's two bounds where it has a path region (from the path region,
+    the jitter counted once, at the zone; from the position region, twice), else the
+    position region's."""
     polygons = [zone.polygon for zone in zones]
-    arrivals = _source_arrivals(parts, [s.region for s in parts], polygons, zones,
+    arrivals = _source_arrivals(sources, [s.region for s in sources], polygons, zones,
                                 pedestrians, kind, of_path=False)  # (n, z)
-    pathed = [i for i, s in enumerate(parts) if s.path is not None and not s.path.is_empty]
+    pathed = [i for i, s in enumerate(sources) if s.path is not None and not s.path.is_empty]
     if pathed:
         arrivals[pathed] = np.maximum(arrivals[pathed], _source_arrivals(
-            [parts[i] for i in pathed], [parts[i].path for i in pathed], polygons, zones,
+            [sources[i] for i in pathed], [sources[i].path for i in pathed], polygons, zones,
             pedestrians, kind, of_path=True))
-    return arrivals.min(axis=0)
+    return arrivals
 
 
 def _source_arrivals(sources: Sequence[Source], regions: Sequence[Region],
@@ -620,6 +767,29 @@ def _cut_along(part: shapely.Geometry, route_line: shapely.LineString,
     if shapely.difference(part, shapely.union_all(cuts)).area > _CUT_COVER_M2:
         return [(part, first, last)]
     return [(cut, *_extent(cut, route_line)) for cut in cuts]
+
+
+def _lit_crossings(roadmap: RoadMap, pieces: Sequence[shapely.Geometry], beyond: Region,
+                   kind: RegionKind) -> tuple[LitCrossing, ...]:
+    """The signalised crossings whose own ground (RoadMap.own_grounds) some of the zones'
+    ``pieces`` meet; ``beyond``: the ground beyond the tracked window."""
+    lit = []
+    for crossing in roadmap.crossings:
+        own = roadmap.own_grounds.get(crossing.id)
+        if own is None:
+            continue
+        if not any(_meets(piece, own) for piece in pieces):
+            continue
+        near = kind.outer(crossing.area.buffer(2.0 * AREA_TOL_M, join_style="mitre"))
+        lit.append(LitCrossing(crossing.id, roadmap.crossing_lights(crossing), own, near,
+                               kind.inner(crossing.area.buffer(AREA_TOL_M, join_style="mitre")),
+                               not beyond.intersects(near)))
+    return tuple(lit)
+
+
+def _meets(piece: shapely.Geometry, ground: shapely.Geometry) -> bool:
+    """Whether ``piece`` and ``ground`` share some area."""
+    return shapely.intersection(piece, ground).area > 0.0
 
 
 def _stop_lines(roadmap: RoadMap, route_edges: Sequence[str],

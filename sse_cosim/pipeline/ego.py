@@ -18,7 +18,14 @@ from typing import Protocol
 
 import numpy as np
 
-from sse_cosim.control.picture import ArrivalMemory, Picture, SceneContext, Source, assess
+from sse_cosim.control.picture import (
+    ArrivalMemory,
+    LightClaims,
+    Picture,
+    SceneContext,
+    Source,
+    assess,
+)
 from sse_cosim.control.speed import Decision, fallback_floor, make_policy
 from sse_cosim.errors import AssumptionBroken
 from sse_cosim.estimation.fusion_centre import BusEstimate
@@ -98,6 +105,8 @@ class Ego:
         )
         self.policy = make_policy(self.context)
         self.arrivals = ArrivalMemory(dt)  # the last consistent picture, for the floors
+        # who a red light keeps off its crossing: a key is one pedestrian in labelled runs only
+        self.claims = LightClaims(self.context) if config.association == "labelled" else None
         self.known = known_regions(config.filter, model, kind, self.context.walkable,
                                    self.context.window, history=config.association == "labelled")
         # hidden ground is tracked near the crossings on its route; outside it counts as occupied
@@ -126,8 +135,12 @@ class Ego:
             [*received.ended, *(own.ended_at(step) if own is not None else ())])
         timer.lap("occupancy")
         paths = self.known.paths
+        offs = {} if self.claims is None else self.claims.update(
+            snapshot.time, possible, self.context.releases(snapshot.signals),
+            estimate.flags.inconsistent)
         sources = {key: Source(region, estimate.fused.get(key) if self.known.with_states
-                               else None, paths.get(key)) for key, region in possible.items()}
+                               else None, paths.get(key), offs.get(key, ()))
+                   for key, region in possible.items()}
         unobserved = Source(unknown, path=self.unobserved.path)
         picture = assess(
             self.context, me.footprint.front.position, me.speed,

@@ -370,7 +370,8 @@ class RunRecorder:
             self.pedestrian_rows.append({"t": t, "vehicle": vehicle, **check.row()})
         row["accounted_for"] = _all(c.accounted_for for c in checks.values())
         row["path_clear"] = ego.picture.path_clear
-        row["truly_clear"] = self._truly_clear(ego, points) and not _told_to_stop(ego, result)
+        row["truly_clear"] = self._truly_clear(ego, points, result) and not _told_to_stop(
+            ego, result)
         row["unresolved_occluded_m2"] = ego.picture.unresolved_occluded_m2
         row["own_occluded_m2"] = ego.picture.own_occluded_m2
         row["distance_to_crossing"] = ego.picture.distance_to_crossing
@@ -391,22 +392,40 @@ class RunRecorder:
         self.scenes += [frame] * wanted
         self.key_moments.frames.update(dict.fromkeys(moments, frame))
 
-    def _truly_clear(self, ego: EgoStep, points: _TruePoints) -> bool:
+    def _truly_clear(self, ego: EgoStep, points: _TruePoints, result: StepResult) -> bool:
         """Whether the truth left the vehicle's path clear: from standstill it would have
         cleared every zone ahead (each zone's ``clear_s``) before any pedestrian in the scene
         could be in it. A pedestrian whose true position lies d from the zone's ground is
         there no sooner than (d - 2 eps) / v (A1: its path, within eps of it, moves at most
-        v), whatever anyone knows of it. The controller's picture is not read (its zones
-        are the route's geometry, their clear times the bus's dynamics)."""
+        v), whatever anyone knows of it; on a signalised crossing's own ground, a walker whom
+        the world has off that crossing while its light holds its walkers is there no sooner
+        than the light can change (``pedestrian_lights``, read from the snapshot's lights).
+        The controller's picture is not read (its zones are the route's geometry, their clear
+        times the bus's dynamics)."""
         zones = [z for z in ego.picture.zones if z.ground is not None]
         if not zones or not len(points.array):
             return True
         estimator = self.scenario.estimator
-        grounds = np.array([z.ground for z in zones], dtype=object)[:, None]
-        distance = shapely.distance(grounds, points.array[None, :]).min(axis=1)  # (z,)
-        arrival = np.maximum(0.0, distance - 2.0 * estimator.position_jitter_m) \
-            / estimator.max_pedestrian_speed_mps
-        return bool(all(a > z.clear_s for a, z in zip(arrival, zones, strict=True)))
+        crossings = np.array([result.snapshot.persons[pid].crossing or ""
+                              for pid in points.by_id])  # (k,)
+        for zone in zones:
+            parts = [(zone.ground, "", 0.0)]
+            for cid, own, lights in zone.lit:
+                release = lights.release_s(result.snapshot.signals)
+                if release > 0.0:
+                    parts = [(shapely.difference(parts[0][0], own), "", 0.0), *parts[1:],
+                             (shapely.intersection(zone.ground, own), cid, release)]
+            for ground, cid, release in parts:
+                if ground.is_empty:
+                    continue
+                distance = shapely.distance(ground, points.array)  # (k,)
+                arrival = np.maximum(0.0, distance - 2.0 * estimator.position_jitter_m) \
+                    / estimator.max_pedestrian_speed_mps
+                if cid:
+                    arrival = np.where(crossings != cid, np.maximum(arrival, release), arrival)
+                if arrival.min() <= zone.clear_s:
+                    return False
+        return True
 
     def _check_labelled(self, t: float, ego: EgoStep, truths: dict[str, np.ndarray],
                         held: _HeldRegions, checks: dict[str, _PedestrianCheck]

@@ -37,7 +37,7 @@ import sumolib
 from sse_cosim.errors import UserError
 from sse_cosim.regions.polygon import PolygonRegion
 from sse_cosim.world.extent import SceneExtent, scene_extent
-from sse_cosim.world.signals import Phase, Program, Signal
+from sse_cosim.world.signals import CrossingLights, Phase, Program, Signal
 
 if TYPE_CHECKING:
     from sse_cosim.scenario.model import Scenario
@@ -62,6 +62,9 @@ which every region cut from the ground would keep, at the cost of every overlay 
 the step."""
 
 
+OWN_GROUND_TOL_M = 1e-6
+"""How far (m) beyond the other walkable ground a crossing's own ground begins: SUMO's positions
+beside it round within far less (:attr:`RoadMap.own_grounds`)."""
 IN_ORDER = frozenset({"static", "actuated", "delay_based"})
 """Signal program types whose phases run in order (unless a phase names its successor)."""
 
@@ -135,6 +138,7 @@ class RoadMap:
     ground_patches: dict[str, shapely.Geometry] = field(default_factory=dict)
     walking_areas: shapely.Geometry = field(default_factory=shapely.Polygon)
     junction_margin_m: float = 0.0
+    stray_m: float = 0.0  # how far a walker off a signalised crossing may reach into its area
     net: sumolib.net.Net | None = field(default=None, compare=False, repr=False)
 
     @functools.cached_property
@@ -159,10 +163,13 @@ class RoadMap:
         return PolygonRegion(shapely.union_all(parts)).coarsen(WALKABLE_COARSEN_M).shape
 
     def with_ground_patches(self, patches: dict[str, shapely.Geometry],
-                            junction_margin_m: float = 0.0) -> RoadMap:
-        """This road map with ``patches`` (junction -> ground) as its ``ground_patches`` and
-        the junctions' ground grown by ``junction_margin_m`` in :attr:`walkable`."""
-        return replace(self, ground_patches=dict(patches), junction_margin_m=junction_margin_m)
+                            junction_margin_m: float = 0.0, stray_m: float = 0.0) -> RoadMap:
+        """This road map with ``patches`` (junction -> ground) as its ``ground_patches``, the
+        junctions' ground grown by ``junction_margin_m`` in :attr:`walkable`, and ``stray_m``
+        (the position jitter) as how far a walker beside a signalised crossing may reach into
+        its area (:attr:`own_grounds`)."""
+        return replace(self, ground_patches=dict(patches), junction_margin_m=junction_margin_m,
+                       stray_m=stray_m)
 
     @functools.cached_property
     def crossing_area(self) -> shapely.Geometry:
@@ -174,6 +181,32 @@ class RoadMap:
         """The traffic lights of its signalised driving links and crossings, sorted."""
         return tuple(sorted({light for light, _ in self.link_signals.values()}
                             | {light for c in self.crossings for light, _ in c.signals}))
+
+    def crossing_lights(self, crossing: Crossing) -> CrossingLights:
+        """``crossing``'s lights: its signals and their programs (none for a zebra)."""
+        lights = {light for light, _ in crossing.signals}
+        return CrossingLights(crossing.signals, {key: program for key, program
+                                                 in self.programs.items() if key[0] in lights})
+
+    @functools.cached_property
+    def own_grounds(self) -> dict[str, shapely.Geometry]:
+        """Each signalised crossing's own ground, by id: its area less every other walkable
+        ground (sidewalks, walking areas, the other crossings, the measured patches) grown by
+        :attr:`junction_margin_m`, :attr:`stray_m` and :data:`OWN_GROUND_TOL_M` -- where a
+        walker's centre can only be while it walks on that crossing (the ``pedestrian_lights``
+        check holds SUMO to it: SUMO's walkers on a walking area reach into a crossing's area,
+        0.09 m on tests/networks/two_lanes/, within the position jitter)."""
+        grounds = {}
+        for crossing in self.crossings:
+            if not crossing.signals:
+                continue
+            others = shapely.union_all(
+                [self.sidewalks, *(c.area for c in self.crossings if c is not crossing),
+                 *self.ground_patches.values()])
+            grow = self.junction_margin_m + self.stray_m + OWN_GROUND_TOL_M
+            grounds[crossing.id] = shapely.difference(
+                crossing.area, others.buffer(grow, join_style="mitre"))
+        return grounds
 
     @functools.cached_property
     def crossing_ids(self) -> frozenset[str]:

@@ -20,6 +20,7 @@ rest alone.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 Signal = tuple[str, int]
@@ -81,3 +82,26 @@ def earliest_release_s(program: Program, now: SignalState, link: int,
             return wait
         wait += phase.min_s
     return math.inf
+
+
+@dataclass(frozen=True)
+class CrossingLights:
+    """The lights of a signalised crossing: the ``signals`` of the links that let walkers
+    onto it, and the network's ``programs`` of their lights, by (light, program id)."""
+
+    signals: tuple[Signal, ...]
+    programs: Mapping[tuple[str, str], Program]
+
+    def release_s(self, states: Mapping[str, SignalState]) -> float:
+        """A lower bound (s) on how long no walker off the crossing steps onto it: 0 unless
+        every light of its links shows red now (:data:`WALKERS_WAIT`), else the least time
+        any of them can change (:func:`earliest_release_s`; 0 for a light ``states`` lacks
+        or that runs a program the network does not define)."""
+        waits = []
+        for light, link in self.signals:
+            state = states.get(light)
+            program = None if state is None else self.programs.get((light, state.program))
+            if state is None or program is None or state.phase >= len(program.phases):
+                return 0.0
+            waits.append(earliest_release_s(program, state, link, WALKERS_WAIT))
+        return min(waits, default=0.0)

@@ -313,8 +313,10 @@ class SumoWorld:
                                                              accel_mps2=self._accel))
             measured = self._measure()
             self.scenario = self._with_jitter(measured)
+        estimator = self.scenario.estimator
         self._roadmap = self._roadmap.with_ground_patches(
-            measured.ground_patches, self.scenario.estimator.junction_ground_margin_m)
+            measured.ground_patches, estimator.junction_ground_margin_m,
+            estimator.position_jitter_m or 0.0)
         shapely.prepare(self._roadmap.walkable)
         self._lights = self._roadmap.lights
         self._ledger = checks.ledger(CheckSetup(self.scenario, self._roadmap, self._accel),

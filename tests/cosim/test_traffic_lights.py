@@ -72,3 +72,58 @@ def test_the_bus_commands_no_more_than_it_can_stop_for_at_its_red(tmp_path: Path
     assert summary["route_completed"]
     assert summary["longest_needless_hold_s"] == 0.0
     assert summary["level_share"]["emergency"] == 0.0
+
+
+WALKER = """<routes>
+    <vType id="walker" vClass="pedestrian" speed="1.4" speedDev="0" sigma="0"/>
+    <person id="w" type="walker" depart="0.0" departPos="4.0">
+        <walk edges="JW JE" arrivalPos="10.0"/>
+    </person>
+</routes>
+"""
+WAITING = f"""
+name = "waiting_walker"
+description = "A bus passes on its green while a walker waits at the red pedestrian light"
+[simulation]
+duration_s = 40.0
+step_length_s = {DT}
+seed = 1
+[network]
+sources_dir = "{(ROOT / 'tests' / 'networks' / 'two_lanes').as_posix()}"
+route_files = ["walker.rou.xml"]
+[automated.bus]
+route_edges = ["WJ", "JE"]
+depart_pos_m = 20.0
+nominal_speed_mps = 8.0
+[sensors.around]
+node = "bus"
+fov_deg = 360.0
+range_m = 60.0
+noise_bound_m = [0.3, 0.3]
+[rsus.corner]
+x_m = 8.0
+y_m = 10.0
+heading_deg = -135.0
+[sensors.corner_camera]
+node = "corner"
+fov_deg = 120.0
+range_m = 40.0
+noise_bound_m = [0.3, 0.3]
+"""
+
+
+def test_the_bus_passes_on_its_green_while_a_walker_waits_at_red(tmp_path: Path) -> None:
+    """The walker comes along the north sidewalk to J's crossing from t = 0 and waits at its
+    red until t = 80 s; the road-side unit sees it arrive, its region clear of the crossing,
+    so the bus knows it waits (LightClaims) and passes at its nominal speed. Without the
+    pedestrian lights (before this issue) the bus stood 20 s before the crossing, and the
+    truth did not count that wait as needless."""
+    (tmp_path / "walker.rou.xml").write_text(WALKER)
+    path = tmp_path / "waiting_walker.toml"
+    path.write_text(WAITING)
+    summary = run_scenario_file(path, tmp_path / "out", {}, plots=False)
+    trace = pd.read_csv(tmp_path / "out" / "trace.csv")
+    assert trace["commanded_speed"].min() == 8.0
+    assert summary["time_stopped_s"] == 0.0
+    assert summary["route_completed"]
+    assert summary["containment_violations"] == 0 and summary["collisions"] == 0

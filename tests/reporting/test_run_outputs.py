@@ -79,21 +79,32 @@ def test_the_needless_hold_counts_held_steps_in_a_row_while_the_truth_left_the_p
 
 
 def test_the_truth_leaves_the_path_clear_while_nobody_can_reach_a_zone_in_its_clear_time():
-    """(d - 2 eps) / v against the zone's clear time, for every zone and true pedestrian."""
+    """(d - 2 eps) / v against the zone's clear time, for every zone and true pedestrian; on a
+    red crossing's own ground, no sooner than its light can change for a walker off it."""
     from sse_cosim.reporting.recorder import _TruePoints
+    from sse_cosim.world.signals import CrossingLights, Phase, Program, SignalState
 
     recorder = RunRecorder(load_scenario(SCENARIO, {"estimator.position_jitter_m": 0.5}))
-    zone = SimpleNamespace(ground=shapely.box(0.0, 0.0, 4.0, 4.0), clear_s=2.0)
+    zone = SimpleNamespace(ground=shapely.box(0.0, 0.0, 4.0, 4.0), clear_s=2.0, lit=())
     ego = SimpleNamespace(picture=SimpleNamespace(zones=(zone,)))
     v = recorder.scenario.estimator.max_pedestrian_speed_mps
 
-    def clear_with_one_at(distance: float) -> bool:
+    def clear_with_one_at(distance: float, on: str | None = None, light: str = "G") -> bool:
+        step = SimpleNamespace(snapshot=SimpleNamespace(
+            persons={"p": SimpleNamespace(crossing=on)},
+            signals={"L": SignalState("0", 0, light, 0.0)}))
         return recorder._truly_clear(ego, _TruePoints.of({"p": np.array([4.0 + distance,
-                                                                         2.0])}))
+                                                                         2.0])}), step)
 
     assert clear_with_one_at(2.0 * v + 1.0 + 0.01)  # arrives 0.004 s after it clears
     assert not clear_with_one_at(2.0 * v + 1.0 - 0.01)
-    assert recorder._truly_clear(ego, _TruePoints.of({}))  # nobody in the scene
+    assert recorder._truly_clear(ego, _TruePoints.of({}), None)  # nobody in the scene
+    lights = CrossingLights((("L", 0),), {("L", "0"): Program("0", (Phase("r", 10.0),
+                                                                     Phase("G", 5.0)))})
+    zone.lit = (("c", shapely.box(0.0, 0.0, 4.0, 4.0), lights),)
+    assert clear_with_one_at(0.5, on=None, light="r")  # waits 10 s at its red
+    assert not clear_with_one_at(0.5, on="c", light="r")  # on it already
+    assert not clear_with_one_at(0.5, on=None, light="G")
 
 
 def test_collisions_count_entries_into_contact_and_contact_steps_every_step():

@@ -15,7 +15,7 @@ from world_helpers import REPO
 from sse_cosim.errors import AssumptionBroken
 from sse_cosim.scenario.loader import load_scenario_data, validate_scenario
 from sse_cosim.world.checks import CheckSetup, Ledger, StepFacts, ledger
-from sse_cosim.world.checks.lights import LightsCheck, crossing_release_s
+from sse_cosim.world.checks.lights import LightsCheck
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import RoadMap, load_roadmap
 from sse_cosim.world.signals import (
@@ -68,7 +68,8 @@ def test_the_road_map_reads_the_signalised_links_crossings_and_programs(roadmap)
     assert roadmap.link_signals[("WJ_1", "JE_1")] == ("J", 2)
     assert roadmap.programs[("J", "0")] == PROGRAM
     assert roadmap.lights == ("J",)
-    assert crossing_release_s(crossing, roadmap, {"J": state(0, 10.0)}) == pytest.approx(70.0)
+    assert roadmap.crossing_lights(crossing).release_s({"J": state(0, 10.0)}) == \
+        pytest.approx(70.0)
 
 
 def walker(crossing: str | None, x: float = 0.0, y: float = -7.0) -> PersonState:
@@ -98,12 +99,16 @@ def test_a_walker_stepping_onto_its_crossing_at_red_breaks_the_assumption(roadma
 
 
 @pytest.mark.sumo
-def test_a_light_off_its_program_or_a_walker_off_its_crossing_breaks_it(roadmap):
+def test_a_light_off_its_program_or_a_walker_off_its_crossing_or_on_it_unseen_breaks_it(
+        roadmap):
     other = SignalState("0", 0, "GGGGG", 1.0)
     assert "is not a phase of the programs the network defines" in check(
         roadmap, (1.0, other, walker(None)))[0]
     off = check(roadmap, (80.5, state(2, 0.5), walker(":J_c0", x=2.5, y=0.0)))
     assert len(off) == 1 and "0.500 m outside the crossing's area" in off[0]
+    elsewhere = check(roadmap, (80.5, state(2, 0.5), walker(None, x=0.0, y=-3.0)))
+    assert len(elsewhere) == 1 and "is on crossing :J_c0's own ground" in elsewhere[0]
+    assert check(roadmap, (80.5, state(2, 0.5), walker(None, x=0.0, y=-6.5))) == []
 
 
 @pytest.mark.sumo

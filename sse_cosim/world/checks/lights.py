@@ -11,7 +11,10 @@ statements, each checked every step:
    step, while the walker was off it (SUMO's walkers wait for their green);
 3. a walker on a crossing has its centre within the crossing's area (to
    :data:`AREA_TOL_M`): the controller tells walkers on a crossing from walkers off it by
-   their regions meeting that area.
+   their regions meeting that area;
+4. a walker off a signalised crossing has its centre off the crossing's own ground
+   (:attr:`~sse_cosim.world.roadmap.RoadMap.own_grounds`, closed): the controller's rule
+   holds for zones on that ground.
 
 A break names the walker or the light, the time and the fix.
 """
@@ -24,8 +27,8 @@ from typing import ClassVar
 import shapely
 
 from sse_cosim.world.checks.base import Break, CheckSetup, StepFacts, WorldCheck
-from sse_cosim.world.roadmap import Crossing, RoadMap
-from sse_cosim.world.signals import WALKERS_WAIT, SignalState, earliest_release_s
+from sse_cosim.world.checks.motion import lane_name
+from sse_cosim.world.roadmap import RoadMap
 from sse_cosim.world.snapshot import Snapshot
 
 AREA_TOL_M = 1e-6
@@ -33,24 +36,6 @@ AREA_TOL_M = 1e-6
 positions along a lane a few kilometres from the origin is about 1e-12 m)."""
 TIME_TOL_S = 1e-6
 """Slack of the release bound against SUMO's clock (s)."""
-
-
-def crossing_release_s(crossing: Crossing, roadmap: RoadMap,
-                       signals: dict[str, SignalState]) -> float:
-    """A lower bound (s) on how long no walker off ``crossing`` steps onto it: 0 unless every
-    light of its links shows red now (:data:`~sse_cosim.world.signals.WALKERS_WAIT`), else the
-    least time any of them can change (:func:`~sse_cosim.world.signals.earliest_release_s`,
-    the network's program; 0 for a light the snapshot lacks or runs another program)."""
-    if not crossing.signals:
-        return 0.0
-    waits = []
-    for light, link in crossing.signals:
-        state = signals.get(light)
-        program = None if state is None else roadmap.programs.get((light, state.program))
-        if state is None or program is None:
-            return 0.0
-        waits.append(earliest_release_s(program, state, link, WALKERS_WAIT))
-    return min(waits)
 
 
 class LightsCheck(WorldCheck):
@@ -62,6 +47,10 @@ class LightsCheck(WorldCheck):
     def __init__(self, roadmap: RoadMap) -> None:
         self.roadmap = roadmap
         self.signalised = {c.id: c for c in roadmap.crossings if c.signals}
+        self.lights = {cid: roadmap.crossing_lights(c) for cid, c in self.signalised.items()}
+        self.own = dict(roadmap.own_grounds)  # a walker off the crossing stays out of it
+        for ground in self.own.values():
+            shapely.prepare(ground)
         self._released_at: dict[str, float] = {}  # crossing -> when its walkers may step on
         self._on: dict[str, str | None] = {}  # walker -> its crossing at the previous step
 
@@ -70,11 +59,11 @@ class LightsCheck(WorldCheck):
         return cls(setup.roadmap) if setup.roadmap.lights else None
 
     def check(self, snapshot: Snapshot, facts: StepFacts) -> Sequence[Break]:
-        found = [*self._programs(snapshot), *self._steps_on(snapshot), *self._areas(snapshot)]
+        found = [*self._programs(snapshot), *self._steps_on(snapshot), *self._areas(snapshot),
+                 *self._own_grounds(snapshot, facts)]
         self._on = {pid: person.crossing for pid, person in snapshot.persons.items()}
-        self._released_at = {
-            cid: snapshot.time + crossing_release_s(crossing, self.roadmap, snapshot.signals)
-            for cid, crossing in self.signalised.items()}
+        self._released_at = {cid: snapshot.time + lights.release_s(snapshot.signals)
+                             for cid, lights in self.lights.items()}
         return found
 
     def _programs(self, snapshot: Snapshot) -> list[Break]:
@@ -128,4 +117,21 @@ class LightsCheck(WorldCheck):
                     f"crossing's lane), or list '{self.name}' in breaks_assumptions",
                     {"pedestrian": pid, "t": snapshot.time, "crossing": crossing.id,
                      "off_m": round(off_m, 3)}))
+        return found
+
+    def _own_grounds(self, snapshot: Snapshot, facts: StepFacts) -> list[Break]:
+        found = []
+        for pid, person in snapshot.persons.items():
+            x, y = person.position
+            for cid, own in self.own.items():
+                if person.crossing != cid and shapely.intersects_xy(own, x, y):
+                    lane = facts.lanes_now.get(pid, "")
+                    found.append(Break(
+                        f"pedestrian {pid!r} at t={snapshot.time:.2f} s is on crossing "
+                        f"{cid}'s own ground (its area less every other walkable ground) "
+                        f"while SUMO has it on lane {lane_name(lane)}",
+                        "report this network to the project (SUMO placed a walker of a walking "
+                        f"area on a crossing), or list '{self.name}' in breaks_assumptions",
+                        {"pedestrian": pid, "t": snapshot.time, "crossing": cid,
+                         "lane": lane}))
         return found
