@@ -89,7 +89,7 @@ def test_a_walker_stepping_onto_its_crossing_at_red_breaks_the_assumption(roadma
     at_red = check(roadmap, (10.0, state(0, 10.0), walker(None, y=-7.0)),
                    (10.1, state(0, 10.1), walker(":J_c0", y=-6.3)))
     assert len(at_red) == 1 and "stepped onto crossing :J_c0 at t=10.10 s while its light " \
-        "showed red, 69.90 s before it could change" in at_red[0]
+        "showed red" in at_red[0]
     at_green = check(roadmap, (80.5, state(2, 0.5), walker(None, y=-7.0)),
                      (80.6, state(2, 0.6), walker(":J_c0", y=-6.3)))
     assert at_green == []
