@@ -80,7 +80,7 @@ from sse_cosim.regions import Region, RegionKind
 from sse_cosim.regions.polygon import OFFSET_MARGIN
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
 from sse_cosim.sets import Zonotope
-from sse_cosim.world.checks.lights import AREA_TOL_M
+from sse_cosim.world.checks.lights import AREA_TOL_M, on_crossing_reach_m
 from sse_cosim.world.roadmap import RoadMap
 from sse_cosim.world.signals import STOP_FOR, CrossingLights, Signal, SignalState
 
@@ -133,10 +133,10 @@ class ConflictZone:
 class LitCrossing:
     """A signalised crossing whose own ground the route's zones meet: its ``id``, its
     ``lights``, its ``own`` ground (RoadMap.own_grounds: where a walker's centre is only while
-    it is on that crossing) and its area grown by the lights check's tolerance, as regions:
-    ``near`` (outer: holds every walker on the crossing) and ``within`` (inner: a walker
-    outside it is off the crossing). ``beyond_off``: the ground beyond the tracked window
-    lies off the crossing."""
+    it is on that crossing) and its area grown by how far a walker on it may lie outside it
+    (``on_crossing_reach_m``), as regions: ``near`` (outer: holds every walker on the
+    crossing) and ``within`` (inner: a walker outside it is off the crossing).
+    ``beyond_off``: the ground beyond the tracked window lies off the crossing."""
 
     id: str
     lights: CrossingLights
@@ -210,7 +210,8 @@ class SceneContext:
         window = _window(crossings, [(region, start, end) for _, region, start, end in swept],
                          config.interest_radius_m, kind)
         beyond = Source(ground.difference(window))
-        lit = _lit_crossings(roadmap, [piece for piece, *_ in swept], beyond.region, kind)
+        lit = _lit_crossings(roadmap, [piece for piece, *_ in swept], beyond.region,
+                             pedestrian_radius, kind)
         zones = tuple(
             ConflictZone(region, start, end, _arrival(beyond, region, pedestrians, kind), piece,
                          _meeting(sweep, piece),
@@ -770,9 +771,10 @@ def _cut_along(part: shapely.Geometry, route_line: shapely.LineString,
 
 
 def _lit_crossings(roadmap: RoadMap, pieces: Sequence[shapely.Geometry], beyond: Region,
-                   kind: RegionKind) -> tuple[LitCrossing, ...]:
+                   radius_m: float, kind: RegionKind) -> tuple[LitCrossing, ...]:
     """The signalised crossings whose own ground (RoadMap.own_grounds) some of the zones'
-    ``pieces`` meet; ``beyond``: the ground beyond the tracked window."""
+    ``pieces`` meet; ``beyond``: the ground beyond the tracked window; ``radius_m``: the
+    pedestrians' body radius (how far a walker on a crossing may lie outside its area)."""
     lit = []
     for crossing in roadmap.crossings:
         own = roadmap.own_grounds.get(crossing.id)
@@ -780,9 +782,10 @@ def _lit_crossings(roadmap: RoadMap, pieces: Sequence[shapely.Geometry], beyond:
             continue
         if not any(_meets(piece, own) for piece in pieces):
             continue
-        near = kind.outer(crossing.area.buffer(2.0 * AREA_TOL_M, join_style="mitre"))
+        reach = on_crossing_reach_m(radius_m)
+        near = kind.outer(crossing.area.buffer(reach + AREA_TOL_M, join_style="mitre"))
         lit.append(LitCrossing(crossing.id, roadmap.crossing_lights(crossing), own, near,
-                               kind.inner(crossing.area.buffer(AREA_TOL_M, join_style="mitre")),
+                               kind.inner(crossing.area.buffer(reach, join_style="mitre")),
                                not beyond.intersects(near)))
     return tuple(lit)
 

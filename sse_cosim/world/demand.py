@@ -70,6 +70,7 @@ from sse_cosim.world.roadmap import (
     is_driving_lane,
     is_sidewalk,
 )
+from sse_cosim.world.signals import WALKERS_GO
 from sse_cosim.world.walkgraph import WalkGraph
 
 if TYPE_CHECKING:
@@ -163,6 +164,8 @@ def plan_actors(scenario: Scenario, net_path: Path, roadmap: RoadMap, source: st
     walks, times = _timed_walks(scenario, net, net_path, source, timer)
     plans = {pid: _time_pedestrian(net, pid, pedestrians[pid], walk, times[pid], dt, source)
              for pid, walk in walks.items()}
+    for pid, plan in plans.items():
+        _check_light(pid, plan, roadmap, dt, source)
     return ActorPlan(automated_lanes=lanes, pedestrians=plans)
 
 
@@ -532,6 +535,40 @@ def _time_pedestrian(net: sumolib.net.Net, pid: str, ped: Pedestrian, walk: Walk
         walk_to_crossing_s=round(walk_s, 6),
         crossing_time_s=wanted,
     )
+
+
+def _check_light(pid: str, plan: PedestrianPlan, roadmap: RoadMap, dt: float,
+                 source: str) -> None:
+    """A pedestrian whose crossing has a pedestrian light steps onto it while the light lets
+    its walkers go, for the whole step (a static program, whose greens are known in advance:
+    :meth:`~sse_cosim.world.signals.Program.windows`); else a UserError naming the next time
+    it can. The light a snapshot at time t shows is SUMO's at t + dt (:mod:`walk_probe`)."""
+    crossing = next((c for c in roadmap.crossings if c.id == plan.crossing), None)
+    if crossing is None or not crossing.signals:
+        return
+    field = f"pedestrians.{pid}.steps_onto_crossing_s"
+    steps_on = plan.steps_on_s
+    for light, link in crossing.signals:
+        programs = [program for (owner, _), program in roadmap.programs.items()
+                    if owner == light]
+        if len(programs) != 1 or not programs[0].static:
+            raise UserError(source, field, f"the pedestrian light {light!r} of its crossing "
+                            f"{crossing.id} runs no single static program, so its greens "
+                            "cannot be known in advance", "plan the step-out at a crossing "
+                            "without a light or with a static program, or walk the pedestrian "
+                            "from a route file (network.route_files)")
+        program = programs[0]
+        greens = program.windows(link, WALKERS_GO, steps_on, steps_on + 2 * program.cycle_s)
+        if greens and greens[0][0] <= steps_on + _EPS and steps_on + dt <= greens[0][1] + _EPS:
+            continue
+        fits = [math.ceil(max(start, steps_on) / dt - _EPS) * dt for start, end in greens
+                if math.ceil(max(start, steps_on) / dt - _EPS) * dt + dt <= end + _EPS]
+        hint = f", e.g. {fits[0]:g} s, when its walkers' next green has begun" if fits else ""
+        raise UserError(source, field, f"{steps_on:g} s falls while the pedestrian light "
+                        f"{light!r} of its crossing {crossing.id} holds its walkers (SUMO's "
+                        "walker would wait there, off its time)",
+                        f"use a time within a green of that light{hint} (its program: "
+                        f"{program.cycle_s:g} s a cycle, from t = {program.offset_s:g} s)")
 
 
 def _check_crossing_on_route(net: sumolib.net.Net, pid: str, ped: Pedestrian,

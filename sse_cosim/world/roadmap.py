@@ -510,7 +510,8 @@ def _programs(net: sumolib.net.Net) -> dict[tuple[str, str], Program]:
                 program_id,
                 tuple(Phase(p.state, float(p.minDur if actuated and p.minDur >= 0
                                            else p.duration)) for p in phases),
-                in_order=program.getType() in IN_ORDER and not any(p.next for p in phases))
+                in_order=program.getType() in IN_ORDER and not any(p.next for p in phases),
+                static=program.getType() == "static", offset_s=float(program.getOffset()))
     return result
 
 

@@ -29,6 +29,8 @@ Signal = tuple[str, int]
 STOP_FOR = frozenset("ryu")
 """The states at which a vehicle that can still stop before the stop line stops (SUMO)."""
 WALKERS_WAIT = frozenset("r")
+WALKERS_GO = frozenset("Gg")
+"""The states at which a planned walker may step onto its crossing as planned."""
 """The states at which no walker steps onto a crossing (the declared assumption)."""
 
 
@@ -43,11 +45,42 @@ class Phase:
 @dataclass(frozen=True)
 class Program:
     """A traffic light's program as the network defines it; ``in_order``: its phases run
-    one after the other, cyclically (none names a successor)."""
+    one after the other, cyclically (none names a successor); ``static``: each phase lasts
+    its duration (``Phase.min_s``), so the program's state at any time is known in advance;
+    ``offset_s``: at SUMO time t a static program is ``(t - offset_s) mod cycle`` into its
+    cycle (measured against SUMO 1.28)."""
 
     id: str
     phases: tuple[Phase, ...]
     in_order: bool = True
+    static: bool = True
+    offset_s: float = 0.0
+
+    @property
+    def cycle_s(self) -> float:
+        """The cycle's length (s): its phases' durations."""
+        return sum(phase.min_s for phase in self.phases)
+
+    def windows(self, link: int, states: frozenset[str], from_s: float,
+                until_s: float) -> list[tuple[float, float]]:
+        """The SUMO-time intervals ``[start, end)`` between ``from_s`` and ``until_s`` in which
+        a static program shows link ``link`` in one of ``states``, in order."""
+        cycle = self.cycle_s
+        if not self.static or cycle <= 0.0:
+            raise ValueError("only a static program's windows are known in advance")
+        first = math.floor((from_s - self.offset_s) / cycle) * cycle + self.offset_s
+        windows: list[tuple[float, float]] = []
+        start = first
+        while start < until_s:
+            for phase in self.phases:
+                end = start + phase.min_s
+                if phase.state[link] in states and end > from_s and start < until_s:
+                    if windows and abs(windows[-1][1] - start) < 1e-9:
+                        windows[-1] = (windows[-1][0], end)
+                    else:
+                        windows.append((start, end))
+                start = end
+        return windows
 
 
 @dataclass(frozen=True)

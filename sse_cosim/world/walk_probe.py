@@ -101,12 +101,14 @@ class WalkTrace:
 
 
 def walk_alone(net_path: Path, walkers: Sequence[Walker], step_s: float, work_dir: Path,
-               until_s: float | None = None,
-               accel_mps2: float | None = None) -> dict[str, WalkTrace]:
+               until_s: float | None = None, accel_mps2: float | None = None,
+               lights: bool = True) -> dict[str, WalkTrace]:
     """Run the walkers (and nothing else) on the network; every walker's trace by id.
 
     SUMO steps until every walker has arrived, or until the state at time ``until_s`` if
-    given; ``accel_mps2``: the speed ramp's acceleration (module docstring), None for none.
+    given; ``accel_mps2``: the speed ramp's acceleration (module docstring), None for none;
+    ``lights``: the traffic lights run their programs (else every link shows green all
+    session long, and no walker waits at one).
     Raises :class:`SimulationError` (one line) when a SUMO simulation is already open in
     this process, when SUMO cannot route a walker (naming it, see ``work_dir/sumo.log``), and
     when a walker is not on the network at its departure.
@@ -132,6 +134,10 @@ def walk_alone(net_path: Path, walkers: Sequence[Walker], step_s: float, work_di
                               f"(see {work_dir / LOG_FILE_NAME})") from exc
     try:
         _check_positions(walkers)
+        if not lights:  # every link green until the session ends
+            for light in libsumo.trafficlight.getIDList():
+                links = len(libsumo.trafficlight.getRedYellowGreenState(light))
+                libsumo.trafficlight.setRedYellowGreenState(light, "G" * links)
         ramp = None if accel_mps2 is None else SpeedRamp(accel_mps2, step_s)
         return _walk(walkers, step_s, until_s, ramp)
     except LIBSUMO_ERRORS as exc:
@@ -150,8 +156,9 @@ class ProbeTimer:
     is an error), each with the pedestrian's speed and size, and with the run's speed ramp
     if ``accel_mps2`` is given (the motion model's acceleration bound: module docstring).
     A walk's time is the first step its walker is on the crossing's lane less its departure:
-    a whole number of steps. The session's files go into ``work_dir`` (kept), or a temporary
-    folder (removed) if None.
+    a whole number of steps. The traffic lights are off: a walk's time is its walking, and
+    the planner fits it to the lights' programs (:mod:`sse_cosim.world.demand`). The
+    session's files go into ``work_dir`` (kept), or a temporary folder (removed) if None.
 
     A timer keeps the times of every set of walks it has timed: lone walkers draw no random
     numbers, so the same walks in the same order at the same step length walk the same in
@@ -177,18 +184,17 @@ class ProbeTimer:
         """Every walk's time from one SUMO session (class docstring)."""
         walkers: list[Walker] = []
         depart = 0.0
-        cycle = longest_cycle_s(self.net_path)
         for pid, walk in walks.items():
             walkers.append(Walker(pid, walk.path, walk.start_pos_m, walk.end_pos_m,
                                   walk.speed_mps, depart, walk.radius_m))
-            depart = round(depart + slot_s(walk.length_m / walk.speed_mps, step_s, cycle), 6)
+            depart = round(depart + slot_s(walk.length_m / walk.speed_mps, step_s), 6)
         if self.work_dir is not None:
             traces = walk_alone(self.net_path, walkers, step_s, self.work_dir,
-                                accel_mps2=self.accel_mps2)
+                                accel_mps2=self.accel_mps2, lights=False)
         else:
             with tempfile.TemporaryDirectory(prefix="sse-cosim-walk-probe-") as folder:
                 traces = walk_alone(self.net_path, walkers, step_s, Path(folder),
-                                    accel_mps2=self.accel_mps2)
+                                    accel_mps2=self.accel_mps2, lights=False)
         times: dict[str, float] = {}
         for walker, following in zip(walkers, [*walkers[1:], None], strict=True):
             trace = traces[walker.id]

@@ -14,6 +14,7 @@ import pandas as pd
 import pytest
 
 from sse_cosim.control.kinematics import BusDynamics
+from sse_cosim.errors import UserError
 from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
 
@@ -126,4 +127,31 @@ def test_the_bus_passes_on_its_green_while_a_walker_waits_at_red(tmp_path: Path)
     assert trace["commanded_speed"].min() == 8.0
     assert summary["time_stopped_s"] == 0.0
     assert summary["route_completed"]
+    assert summary["containment_violations"] == 0 and summary["collisions"] == 0
+
+
+STEP_OUT = SCENARIO.replace('name = "red_light"', 'name = "step_out"') + """
+[pedestrians.pedestrian]
+start_edge = "JW"
+start_pos_m = 6.0
+end_edge = "JE"
+end_pos_m = 10.0
+walking_speed_mps = 1.4
+steps_onto_crossing_s = {time}
+"""
+
+
+def test_a_step_out_at_a_pedestrian_light_is_planned_against_its_program(tmp_path: Path) -> None:
+    """J's walkers have their green from 80 to 85 s of each 90 s cycle. A step-out at 50 s
+    cannot happen: refused at planning (exit status 2), naming the next green; before, the
+    timing probe counted the wait at the light as walking and the run failed at run time
+    (exit status 3). One at 80.5 s happens as planned (the world checks it within a step)."""
+    path = tmp_path / "step_out.toml"
+    path.write_text(STEP_OUT.format(time=50.0))
+    with pytest.raises(UserError, match=r"pedestrians\.pedestrian\.steps_onto_crossing_s: 50 s "
+                       r"falls while the pedestrian light 'J' of its crossing :J_c0 holds its "
+                       r"walkers .* e\.g\. 80 s, when its walkers' next green has begun"):
+        run_scenario_file(path, tmp_path / "refused", {}, plots=False)
+    path.write_text(STEP_OUT.format(time=80.5))
+    summary = run_scenario_file(path, tmp_path / "out", {}, plots=False)
     assert summary["containment_violations"] == 0 and summary["collisions"] == 0

@@ -19,6 +19,7 @@ from sse_cosim.world.checks.lights import LightsCheck
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import RoadMap, load_roadmap
 from sse_cosim.world.signals import (
+    WALKERS_GO,
     WALKERS_WAIT,
     Phase,
     Program,
@@ -78,7 +79,7 @@ def walker(crossing: str | None, x: float = 0.0, y: float = -7.0) -> PersonState
 
 def check(roadmap: RoadMap, *steps: tuple[float, SignalState, PersonState]) -> list[str]:
     """The problems the lights check finds over ``steps`` (time, J's state, the walker)."""
-    lights = LightsCheck(roadmap)
+    lights = LightsCheck(roadmap, 0.25)
     return [brk.problem for time, light, person in steps
             for brk in lights.check(Snapshot(time, persons={"w": person},
                                              signals={"J": light}), StepFacts())]
@@ -116,7 +117,7 @@ def test_the_ledger_stops_the_run_in_one_line_unless_the_study_declares_it(roadm
     steps = [Snapshot(10.0, persons={"w": walker(None)}, signals={"J": state(0, 10.0)}),
              Snapshot(10.1, persons={"w": walker(":J_c0", y=-6.3)},
                       signals={"J": state(0, 10.1)})]
-    stopping = Ledger([LightsCheck(roadmap)], [], "s.toml")
+    stopping = Ledger([LightsCheck(roadmap, 0.25)], [], "s.toml")
     stopping.step(steps[0], StepFacts())
     with pytest.raises(AssumptionBroken, match=r"^s\.toml: .*\(pedestrian_lights\): pedestrian "
                        r"'w' stepped onto crossing :J_c0 .* list 'pedestrian_lights' in "
@@ -131,3 +132,14 @@ def test_the_ledger_stops_the_run_in_one_line_unless_the_study_declares_it(roadm
         counting.step(snapshot, StepFacts())
     assert counting.summary["light_breaks"]["count"] == 1
     assert counting.summary["light_breaks"]["first"][0]["crossing"] == ":J_c0"
+
+
+def test_a_static_programs_green_windows_follow_its_offset_as_sumo_runs_it():
+    """SUMO 1.28 runs J's program with offset 10 s from rrrrG at t = 0 to 5 s, then rrrrr,
+    then GGGGr from 10 s (measured with libsumo on a copy of the network): at SUMO time t
+    the program is (t - offset) mod cycle into its cycle."""
+    shifted = Program("0", PROGRAM.phases, offset_s=10.0)
+    assert shifted.windows(4, WALKERS_GO, 0.0, 200.0) == [(0.0, 5.0), (90.0, 95.0),
+                                                          (180.0, 185.0)]
+    assert PROGRAM.windows(0, frozenset("G"), 50.0, 200.0) == [(0.0, 77.0), (90.0, 167.0),
+                                                               (180.0, 257.0)]
