@@ -86,6 +86,7 @@ from sse_cosim.world.signals import STOP_FOR, CrossingLights, Signal, SignalStat
 
 ZONE_PIECE_M = 4.0  # conflict zones are cut into pieces about this long along the route (m)
 _CUT_OVERLAP_M = 0.5  # consecutive pieces overlap by twice this along the route (m)
+_PIECE_TOL_M = 1e-6  # a piece this much longer than ZONE_PIECE_M, by rounding, stays whole (m)
 _CUT_COVER_M2 = 1e-9  # what the cut pieces may leave of a zone uncovered, by rounding (m²)
 LIT_AREA_M2 = 1e-9  # a zone's ground off the red crossings' own ground by less lies on it (m²)
 ARRIVAL_DIRECTIONS = 32  # fan of directions along which a known pedestrian's gap is measured
@@ -754,7 +755,7 @@ def _cut_along(part: shapely.Geometry, route_line: shapely.LineString,
     Why: a long strip of kerb inside the corridor (sidewalk slivers joined at a walking area)
     would be one zone the bus has to clear whole before anyone could reach any of it."""
     first, last = _extent(part, route_line)
-    if last - first <= ZONE_PIECE_M:
+    if last - first <= ZONE_PIECE_M + _PIECE_TOL_M:
         return [(part, first, last)]
     count = math.ceil((last - first) / ZONE_PIECE_M)
     edges = np.linspace(first, last, count + 1)
