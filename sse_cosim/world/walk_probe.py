@@ -32,6 +32,7 @@ from __future__ import annotations
 import gzip
 import math
 import re
+import shutil
 import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -192,9 +193,9 @@ class ProbeTimer:
             traces = walk_alone(self.net_path, walkers, step_s, self.work_dir,
                                 accel_mps2=self.accel_mps2, lights=False)
         else:
-            with tempfile.TemporaryDirectory(prefix="sse-cosim-walk-probe-") as folder:
-                traces = walk_alone(self.net_path, walkers, step_s, Path(folder),
-                                    accel_mps2=self.accel_mps2, lights=False)
+            traces = walk_alone_kept_on_error(self.net_path, walkers, step_s,
+                                              "sse-cosim-walk-probe-",
+                                              accel_mps2=self.accel_mps2, lights=False)
         times: dict[str, float] = {}
         for walker, following in zip(walkers, [*walkers[1:], None], strict=True):
             trace = traces[walker.id]
@@ -234,6 +235,16 @@ def longest_cycle_s(net_path: Path) -> float:
                 cycle += float(found.group(1)) if found else 0.0
                 longest = max(longest, cycle)
     return longest
+
+
+def walk_alone_kept_on_error(net_path: Path, walkers: Sequence[Walker], step_s: float,
+                             prefix: str, **options: Any) -> dict[str, WalkTrace]:
+    """:func:`walk_alone` in a new temporary folder (named ``prefix...``), removed once the
+    walkers have walked; kept when SUMO fails, since the error names its log there."""
+    folder = Path(tempfile.mkdtemp(prefix=prefix))
+    traces = walk_alone(net_path, walkers, step_s, folder, **options)
+    shutil.rmtree(folder, ignore_errors=True)
+    return traces
 
 
 def _walk(walkers: Sequence[Walker], step_s: float, until_s: float | None,

@@ -81,7 +81,6 @@ import hashlib
 import json
 import os
 import sys
-import tempfile
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, replace
@@ -98,7 +97,13 @@ from sse_cosim.world.acceleration_assumption import AccelerationBounds, needed_j
 from sse_cosim.world.assumptions import MotionBounds, admits, least_jitter, path_jitter
 from sse_cosim.world.extent import SceneExtent
 from sse_cosim.world.network import BUILD_DIR_NAME, NET_FILE_NAME
-from sse_cosim.world.walk_probe import Walker, WalkTrace, longest_cycle_s, slot_s, walk_alone
+from sse_cosim.world.walk_probe import (
+    Walker,
+    WalkTrace,
+    longest_cycle_s,
+    slot_s,
+    walk_alone_kept_on_error,
+)
 
 LEAD_M = 3.0  # how far a walk starts before a walking area and ends beyond it (m)
 CACHE_FILE_NAME = "walker_jitter.json"
@@ -362,8 +367,8 @@ def _walk_junctions(net_path: Path, net: sumolib.net.Net,
                       speed_mps=speed_mps, depart_s=round(k * slot, 6), radius_m=radius_m)
                for i, ((_, edges, depart, arrival), k)
                in enumerate(zip(walks, _slots([w[1] for w in walks]), strict=True))]
-    with tempfile.TemporaryDirectory(prefix="walker_jitter.") as work:
-        traces = walk_alone(net_path, walkers, step_s, Path(work), accel_mps2=accel_mps2)
+    traces = walk_alone_kept_on_error(net_path, walkers, step_s, "walker_jitter.",
+                                      accel_mps2=accel_mps2)
     _check_alone(walkers, traces)
     by_junction: dict[str, list[tuple[tuple[str, ...], WalkTrace]]] = {}
     for (junction, edges, _, _), walker in zip(walks, walkers, strict=True):

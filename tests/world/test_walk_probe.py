@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from sse_cosim.errors import SimulationError
-from sse_cosim.world.walk_probe import Walker, WalkTrace, walk_alone
+from sse_cosim.world.walk_probe import Walker, WalkTrace, walk_alone, walk_alone_kept_on_error
 
 pytestmark = pytest.mark.sumo
 
@@ -97,3 +100,20 @@ def test_an_open_simulation_is_refused_and_the_probe_always_closes(net_path, tmp
     assert not libsumo.isLoaded()
     assert len(walk_alone(net_path, [walker], STEP_S, tmp_path / "e",
                           until_s=0.5)["p"].times_s) == 6
+
+
+def test_a_failed_probe_in_a_temporary_folder_keeps_the_log_its_error_names(net_path):
+    """A cut network's border walks (issue: live on real streets) failed with an error that
+    named a log in a temporary folder already deleted; the folder now stays on failure, and
+    goes once the walkers have walked."""
+    import re
+
+    with pytest.raises(SimulationError) as info:
+        walk_alone_kept_on_error(net_path, [Walker("lost", ("WC", "nowhere"), 184.0, 1.0,
+                                                   SPEED)], STEP_S, "sse-cosim-test-")
+    named = re.search(r"see (\S+sumo\.log)", str(info.value))
+    assert named is not None and Path(named.group(1)).is_file()
+    shutil.rmtree(Path(named.group(1)).parent)
+    walked = walk_alone_kept_on_error(net_path, [Walker("p", ACROSS, 184.0, 4.0, SPEED)],
+                                      STEP_S, "sse-cosim-test-", until_s=0.5)
+    assert len(walked["p"].times_s) == 6
