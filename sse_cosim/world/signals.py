@@ -29,9 +29,9 @@ Signal = tuple[str, int]
 STOP_FOR = frozenset("ryu")
 """The states at which a vehicle that can still stop before the stop line stops (SUMO)."""
 WALKERS_WAIT = frozenset("r")
+"""The states at which no walker steps onto a crossing (the declared assumption)."""
 WALKERS_GO = frozenset("Gg")
 """The states at which a planned walker may step onto its crossing as planned."""
-"""The states at which no walker steps onto a crossing (the declared assumption)."""
 
 
 @dataclass(frozen=True)

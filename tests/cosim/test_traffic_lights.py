@@ -22,18 +22,21 @@ pytestmark = pytest.mark.sumo
 ROOT = Path(__file__).resolve().parents[2]
 STOP_LINE_X = -2.0
 DT = 0.1
-SCENARIO = f"""
-name = "red_light"
-description = "A bus meets its red light at a signalised junction"
+def street(name: str, duration_s: float, depart_s: float = 0.0, more: str = "") -> str:
+    """A scenario of the bus along WJ -> JE at 8 m/s, seeing 60 m around it, and ``more``."""
+    return f"""
+name = "{name}"
+description = "A bus at a signalised junction"
 [simulation]
-duration_s = 112.0
+duration_s = {duration_s}
 step_length_s = {DT}
 seed = 1
 [network]
 sources_dir = "{(ROOT / 'tests' / 'networks' / 'two_lanes').as_posix()}"
+route_files = {'["walker.rou.xml"]' if "walker" in name else "[]"}
 [automated.bus]
 route_edges = ["WJ", "JE"]
-depart_s = 66.0
+depart_s = {depart_s}
 depart_pos_m = 20.0
 nominal_speed_mps = 8.0
 [sensors.around]
@@ -41,7 +44,10 @@ node = "bus"
 fov_deg = 360.0
 range_m = 60.0
 noise_bound_m = [0.3, 0.3]
-"""
+{more}"""
+
+
+SCENARIO = street("red_light", 112.0, depart_s=66.0)
 
 
 def cars_stop(t: float) -> bool:
@@ -82,25 +88,7 @@ WALKER = """<routes>
     </person>
 </routes>
 """
-WAITING = f"""
-name = "waiting_walker"
-description = "A bus passes on its green while a walker waits at the red pedestrian light"
-[simulation]
-duration_s = 40.0
-step_length_s = {DT}
-seed = 1
-[network]
-sources_dir = "{(ROOT / 'tests' / 'networks' / 'two_lanes').as_posix()}"
-route_files = ["walker.rou.xml"]
-[automated.bus]
-route_edges = ["WJ", "JE"]
-depart_pos_m = 20.0
-nominal_speed_mps = 8.0
-[sensors.around]
-node = "bus"
-fov_deg = 360.0
-range_m = 60.0
-noise_bound_m = [0.3, 0.3]
+WAITING = street("waiting_walker", 40.0, more="""
 [rsus.corner]
 x_m = 8.0
 y_m = 10.0
@@ -110,7 +98,7 @@ node = "corner"
 fov_deg = 120.0
 range_m = 40.0
 noise_bound_m = [0.3, 0.3]
-"""
+""")
 
 
 def test_the_bus_passes_on_its_green_while_a_walker_waits_at_red(tmp_path: Path) -> None:
@@ -130,7 +118,7 @@ def test_the_bus_passes_on_its_green_while_a_walker_waits_at_red(tmp_path: Path)
     assert summary["containment_violations"] == 0 and summary["collisions"] == 0
 
 
-STEP_OUT = SCENARIO.replace('name = "red_light"', 'name = "step_out"') + """
+STEP_OUT = street("step_out", 112.0, depart_s=66.0) + """
 [pedestrians.pedestrian]
 start_edge = "JW"
 start_pos_m = 6.0
