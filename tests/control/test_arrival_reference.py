@@ -1,6 +1,6 @@
 """The controller's earliest arrivals against the exact reference of
-:mod:`benchmarks.arrivals`, at every step of every zone ahead, on the paper's scenes, the town
-and the junction: never later (soundness), and within 5 % on average (tightness, the issue's
+:mod:`benchmarks.arrivals`, at every step of every zone ahead, on the paper's scenes, the town,
+the junction and a walker waiting at a red pedestrian light: never later (soundness), and within 5 % on average (tightness, the issue's
 target for ``make bench``); the figures are printed.
 
 The reference is independent of the controller's arithmetic (exact shapely distances to the
@@ -54,3 +54,20 @@ def test_a_controller_that_counts_the_jitter_twice_falls_short_of_the_reference(
     figures = arrivals.figures(rows)
     assert figures["later_than_reference"] == 0
     assert figures["ratio_of_means"] < 0.97  # the exact controller gives 1.0000 here
+
+
+def test_at_a_red_pedestrian_light_no_arrival_is_later_than_the_reference(tmp_path):
+    """tests/cosim/test_traffic_lights.py's walker waiting at its red while the bus passes on
+    green: the rule's arrivals (docs/controller.md, "Walkers at their red light") against the
+    reference's own exact geometry of it."""
+    sys.path.insert(0, str(ROOT / "tests" / "cosim"))
+    from test_traffic_lights import WAITING, WALKER
+
+    (tmp_path / "walker.rou.xml").write_text(WALKER)
+    (tmp_path / "waiting_walker.toml").write_text(WAITING)
+    rows, summary = arrivals.run(str(tmp_path / "waiting_walker.toml"))
+    figures = arrivals.figures(rows)
+    print("waiting_walker", figures)
+    assert figures["later_than_reference"] == 0, figures
+    assert figures["ratio_of_means"] >= TARGET
+    assert summary["collisions"] == summary["containment_violations"] == 0
