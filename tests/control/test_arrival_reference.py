@@ -1,7 +1,8 @@
 """The controller's earliest arrivals against the exact reference of
 :mod:`benchmarks.arrivals`, at every step of every zone ahead, on the paper's scenes, the town,
-the junction and a walker waiting at a red pedestrian light: never later (soundness), and within 5 % on average (tightness, the issue's
-target for ``make bench``); the figures are printed.
+the junction and a walker waiting at a red pedestrian light: never later (soundness), and
+within 5 % on average (tightness, the issue's target for ``make bench``); the figures are
+printed.
 
 The reference is independent of the controller's arithmetic (exact shapely distances to the
 zones' exact ground, the jitter subtracted by its own rule), so the two checks at the end show

@@ -94,7 +94,7 @@ def test_a_measurement_is_cached_with_its_settings(paper, monkeypatch) -> None:
     def no_sumo(*args: object, **kwargs: object) -> None:
         raise AssertionError("measured again")
 
-    monkeypatch.setattr(walker_jitter, "walk_alone", no_sumo)
+    monkeypatch.setattr(walker_jitter, "walk_alone_kept_on_error", no_sumo)
     assert _measure(net_path, SPEED) == first
     with pytest.raises(AssertionError, match="measured again"):  # another speed bound
         _measure(net_path, 2.0)
@@ -114,13 +114,13 @@ def test_a_cache_entry_without_its_walk_off_the_ground_is_measured_again(paper,
             entry["ground_patch"] = entry.pop("off_ground")
     cache.write_text(json.dumps(entries), "utf-8")
     walked: list[int] = []
-    real = walker_jitter.walk_alone
+    real = walker_jitter.walk_alone_kept_on_error
 
     def counted(net: Path, walkers: list[Walker], *args: object, **kwargs: object) -> dict:
         walked.append(len(walkers))
         return real(net, walkers, *args, **kwargs)
 
-    monkeypatch.setattr(walker_jitter, "walk_alone", counted)
+    monkeypatch.setattr(walker_jitter, "walk_alone_kept_on_error", counted)
     assert _measure(net_path, SPEED) == first and len(walked) == 1
     assert all(entry["off_ground"] is not None
                for junctions in json.loads(cache.read_text("utf-8")).values()
@@ -138,7 +138,7 @@ def test_the_patch_is_drawn_anew_from_the_cached_walk(paper, monkeypatch) -> Non
     def no_sumo(*args: object, **kwargs: object) -> None:
         raise AssertionError("measured again")
 
-    monkeypatch.setattr(walker_jitter, "walk_alone", no_sumo)
+    monkeypatch.setattr(walker_jitter, "walk_alone_kept_on_error", no_sumo)
     monkeypatch.setattr(walker_jitter, "GROUND_BAND_M", 2.0 * walker_jitter.GROUND_BAND_M)
     wide = _measure(net_path, SPEED).ground_patches["C"]
     assert wide.covers(narrow) and wide.area > 1.5 * narrow.area
