@@ -67,6 +67,7 @@ import shapely
 import shapely.ops
 
 from sse_cosim.control.kinematics import BusDynamics
+from sse_cosim.control.limits import RouteLimits
 from sse_cosim.control.swept import (
     RoutePath,
     SweepPiece,
@@ -182,6 +183,7 @@ class SceneContext:
     kind: RegionKind
     sweep_width_m: float  # the body's sweep: its width and a pedestrian's radius each side
     planned: shapely.Geometry  # the ground that sweep covers along the planned lanes (prepared)
+    limits: RouteLimits  # the speed limits along the route
     stop_lines: tuple[StopLine, ...] = ()  # the route's signalised stop lines, nearest first
     lit: tuple[LitCrossing, ...] = ()  # the signalised crossings the zones meet
     _relevant: dict[tuple[int, float], Region] = field(default_factory=dict, repr=False)
@@ -221,6 +223,7 @@ class SceneContext:
         return cls(route_line, ground, crossings, bus, config, pedestrians,
                    BusDynamics.of(bus, config, step_length), window, zones, kind,
                    bus.width_m + 2.0 * pedestrian_radius, planned,
+                   RouteLimits.of_lanes(roadmap.route_lanes(route_edges)),
                    _stop_lines(roadmap, route_edges, route_line), lit)
 
     def off_plan_m(self, corners: np.ndarray) -> float:
@@ -266,15 +269,16 @@ class SceneContext:
 
     def reach_radius(self, front_s: float) -> float:
         """How far from the crossing (:meth:`crossing_at`) an unseen pedestrian can be and
-        still reach it before the bus, keeping its nominal speed, has cleared it; capped by
-        ``interest_radius_m``. (The paper policy's notion of "near the crossing".)"""
+        still reach it before the bus, keeping its nominal speed (:meth:`top_speed`), has
+        cleared it; capped by ``interest_radius_m``. (The paper policy's notion of "near the
+        crossing".)"""
         crossing = self.crossing_at(front_s)
         if crossing is None:
             return 0.0
         to_clear = crossing.end_m - front_s + self.bus.length_m
         if to_clear <= 0:
             return 0.0
-        radius = self.pedestrians.reach_during_m(to_clear, self.bus.nominal_speed_mps)
+        radius = self.pedestrians.reach_during_m(to_clear, self.top_speed(front_s, to_clear))
         return min(radius, self.config.interest_radius_m)
 
     def path_ahead(self, front_s: float, length: float, margin: float) -> Region:
@@ -306,10 +310,18 @@ class SceneContext:
         braking = speed**2 / (2.0 * self.bus.comfortable_decel_mps2)
         return speed * cfg.reaction_time_s + braking + cfg.stopping_margin_m
 
-    def standstill_clear_time(self, to_clear: float) -> float:
-        """Time (s) the bus needs, starting from standstill at nominal command, to clear a zone
-        whose far end its front must still travel ``to_clear`` metres to pass."""
-        return self.dynamics.travel_time(to_clear, 0.0, self.bus.nominal_speed_mps)
+    def top_speed(self, front_s: float, distance: float) -> float:
+        """The fastest speed (m/s) the bus can hold while its front drives ``distance`` m on
+        from ``front_s``: its nominal speed, within the speed limits on that stretch and just
+        beyond it (:meth:`~sse_cosim.control.limits.RouteLimits.least`)."""
+        return min(self.bus.nominal_speed_mps, self.limits.least(
+            front_s, front_s + distance, self.dynamics.decel))
+
+    def standstill_clear_time(self, front_s: float, to_clear: float) -> float:
+        """Time (s) the bus, its front at ``front_s``, needs from standstill at its top speed
+        (:meth:`top_speed`) to clear a zone whose far end its front must still travel
+        ``to_clear`` metres to pass."""
+        return self.dynamics.travel_time(to_clear, 0.0, self.top_speed(front_s, to_clear))
 
 
 @dataclass(frozen=True)
@@ -322,7 +334,9 @@ class ZoneOutlook:
     ``in_view_arrival_s``: the earliest time a pedestrian in view (some node detects it now)
     can be in it, infinite if none can; ``index``: the zone's place in
     ``SceneContext.zones``; ``clear_s``: the time the bus needs from standstill to clear it
-    (:meth:`SceneContext.standstill_clear_time`); ``ground``: its walkable ground as far as
+    (:meth:`SceneContext.standstill_clear_time`); ``limit_mps``: the slowest speed the
+    limits may hold the bus to until its rear has cleared it (a pass holds no more;
+    :meth:`~sse_cosim.control.limits.RouteLimits.least`); ``ground``: its walkable ground as far as
     the body can still touch it (:func:`_ahead_of_body`; a check's, the recorder's);
     ``lit``: the signalised crossings whose own ground it meets, each its id, that own ground
     and its lights (the route's geometry and the network's programs, for the checks).
@@ -336,6 +350,7 @@ class ZoneOutlook:
     clear_s: float = 0.0
     ground: shapely.Geometry | None = None
     lit: tuple[tuple[str, shapely.Geometry, CrossingLights], ...] = ()
+    limit_mps: float = math.inf
 
 
 @dataclass(frozen=True)
@@ -360,6 +375,7 @@ class Picture:
     # light tells traffic to stop (STOP_FOR; None while it lets the bus on, or without one)
     light: Signal | None = None
     stop_line_m: float | None = None
+    limit_mps: float = math.inf  # the speed limit where the front is (SUMO holds the bus to it)
 
 
 def assess(
@@ -426,6 +442,7 @@ def assess(
         light=None if line is None else line.signal,
         stop_line_m=None if line is None or _shows(signals or {}, line.signal) not in STOP_FOR
         else float(line.at_m - front_s),
+        limit_mps=context.limits.at(front_s),
     )
 
 
@@ -535,8 +552,9 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
     return tuple(
         ZoneOutlook(index, zone.start_m - front_s, to_clear,
                     max(float(arrival), floors.get(index, 0.0)), float(in_view_arrival),
-                    context.standstill_clear_time(to_clear), zone.ground,
-                    tuple((c.id, c.own, c.lights) for c in (context.lit[i] for i in zone.lit)))
+                    context.standstill_clear_time(front_s, to_clear), zone.ground,
+                    tuple((c.id, c.own, c.lights) for c in (context.lit[i] for i in zone.lit)),
+                    context.limits.least(front_s, front_s + to_clear, context.dynamics.decel))
         for (index, zone, to_clear), arrival, in_view_arrival
         in zip(ahead, arrivals, in_view_arrivals, strict=True))
 

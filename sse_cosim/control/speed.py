@@ -123,7 +123,8 @@ class PaperPolicy:
 
     def decide(self, picture: Picture, floor: SpeedLevel = SpeedLevel.NOMINAL) -> Decision:
         level = paper_level(picture, self.config, floor)
-        return Decision(level, level_speed(level, self.nominal, self.config))
+        return Decision(level, min(level_speed(level, self.nominal, self.config),
+                                   picture.limit_mps))
 
 
 def make_policy(context: SceneContext) -> SafePolicy | PaperPolicy:
@@ -226,7 +227,7 @@ class SafePolicy:
                 if plans is not None:
                     self.committed = {p.zone: p.commitment for p in plans
                                       if p.commitment is not None}
-                    return Decision(level, command)
+                    return Decision(level, min(command, picture.limit_mps))
         self.committed = {}
         return Decision(SpeedLevel.EMERGENCY, 0.0)
 
@@ -269,7 +270,7 @@ class SafePolicy:
                 if plan is not None:  # a later stop starts once this zone is cleared
                     # holding the command, the speed moves from the predicted one toward it
                     start = _StopStart(zone.to_clear_m, max(speed, command), dyn.pass_time(
-                        zone.to_clear_m, picture.speed_mps, command))
+                        zone.to_clear_m, picture.speed_mps, min(command, zone.limit_mps)))
             if plan is None:
                 return None
             passing = passing and plan.kind == "pass"
@@ -332,19 +333,21 @@ class SafePolicy:
             return True
         dyn = self.dynamics
         entered = _entered_while_clearing(zone, zones) if command > speed_now else [zone]
-        return all(dyn.pass_time(z.to_clear_m, speed_now, command) + dyn.step
+        return all(dyn.pass_time(z.to_clear_m, speed_now, min(command, z.limit_mps)) + dyn.step
                    < z.in_view_arrival_s for z in entered)
 
     def _pass(self, zone: ZoneOutlook, picture: Picture, command: float) -> Plan | None:
         """Holding the command, the rear clears the zone a step before anyone can arrive (or a
         pass committed earlier still holds: this command is as fast, and the bus has kept to
-        the pass)."""
+        the pass). The bus holds the command within the speed limits until it has cleared
+        the zone (``zone.limit_mps``): the pass is proven, and committed, at the held speed."""
         dyn, speed_now = self.dynamics, picture.speed_mps
-        if dyn.pass_time(zone.to_clear_m, speed_now, command) + dyn.step < zone.arrival_s:
+        held = min(command, zone.limit_mps)
+        if dyn.pass_time(zone.to_clear_m, speed_now, held) + dyn.step < zone.arrival_s:
             return Plan(zone.index, "pass", command,
-                        Commitment(command, self.now_s, picture.front_s, speed_now))
+                        Commitment(held, self.now_s, picture.front_s, speed_now))
         committed = self.committed.get(zone.index)
-        if committed is not None and command >= committed.command and committed.kept(
+        if committed is not None and held >= committed.command and committed.kept(
                 dyn, self.now_s, picture.front_s, speed_now):
             return Plan(zone.index, "pass", committed.command, committed)
         return None

@@ -85,8 +85,9 @@ class AutomatedVehicle(StrictModel):
     depart_s: NonNegativeFloat = Field(0.0, description="Departure time (s).")
     depart_pos_m: NonNegativeFloat = Field(0.0, description="Front position on the first edge (m).")
     nominal_speed_mps: PositiveFloat = Field(
-        20.0, description="Nominal speed (m/s), Table I: 20; at most the speed limit of every lane "
-        "on its route."
+        20.0, description="Nominal speed (m/s), Table I: 20; at most the fastest speed limit on "
+        "its route. The vehicle drives each lane at most at the lane's limit, and its controller "
+        "plans with the limits ahead."
     )
     length_m: PositiveFloat = Field(12.0, description="Length (m).")
     width_m: PositiveFloat = Field(2.55, description="Width (m).")

@@ -66,6 +66,7 @@ from sse_cosim.scenario.model import (
 from sse_cosim.world.roadmap import (
     DRIVING_VCLASSES,
     PARKED_VCLASS,
+    LaneGeometry,
     RoadMap,
     is_driving_lane,
     is_sidewalk,
@@ -141,7 +142,7 @@ class ActorPlan:
     """Everything the route file needs beyond the scenario: each automated vehicle's
     departure lane and each present pedestrian's plan, by id."""
 
-    automated_lanes: dict[str, int]
+    automated_lanes: dict[str, LaneGeometry]
     pedestrians: dict[str, PedestrianPlan]
 
 
@@ -234,14 +235,17 @@ def write_route_file(scenario: Scenario, plan: ActorPlan, path: Path) -> Path:
 Entry = tuple[str, float, str]  # (its vType element, departure time (s), its element)
 
 
-def _automated(vid: str, av: AutomatedVehicle, lane: int) -> Entry:
+def _automated(vid: str, av: AutomatedVehicle, lane: LaneGeometry) -> Entry:
+    """The vehicle and its type; it departs on ``lane`` at its nominal speed within the lane's
+    limit (SUMO refuses a faster departure)."""
     vtype = _element("vType", id=vid, vClass=av.vehicle_class, guiShape=av.vehicle_class,
                      length=av.length_m, width=av.width_m, accel=av.accel_mps2,
                      decel=av.comfortable_decel_mps2, emergencyDecel=av.emergency_decel_mps2,
                      apparentDecel=av.comfortable_decel_mps2, maxSpeed=av.nominal_speed_mps,
                      speedFactor=1, speedDev=0, sigma=0)
-    return vtype, av.depart_s, _driving(vid, av.depart_s, lane, av.depart_pos_m,
-                                        av.nominal_speed_mps, av.route_edges)
+    return vtype, av.depart_s, _driving(vid, av.depart_s, lane.index, av.depart_pos_m,
+                                        min(av.nominal_speed_mps, lane.speed_mps),
+                                        av.route_edges)
 
 
 def _parked(vid: str, parked: ParkedVehicle) -> Entry:
@@ -356,13 +360,27 @@ def _check_route(net: sumolib.net.Net, edges: list[str], vclass: str, field: str
 def _check_speed(net: sumolib.net.Net, edges: list[str], vclass: str, speed: float, field: str,
                  source: str) -> None:
     """``speed`` is within the limit of every lane the vehicle may use on its route (SUMO would
-    hold it to the limit, and refuse a faster departure)."""
+    hold it to the limit, and refuse a faster departure): a traffic vehicle keeps one speed."""
     slowest = min(_route_lanes(net, edges, vclass), key=lambda lane: lane.getSpeed())
     limit = slowest.getSpeed()
     if speed > limit + 1e-9:
         raise UserError(source, field, f"{speed:g} m/s is above the speed limit of lane "
                         f"{slowest.getID()!r} on the route ({limit:g} m/s), which SUMO would "
                         "hold the vehicle to", f"use at most {limit:g} m/s")
+
+
+def _check_nominal(net: sumolib.net.Net, edges: list[str], vclass: str, speed: float,
+                   field: str, source: str) -> None:
+    """An automated vehicle's nominal ``speed`` is within the fastest limit on its route: it
+    drives each lane at most at the lane's limit (its controller plans with the limits ahead,
+    :mod:`sse_cosim.control.limits`), so a nominal speed above every limit could never be
+    driven, and its levels (fractions of it) would not mean what they say."""
+    fastest = max(_route_lanes(net, edges, vclass), key=lambda lane: lane.getSpeed())
+    limit = fastest.getSpeed()
+    if speed > limit + 1e-9:
+        raise UserError(source, field, f"{speed:g} m/s is above every speed limit on the "
+                        f"route (the fastest, lane {fastest.getID()!r}, allows {limit:g} m/s): "
+                        "the vehicle could never drive it", f"use at most {limit:g} m/s")
 
 
 def _route_lanes(net: sumolib.net.Net, edges: list[str],
@@ -389,17 +407,17 @@ def _check_lane(net: sumolib.net.Net, edge_id: str, index: int, vclass: str, fie
 
 
 def _check_automated(net: sumolib.net.Net, roadmap: RoadMap, vid: str, av: AutomatedVehicle,
-                     source: str) -> int:
+                     source: str) -> LaneGeometry:
     """Check an automated vehicle's route, speed and departure; its departure lane: the first
     of the lanes its controller plans on (``RoadMap.route_lanes``), one that leads on along
     the route."""
     field, vclass = f"automated.{vid}", av.vehicle_class
     _check_route(net, av.route_edges, vclass, f"{field}.route_edges", source)
     _check_driving_lanes(net, av.route_edges, f"{field}.route_edges", source)
-    _check_speed(net, av.route_edges, vclass, av.nominal_speed_mps,
-                 f"{field}.nominal_speed_mps", source)
+    _check_nominal(net, av.route_edges, vclass, av.nominal_speed_mps,
+                   f"{field}.nominal_speed_mps", source)
     _check_pos(net, av.route_edges[0], av.depart_pos_m, f"{field}.depart_pos_m", source)
-    return roadmap.route_lanes(av.route_edges)[0].index
+    return roadmap.route_lanes(av.route_edges)[0]
 
 
 def _check_driving_lanes(net: sumolib.net.Net, edges: list[str], field: str,

@@ -75,7 +75,8 @@ the first, on the second, and the internal lane between them ("" for none)."""
 
 @dataclass(frozen=True)
 class LaneGeometry:
-    """One lane: its centreline ``shape`` (k, 2), ``width`` and ``length`` (m)."""
+    """One lane: its centreline ``shape`` (k, 2), ``width`` and ``length`` (m), and its speed
+    limit (m/s)."""
 
     id: str
     edge_id: str
@@ -83,6 +84,7 @@ class LaneGeometry:
     shape: np.ndarray
     width: float
     length: float
+    speed_mps: float
 
     def polygon(self) -> shapely.Polygon:
         """The lane's area: the centreline widened by half the width to each side."""
@@ -339,6 +341,7 @@ def _geometry(lane: sumolib.net.lane.Lane) -> LaneGeometry:
         shape=np.asarray(lane.getShape(), dtype=float)[:, :2],
         width=float(lane.getWidth()),
         length=float(lane.getLength()),
+        speed_mps=float(lane.getSpeed()),
     )
 
 

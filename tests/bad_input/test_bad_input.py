@@ -154,7 +154,7 @@ CASES = [
           "13.9 s at the earliest", "use 13.9 s or later",
           "pedestrians.pedestrian.start_pos_m nearer the crossing")),
     Case("bus faster than the road", extend("[automated.bus]\nnominal_speed_mps = 30\n"),
-         ("automated.bus.nominal_speed_mps", "speed limit of lane 'WC_2'",
+         ("automated.bus.nominal_speed_mps", "above every speed limit on the route",
           "use at most 27.78 m/s")),
     Case("car faster than the road", extend("[vehicles.car]\nspeed_mps = 28\n", S2),
          ("vehicles.car.speed_mps", "speed limit of lane 'EC_2'", "use at most 27.78 m/s")),

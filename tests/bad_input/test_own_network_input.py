@@ -248,4 +248,4 @@ def test_the_documented_parking_strip_is_accepted(town, tmp_path):
     from sse_cosim.world.demand import plan_actors
 
     plan = plan_actors(load_scenario(path), net, load_roadmap(net), str(path))
-    assert plan.automated_lanes["bus"] == 2
+    assert plan.automated_lanes["bus"].index == 2

@@ -242,6 +242,7 @@ def test_the_inconsistency_floor_applies_unless_it_breaks_a_committed_pass():
 
 def closed_loop(zone_start: float, hidden_m: float, step_out_s: float, speed_bound: float,
                 duration_s: float = 40.0, held: tuple[float, float] = (0.0, 0.0),
+                limit: tuple[float, float] = (math.inf, math.inf),
                 ) -> tuple[bool, float]:
     """A bus from s=0 at 20 m/s toward a zone at ``zone_start`` (beyond its stopping
     distance, where every run starts safe); a pedestrian waits, hidden,
@@ -250,7 +251,9 @@ def closed_loop(zone_start: float, hidden_m: float, step_out_s: float, speed_bou
     arrival bound from where the pedestrian may be, and acts on each command after its
     reaction time. ``held`` (start, length; s): the world makes the bus yield that long at a
     stop line 1 m before the zone, whatever its command, if it can still stop there at its
-    comfortable deceleration (SUMO's right of way for a car). Returns (no contact while
+    comfortable deceleration (SUMO's right of way for a car). ``limit`` (from m, m/s): the
+    road from there on has that speed limit, which the world holds the bus to as SUMO does
+    (:func:`limited_speed`), and the picture tells (``limit_mps``). Returns (no contact while
     moving, position reached)."""
     safe = policy()
     s, v = 0.0, BUS.nominal_speed_mps
@@ -263,10 +266,13 @@ def closed_loop(zone_start: float, hidden_m: float, step_out_s: float, speed_bou
         if yields is None and t >= held[0]:
             yields = DYN.step * v + v * v / (2 * DYN.decel) <= zone_start - 1.0 - s
         arrival = max(0.0, -ped) / speed_bound if ped < ZONE_LENGTH else math.inf
-        outlook = tuple(zone(zone_start - s, arrival) for _ in (0,)
-                        if zone_start + ZONE_LENGTH + BUS.length_m - s > 0)
-        pending.append(safe.decide(picture(v, outlook, s)).command_mps)
-        acting = pending.pop(0)
+        to_clear = zone_start + ZONE_LENGTH + BUS.length_m - s
+        outlook = tuple(replace(zone(zone_start - s, arrival),
+                                limit_mps=limited_speed(s + to_clear, limit))
+                        for _ in (0,) if to_clear > 0)
+        now = replace(picture(v, outlook, s), limit_mps=limit[1] if s >= limit[0] else math.inf)
+        pending.append(safe.decide(now).command_mps)
+        acting = min(pending.pop(0), limited_speed(s, limit))
         if yields and t < held[0] + held[1]:
             acting = min(acting, yield_speed(zone_start - 1.0 - s))
         s, v = DYN.advance(s, v, acting)
@@ -277,6 +283,17 @@ def closed_loop(zone_start: float, hidden_m: float, step_out_s: float, speed_bou
         if in_zone and overlaps and v > 0.0:
             return False, s
     return True, s
+
+
+def limited_speed(s: float, limit: tuple[float, float]) -> float:
+    """The fastest speed (m/s) SUMO lets a bus with its front at ``s`` have under ``limit``
+    (from m, m/s): the limit on it, and before it the speed from which the comfortable
+    deceleration reaches the limit where it starts."""
+    start, mps = limit
+    if s >= start:
+        return mps
+    return math.sqrt(mps * mps + 2.0 * DYN.decel * (start - s)) if math.isfinite(mps) \
+        else math.inf
 
 
 def yield_speed(gap_m: float) -> float:
@@ -315,6 +332,29 @@ def test_no_contact_while_moving_when_the_world_holds_the_bus_in_a_pass(
     off under the old commitment, is still in it."""
     safe, _ = closed_loop(zone_start, hidden_m, step_out_s, 2.5, held=(hold_s, held_for_s))
     assert safe
+
+
+@settings(max_examples=500, deadline=None)
+@given(zone_start=st.floats(90.0, 250.0), hidden_m=st.floats(0.0, 15.0),
+       step_out_s=st.floats(0.0, 20.0), before_m=st.floats(-20.0, 80.0),
+       limit_mps=st.floats(2.0, 12.0))
+@example(zone_start=90.0, hidden_m=11.0, step_out_s=2.0, before_m=0.0, limit_mps=2.0)
+def test_no_contact_while_moving_where_a_speed_limit_holds_the_bus_back(
+        zone_start, hidden_m, step_out_s, before_m, limit_mps):
+    """A lower speed limit from ``before_m`` before the zone (SUMO brakes the bus ahead of it
+    and holds it there, whatever the command): a pass proven at the commanded speed would
+    come late. The example (found by this test with the limit left out of the picture): the
+    pass at the nominal 20 m/s would clear the zone by 5.4 s, but the limit of 2 m/s from the
+    zone on holds the bus in it when the pedestrian, 11 m off, arrives at 6.4 s."""
+    safe, _ = closed_loop(zone_start, hidden_m, step_out_s, 2.5,
+                          limit=(zone_start - before_m, limit_mps))
+    assert safe
+
+
+def test_the_command_is_never_above_the_limit_where_the_front_is():
+    outlook = zone(200.0, math.inf)
+    decision = policy().decide(replace(picture(5.0, (outlook,)), limit_mps=8.33))
+    assert decision.level is SpeedLevel.NOMINAL and decision.command_mps == 8.33
 
 
 def two_zone_loop(first_start: float, gap_m: float, hidden_m: float, step_out_s: float) -> bool:

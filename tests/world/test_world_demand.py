@@ -131,7 +131,7 @@ def test_unreachable_crossing_time_is_refused(net_path: Path) -> None:
         ({"pedestrians.pedestrian.end_pos_m": 199.0}, "pedestrians.pedestrian.end_pos_m",
          "beyond the end"),
         ({"automated.bus.nominal_speed_mps": 27.8}, "automated.bus.nominal_speed_mps",
-         "speed limit of lane 'WC_2'"),
+         "above every speed limit on the route (the fastest, lane 'WC_2'"),
         ({"vehicles.car.speed_mps": 30.0}, "vehicles.car.speed_mps",
          "speed limit of lane 'EC_2'"),
         ({"vehicles.car.route_edges": ["WC", "CE"], "vehicles.car.speed_mps": 28.0},
