@@ -169,6 +169,7 @@ class Ego:
                 "outside the lanes its controller plans on (the route's edges, each on one "
                 "driving lane); the run stops before it decides on a picture of other lanes",
                 "the controller plans on each edge's rightmost driving lane that leads on "
-                "(RoadMap.route_lanes) and does not follow lane changes yet: keep other traffic "
-                "from making SUMO overtake or change lanes, or route the vehicle over streets "
-                "with one driving lane each way (docs/own_network.md)")
+                "(RoadMap.route_lanes) and SUMO changes none of its lanes of its own accord, "
+                "so SUMO drives it where the planned sweep does not reach (a junction passage "
+                "drawn otherwise): route the vehicle over other edges, and report the network "
+                "with this line (docs/own_network.md)")

@@ -35,6 +35,11 @@ timed before SUMO starts by a lone walker on the same walk
 :class:`SimulationError` (one line: the pedestrian, the planned and the actual time, the fix)
 when SUMO held it up or let it on early -- never a silent mismatch.
 
+Lane change mode. Every automated vehicle drives under lane change mode 512: SUMO changes
+none of its lanes of its own accord (no overtaking, no keeping right), and keeps its safety
+checks. Its lanes are its controller's plan (``RoadMap.route_lanes``: on each edge the
+rightmost lane that leads on, so no change is needed to follow the route).
+
 Speed mode. Every automated vehicle drives under speed mode 31 (SUMO's default, set
 explicitly): SUMO keeps the safe speed towards leaders, the vehicle's maximum acceleration and
 deceleration, and the right of way at junctions -- so SUMO still yields to pedestrians on the
@@ -158,6 +163,7 @@ from sse_cosim.world.walker_turn import CrossingWalker, StraightLane, TurnBack
 log = logging.getLogger(__name__)
 
 AUTOMATED_SPEED_MODE = 31
+AUTOMATED_LANE_CHANGE_MODE = 512  # no lane change of SUMO's own; safety checks kept
 _VEHICLE_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED)
 _AUTOMATED_VARS = (*_VEHICLE_VARS, libsumo.VAR_DISTANCE)
 _PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libsumo.VAR_ROAD_ID,
@@ -719,6 +725,7 @@ class SumoWorld:
             libsumo.vehicle.subscribe(vid, _AUTOMATED_VARS if automated else _VEHICLE_VARS)
             if automated:
                 libsumo.vehicle.setSpeedMode(vid, AUTOMATED_SPEED_MODE)
+                libsumo.vehicle.setLaneChangeMode(vid, AUTOMATED_LANE_CHANGE_MODE)
                 self._apply_command(vid)
         for pid in sim.getDepartedPersonIDList():
             libsumo.person.subscribe(pid, _PERSON_VARS)
