@@ -389,6 +389,7 @@ def assess(
     in_view_beyond: bool = False,
     floors: Mapping[int, float] | None = None,
     signals: Mapping[str, SignalState] | None = None,
+    releases: Sequence[float] | None = None,
 ) -> Picture:
     """The picture at one step.
 
@@ -401,7 +402,8 @@ def assess(
     ``in_view_beyond``: whether one of those may be outside the window instead; ``floors``:
     zone index -> an earliest arrival known from earlier steps (:func:`arrival_floors`);
     ``signals``: the scene's traffic lights by id, as they show now (the bus's own stop
-    lines read them).
+    lines read them); ``releases``: :meth:`SceneContext.releases` of them, if the caller
+    has it already (else worked out here).
     """
     cfg = context.config
     front_s = context.route_line.project(shapely.Point(front_xy))
@@ -422,7 +424,8 @@ def assess(
     stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0) \
         if sets else context.kind.empty()
     line = context.next_stop_line(front_s)
-    releases = context.releases(signals or {})
+    if releases is None:
+        releases = context.releases(signals or {})
     zones = _outlook(context, front_s, [unobserved, *known],
                      [s for s in in_view if not s.region.is_empty], in_view_beyond, floors or {},
                      releases)

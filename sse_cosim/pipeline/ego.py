@@ -135,9 +135,9 @@ class Ego:
             [*received.ended, *(own.ended_at(step) if own is not None else ())])
         timer.lap("occupancy")
         paths = self.known.paths
+        releases = self.context.releases(snapshot.signals)
         offs = {} if self.claims is None else self.claims.update(
-            snapshot.time, possible, self.context.releases(snapshot.signals),
-            estimate.flags.inconsistent)
+            snapshot.time, possible, releases, estimate.flags.inconsistent)
         sources = {key: Source(region, estimate.fused.get(key) if self.known.with_states
                                else None, paths.get(key), offs.get(key, ()))
                    for key, region in possible.items()}
@@ -149,6 +149,7 @@ class Ego:
             in_view_beyond=not self.known.beyond.isdisjoint(estimate.in_view),
             floors=self.arrivals.floors(step, estimate.flags.inconsistent),
             signals=snapshot.signals,
+            releases=releases,
         )
         self.arrivals.keep(step, picture, estimate.flags.inconsistent)
         decision = self.policy.decide(
