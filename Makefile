@@ -9,13 +9,13 @@ STAMP  := $(VENV)/.installed
 DEVSTAMP := $(VENV)/.installed-dev
 BENCHSTAMP := $(VENV)/.installed-bench
 
-.PHONY: run test bench safety lint clean
+.PHONY: run test docs bench safety lint clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
-# Every install takes the versions pinned in requirements.lock (README, "Pinned installs").
+# Every install takes the versions pinned in requirements.lock (docs/howto/development.md, "Pinned installs").
 LOCK   := requirements.lock
 
 $(STAMP): pyproject.toml $(LOCK) | $(BIN)/python
@@ -49,6 +49,11 @@ test: $(DEVSTAMP)
 	$(BIN)/ruff check .
 	$(BIN)/python -m pytest -q -n auto --dist loadfile
 	NPY_DISABLE_CPU_FEATURES="X86_V4 AVX512_ICL AVX512_SPR" NUMBA_CPU_NAME=generic $(BIN)/python -m pytest -q -m kernels
+
+# The documentation site (docs/, mkdocs.yml) into site/; --strict: a broken link or a stale
+# reference fails. The tests build it too and open it in Chromium (tests/reporting/test_docs_site.py).
+docs: $(DEVSTAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
 
 bench: $(BENCHSTAMP)
 	$(BIN)/sse-cosim bench --out results/

@@ -47,7 +47,8 @@ def field_docs(model: type[BaseModel] = Scenario, prefix: str = "") -> Iterator[
 
 
 def fields_markdown() -> str:
-    """The field table as Markdown (the README's scenario-field section)."""
+    """The field table as Markdown (``sse-cosim fields``; the docs site's scenario fields
+    page, docs/reference/fields.md, is made from it)."""
     rows = ["| field | default | meaning |", "|---|---|---|"]
     rows += [f"| `{d.path}` | `{d.default}` | {_escape(d.description)} |" for d in field_docs()]
     return "\n".join(rows) + "\n"

@@ -75,7 +75,7 @@ def apply_overrides(
                 if not _schema_has_table(parts[: depth + 1]):
                     raise UserError(
                         source, dotted, f"there is no table {'.'.join(parts[: depth + 1])!r}",
-                        "check the path against the scenario file (see README: scenario fields)",
+                        "check the path against the scenario file (see sse-cosim fields)",
                     )
                 child = node[part] = {}
             if not isinstance(child, dict):
@@ -203,7 +203,7 @@ def deep_merge(base: Mapping[str, Any], override: Mapping[str, Any]) -> dict[str
 
 
 _FIXES = {
-    "extra_forbidden": "remove it or fix its spelling (see README: scenario fields)",
+    "extra_forbidden": "remove it or fix its spelling (see sse-cosim fields)",
     "missing": "add this field",
     "greater_than": "use a larger value",
     "greater_than_equal": "use a larger value",

@@ -1,19 +1,12 @@
-"""The CLI explains itself, and the README's field table is the schema's."""
+"""The CLI explains itself, and the field table (`sse-cosim fields`, the docs site's scenario
+fields page: tests/reporting/test_docs_site.py) names what each field accepts."""
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import pytest
 
 from sse_cosim.cli.main import main
 from sse_cosim.scenario.fields import fields_markdown
-
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def test_readme_field_table_is_generated_from_the_schema():
-    assert fields_markdown() in (ROOT / "README.md").read_text(encoding="utf-8")
 
 
 @pytest.mark.parametrize("command", [[], ["run"], ["batch"], ["fields"], ["network"],
@@ -32,6 +25,6 @@ def test_help_explains_every_command(command, capsys):
                             "sensor_bounds", "shared_estimates", "reaction_time"]),
 ])
 def test_field_table_names_the_accepted_values_of_enumerated_fields(path, values):
-    """Read from the field's type: the README never goes stale on, e.g., `worst-case`."""
+    """Read from the field's type: the table never goes stale on, e.g., `worst-case`."""
     row = next(line for line in fields_markdown().splitlines() if line.startswith(f"| `{path}`"))
     assert "Accepted values: " + ", ".join(f"`{v}`" for v in values) + "." in row

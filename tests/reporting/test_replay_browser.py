@@ -4,8 +4,6 @@ from the network and logs no error. Without Chromium these tests fail; they neve
 
 from __future__ import annotations
 
-import shutil
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -21,29 +19,6 @@ S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
 JUNCTION = ROOT / "sumo_net" / "junction"  # a four-arm junction with route-file traffic
 S3_SECONDS = 12.5  # the pedestrian steps onto the zebra at 11.5 s
 PAGE_LIMIT_BYTES_PER_S = 5e6 / 30  # a 30 s run's page stays under 5 MB
-FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-
-
-@pytest.fixture(scope="module")
-def browser(tmp_path_factory) -> Iterator:
-    """A headless Chromium with a fresh profile."""
-    chromium = shutil.which("chromium")
-    if chromium is None:
-        pytest.fail("chromium is not installed: `apt-get install -y chromium chromium-driver` "
-                    "(make test installs it where it is missing)")
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        pytest.fail("playwright is not installed: pip install -e '.[dev]'")
-    with sync_playwright() as driver:
-        context = driver.chromium.launch_persistent_context(
-            str(tmp_path_factory.mktemp("chromium-profile")), executable_path=chromium,
-            headless=True, args=FLAGS, viewport={"width": 1400, "height": 900})
-        yield context
-        context.close()
-
-
 class Replay:
     """One replay page open in the browser, with every console error, page error and network
     request it made."""
