@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import shlex
 import sys
 from pathlib import Path
@@ -39,9 +40,15 @@ class RunsFailed(click.ClickException):
 @click.option("--summaries-only", "summary_only", is_flag=True,
               help="Runs write summary.json and scenario.json only (no trace, sets or "
                    "plots): for large sweeps.")
+@click.option("--detect", "detect", multiple=True, metavar="FIGURE=DIFFERENCE",
+              callback=lambda _ctx, _param, texts: [_detection(t) for t in texts],
+              help="After the sweep, say how many seeds per level tell apart a difference "
+                   "of DIFFERENCE in FIGURE (a column of sweep.csv, e.g. "
+                   "average_speed_mps=0.1), from how the seeds spread here; repeatable.")
 def sweep(scenarios: tuple[Path, ...], sweep_file: Path | None, params: tuple[str, ...],
           seeds: str | None, fixed: tuple[str, ...], out_dir: Path, workers: int | None,
-          executor: str, scheduler: str | None, resume: bool, summary_only: bool) -> None:
+          executor: str, scheduler: str | None, resume: bool, summary_only: bool,
+          detect: list[tuple[str, float]]) -> None:
     """Run SCENARIOS (files or folders) for every combination of parameter values and seeds.
 
     PATH is a dotted scenario path. A part may be a glob over names, and may end in a
@@ -61,7 +68,9 @@ def sweep(scenarios: tuple[Path, ...], sweep_file: Path | None, params: tuple[st
     any run (exit status 2); a combination whose value is invalid (a negative noise bound) is
     a failed run. OUT gets
     sweep.json (the plan), runs/<key>/ per run, sweep.csv (one row per run; sweep.parquet
-    too when pyarrow imports) and sweep_<figure>.png. Exit status 3 if any run failed.
+    too when pyarrow imports), sweep_<figure>.png and sweep_uncertainty.md (each figure's mean
+    with its 95 % interval over seeds, and which differences between levels exceed the
+    seeds' spread). Exit status 3 if any run failed.
     """
     from sse_cosim.runner.executors import Execution
     from sse_cosim.runner.parameters import parse_assignment
@@ -91,7 +100,27 @@ def sweep(scenarios: tuple[Path, ...], sweep_file: Path | None, params: tuple[st
                + (f" ({invalid} with invalid values, recorded as failed)" if invalid else ""))
     run_sweep(spec, runs, out_dir, _command(), summary_only,
               Execution(workers, executor, scheduler, resume))
-    _finish_sweep(out_dir)
+    _finish_sweep(out_dir, detect)
+
+
+def _detection(text: str) -> tuple[str, float]:
+    """``FIGURE=DIFFERENCE`` of ``--detect``: a numeric column of sweep.csv and a positive
+    difference."""
+    from sse_cosim.reporting.sweep_report import FIGURES
+
+    figure, _, number = text.partition("=")
+    numeric = sorted(f for f in FIGURES if f != "route_completed")
+    if figure not in numeric:
+        raise click.BadParameter(f"{figure!r} is no figure of sweep.csv; use one of "
+                                 f"{', '.join(numeric)}", param_hint="--detect")
+    try:
+        difference = float(number)
+    except ValueError:
+        difference = -1.0
+    if not difference > 0.0:
+        raise click.BadParameter(f"{text!r} needs a positive difference after '=', e.g. "
+                                 f"{figure}=0.1", param_hint="--detect")
+    return figure, difference
 
 
 @cli.command()
@@ -116,14 +145,19 @@ def report(folders: tuple[Path, ...], out_dir: Path | None) -> None:
     click.echo(f"rebuilt {len(written) - 1} tables and figures; wrote {out_dir / REPORT}")
 
 
-def _finish_sweep(out_dir: Path) -> None:
-    """Rebuild the sweep's table and plots, print a short summary, fail if a run failed."""
+def _finish_sweep(out_dir: Path, detect: list[tuple[str, float]]) -> None:
+    """Rebuild the sweep's table and plots, print a short summary, which differences exceed
+    the seeds' spread and the seeds each ``detect`` needs; fail if a run failed."""
     from sse_cosim.reporting.sweep_report import (
+        SWEEP_UNCERTAINTY,
+        figure_label,
         read_sweep,
         summary_table,
         sweep_table,
+        uncertainty,
         write_sweep_report,
     )
+    from sse_cosim.reporting.uncertainty import MAX_SEEDS, seeds_needed
 
     written = write_sweep_report(out_dir)
     sweep = read_sweep(out_dir)
@@ -132,6 +166,22 @@ def _finish_sweep(out_dir: Path) -> None:
     if len(summary) > SUMMARY_ROWS_MAX:
         summary = summary_table(table, [])
     click.echo(summary.to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    for item in uncertainty(sweep, table):
+        exceed = sum(d.exceeds for d in item.differences)
+        click.echo(f"{figure_label(item.figure)}: {exceed} of {len(item.differences)} "
+                   "differences between neighbouring levels exceed the seeds' spread "
+                   f"({out_dir / SWEEP_UNCERTAINTY})")
+    for figure, difference in detect:
+        found = uncertainty(sweep, table, [figure])
+        sigma = found[0].sigma if found else math.nan
+        needed = seeds_needed(sigma, difference)
+        if math.isnan(sigma):
+            answer = "cannot say: run at least 2 seeds a combination to measure their spread"
+        else:
+            answer = (f"{needed} seeds per level" if needed else
+                      f"more than {MAX_SEEDS:,} seeds per level") + (
+                f" (the seeds spread by {sigma:.3g} here; 95 % confidence, 80 % power)")
+        click.echo(f"to tell apart {difference:g} in {figure_label(figure)}: {answer}")
     failed = table[table["status"] != "ok"]
     for row in failed.itertuples():
         click.echo(f"  FAILED {row.key}: {row.error or row.status}")

@@ -43,12 +43,14 @@ from sse_cosim.reporting.replay import replay_href
 from sse_cosim.reporting.safety_report import SAFETY_PLAN
 from sse_cosim.reporting.sweep_report import (
     PLOTTED,
+    FigureUncertainty,
     SweepFolder,
     figure_label,
     find_sweeps,
     summary_figures,
     summary_table,
     sweep_table,
+    uncertainty,
     write_sweep_report,
 )
 
@@ -230,11 +232,32 @@ def _sweep_section(sweep: SweepFolder, number: int, out_dir: Path) -> str:
         _failures(table[table["status"] != "ok"]),
         "<h3>Summary (runs of one combination combined)</h3>",
         _table(summary_table(table, sweep.columns)),
+        _uncertainty_part(uncertainty(sweep, table)),
         f'<div class="figures">{images}</div>',
         "<details><summary>Every run (sweep.csv, with the command that reproduces it)"
         f'</summary><div class="scroll">{_table(every)}</div></details>',
         _sweep_replays(sweep, out_dir),
     ])
+
+
+def _uncertainty_part(items: Sequence[FigureUncertainty]) -> str:
+    """Each responding figure's mean and 95 % interval over seeds, and which differences
+    between neighbouring levels exceed the seeds' spread (sweep_uncertainty.md's content)."""
+    parts = ["<h3>What the seeds leave uncertain</h3>",
+             "<p>Per combination: the runs (one per seed), the mean and Student's 95 % "
+             "confidence interval of the mean. Between neighbouring levels: the difference "
+             "of the means with Welch's 95 % interval; it exceeds the seeds' spread where "
+             "that interval leaves out zero (also in sweep_uncertainty.md).</p>"]
+    for item in items:
+        label = figure_label(item.figure)
+        exceed = [d for d in item.differences if d.exceeds]
+        lines = "".join(f'<li{" class=off" if d.exceeds else ""}>{html.escape(d.line(label))}'
+                        "</li>" for d in item.differences)
+        parts += [f"<h4>{html.escape(label)}</h4>", _table(item.table),
+                  f"<p>{len(exceed)} of {len(item.differences)} differences between "
+                  "neighbouring levels exceed the seeds' spread.</p>",
+                  f"<details><summary>Every difference</summary><ul>{lines}</ul></details>"]
+    return "\n".join(parts)
 
 
 def _failures(failed: pd.DataFrame) -> str:
@@ -313,7 +336,7 @@ th, td { padding: .32rem .65rem; border-bottom: 1px solid #e9ebf0; text-align: r
 thead th { background: #f4f6fa; text-align: center; font-weight: 600; }
 td:first-child, th:first-child { text-align: left; }
 tbody tr:hover td { background: #f8f9fc; }
-td.off { background: #fff1c2; font-weight: 600; }
+td.off, li.off { background: #fff1c2; font-weight: 600; }
 code { font-family: ui-monospace, Menlo, Consolas, monospace; font-size: .82em; }
 td code { white-space: nowrap; }
 pre.cmd { background: #1d2330; color: #e8ecf5; padding: .55rem .8rem; border-radius: 6px;

@@ -28,6 +28,10 @@ KIND_LABELS = {"automated": "automated vehicle", "parked": "parked vehicle",
 RSU_COLORS = ["tab:green", "tab:cyan", "tab:olive", "tab:pink"]
 VIEW_PAD_M = 5.0  # scene plots: room around what they show (m)
 VIEW_MIN_M = (60.0, 28.0)  # scene plots: the least width and height shown (m)
+LINE_STYLES = ("-", "--", ":", "-.")  # curves in turn: every one shows where they overlap
+MARKERS = ("o", "s", "^", "D", "v", "P")
+MARKS_PER_CURVE = 12  # a long curve is marked at about this many points
+COINCIDE_ATOL = 0.01  # curves this close at every point are said to coincide (their units)
 
 
 def save_figure(fig: Figure, target: Path) -> Path:
@@ -36,6 +40,29 @@ def save_figure(fig: Figure, target: Path) -> Path:
         fig.savefig(tmp, dpi=120, bbox_inches="tight")
     plt.close(fig)
     return target
+
+
+def curve_style(index: int, points: int) -> dict[str, object]:
+    """The ``index``-th curve's colour, line style and marker (marking about
+    :data:`MARKS_PER_CURVE` of its ``points``, each curve from another offset), so that
+    curves lying on one another all show."""
+    every = max(1, points // MARKS_PER_CURVE)
+    return {"color": f"C{index}", "linestyle": LINE_STYLES[index % len(LINE_STYLES)],
+            "marker": MARKERS[index % len(MARKERS)], "markersize": 5,
+            "markevery": (index % every, every)}
+
+
+def coinciding_labels(curves: Sequence[tuple[str, np.ndarray, np.ndarray]]) -> list[str]:
+    """Each curve's legend label (``curves``: label, x (k,), y (k,)), with "coincides with
+    ..." where it lies on an earlier curve: the same x, and y within
+    :data:`COINCIDE_ATOL` at every point."""
+    labels = []
+    for i, (label, x, y) in enumerate(curves):
+        same = next((other for other, ox, oy in curves[:i] if len(ox) == len(x)
+                     and np.allclose(ox, x) and np.allclose(oy, y, rtol=0.0,
+                                                            atol=COINCIDE_ATOL)), None)
+        labels.append(label if same is None else f"{label} (coincides with {same})")
+    return labels
 
 
 def node_color(node: str, order: Sequence[str] = ()) -> str:
@@ -214,8 +241,11 @@ def speed_panels(
     fig, axes = plt.subplots(1, 2, figsize=(12, 4), sharey=True)
     for ax, traces, title in ((axes[0], with_pedestrian, "with pedestrian"),
                               (axes[1], without_pedestrian, "without pedestrian")):
-        for i, (label, trace) in enumerate(traces.items()):
-            ax.plot(trace["t"], trace["bus_speed"], color=f"C{i}", label=label.split()[0])
+        curves = [(label.split()[0], trace["t"].to_numpy(), trace["bus_speed"].to_numpy())
+                  for label, trace in traces.items()]
+        for i, ((_, t, speed), label) in enumerate(zip(curves, coinciding_labels(curves),
+                                                       strict=True)):
+            ax.plot(t, speed, label=label, **curve_style(i, len(t)))
         ax.set_title(f"Bus speed, {title}")
         ax.set_xlabel("time (s)")
         ax.grid(alpha=0.3)

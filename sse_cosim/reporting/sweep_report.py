@@ -13,22 +13,33 @@ noise box ``[r, r]`` that is ``r``), labelled with the list itself.
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 from matplotlib import pyplot as plt
 from matplotlib.figure import Figure
 
-from sse_cosim.files import atomic_path, read_plan
+from sse_cosim.files import atomic_path, read_plan, write_text_atomic
 from sse_cosim.reporting import plots
 from sse_cosim.reporting.outputs import RUNS_FOLDER, TaskOutcome, read_outcome
+from sse_cosim.reporting.safety_report import markdown_table
+from sse_cosim.reporting.uncertainty import (
+    Difference,
+    detectable,
+    differences,
+    intervals,
+    pooled_std,
+)
 
 SWEEP_PLAN = "sweep.json"
 SWEEP_TABLE = "sweep.csv"
 SWEEP_PARQUET = "sweep.parquet"
+SWEEP_UNCERTAINTY = "sweep_uncertainty.md"
 
 # Table column -> where the figure sits in a run's summary.json.
 FIGURES: dict[str, tuple[str, ...]] = {
@@ -63,6 +74,10 @@ PLOTTED = (
     "first_detection_fused_bus_to_crossing_m", "fused_area_mean_m2", "fused_area_max_m2",
     "refined_area_mean_m2", "containment_violations", "collisions",
 )
+# The figures whose uncertainty over seeds is reported (sweep_uncertainty.md, report.html):
+# the bus's speed, and the figures that respond where the average speed hardly does.
+RESPONDING = ("average_speed_mps", "time_stopped_s", "min_distance_bus_pedestrian_m",
+              "first_detection_fused_bus_to_crossing_m", "longest_needless_hold_s")
 # The short table (terminal, report): figure -> how runs of one combination are combined.
 SUMMARY_COLUMNS = {
     "average_speed_mps": "mean", "time_stopped_s": "mean", "travel_time_s": "mean",
@@ -182,7 +197,94 @@ def write_sweep_report(folder: Path) -> list[Path]:
         fig = sweep_figure(sweep, table, figure)
         if fig is not None:
             written.append(plots.save_figure(fig, folder / f"sweep_{figure}.png"))
+    written.append(write_text_atomic(folder / SWEEP_UNCERTAINTY,
+                                     uncertainty_markdown(uncertainty(sweep, table))))
     return written
+
+
+@dataclass(frozen=True)
+class FigureUncertainty:
+    """One figure's uncertainty over seeds in a sweep (:mod:`.uncertainty`): per scenario and
+    combination its runs, mean and 95 % interval (``table``, in words), the differences
+    between neighbouring levels, and the seeds' pooled standard deviation ``sigma`` with the
+    least difference the sweep's seeds tell apart (``detectable``)."""
+
+    figure: str
+    table: pd.DataFrame
+    differences: list[Difference]
+    sigma: float
+    seeds: int
+    detectable: float
+
+
+def uncertainty(sweep: SweepFolder, table: pd.DataFrame,
+                figures: Sequence[str] = RESPONDING) -> list[FigureUncertainty]:
+    """:class:`FigureUncertainty` of each of ``figures`` that the finished runs give."""
+    keys = ["scenario", *sweep.columns]
+    finished = table[table["status"] == "ok"] if "status" in table else table
+    found = []
+    for figure in figures:
+        if figure not in finished or finished[figure].dropna().empty:
+            continue
+        groups = intervals(finished.astype({figure: float}), keys, figure)
+        steps: list[Difference] = []
+        for parameter in sweep.parameters:
+            column = parameter["column"]
+            cells = _cells(parameter["values"])
+            order = [cells[_identity(v)] for v in parameter["values"]]
+            labels = _level_words(parameter["values"])
+            others = [c for c in sweep.columns if c != column]
+            steps += differences(groups, column, order, others, figure, labels)
+        sigma = pooled_std(groups)
+        seeds = int(groups["n"].min())
+        shown = groups[keys].assign(
+            **{p["column"]: groups[p["column"]].map(_level_words(p["values"]))
+               for p in sweep.parameters},
+            runs=groups["n"], mean=groups["mean"].map(lambda v: f"{v:.4g}"),
+            interval=[_interval(low, high) for low, high in zip(groups["low"], groups["high"],
+                                                                 strict=True)])
+        found.append(FigureUncertainty(figure, shown, steps, sigma, seeds,
+                                       detectable(sigma, seeds)))
+    return found
+
+
+def _level_words(values: Sequence[Any]) -> dict[Any, str]:
+    """A parameter's table cells, each by its value in words (:func:`value_label`)."""
+    cells = _cells(values)
+    return {cells[_identity(v)]: value_label(v) for v in values}
+
+
+def _interval(low: float, high: float) -> str:
+    return "–" if pd.isna(low) else f"{low:.4g} to {high:.4g}"
+
+
+def uncertainty_markdown(items: Sequence[FigureUncertainty]) -> str:
+    """``sweep_uncertainty.md``: each figure's table of intervals and its differences."""
+    lines = ["# What the seeds leave uncertain", "",
+             "Per scenario and combination of parameter values: the runs (one per seed), the "
+             "mean and Student's 95 % confidence interval of the mean. Between neighbouring "
+             "levels of a parameter: the difference of the means with Welch's 95 % interval; "
+             "it exceeds the seeds' spread where that interval leaves out zero "
+             "(sse_cosim/reporting/uncertainty.py).", ""]
+    for item in items:
+        label = figure_label(item.figure)
+        lines += [f"## {label}", "", markdown_table(item.table.astype(str).to_dict("records")),
+                  ""]
+        if item.sigma == 0.0:
+            lines += ["Every seed gives the same value at each combination: any difference "
+                      "between levels is the parameter's.", ""]
+        elif not math.isnan(item.detectable):
+            lines += [f"The seeds spread by {item.sigma:.3g} (standard deviation pooled over "
+                      f"the combinations); with {item.seeds} seeds per level, differences "
+                      f"below {item.detectable:.3g} are not told apart (95 % confidence, 80 % "
+                      "power; `sse-cosim sweep --detect` says how many seeds a difference "
+                      "needs).", ""]
+        exceed = [d for d in item.differences if d.exceeds]
+        lines += [f"{len(exceed)} of {len(item.differences)} differences between neighbouring "
+                  "levels exceed the seeds' spread:", ""]
+        lines += [f"- {d.line(label)}" for d in item.differences] or ["- none (one level)"]
+        lines.append("")
+    return "\n".join(lines)
 
 
 def sweep_figure(sweep: SweepFolder, table: pd.DataFrame, figure: str) -> Figure | None:
@@ -228,33 +330,44 @@ class _Axis:
         categorical = any(s is None for s in scalars) or len(set(scalars)) < len(scalars)
         place = {_identity(v): float(i) if categorical else scalars[i]
                  for i, v in enumerate(values)}
-        ticks = {place[_identity(v)]: _tick(v) for v in values}
+        ticks = {place[_identity(v)]: value_label(v) for v in values}
         column = parameter["column"]
         return cls(column, f"__x_{column}",
                    [place[_identity(run["values"][column])] for run in runs], ticks)
 
     def decorate(self, ax) -> None:
-        """Label the x axis with the parameter and (up to 12) its values."""
+        """Label the x axis with the parameter in words and (up to 12) its values."""
         if len(self.ticks) <= 12:
             ax.set_xticks(list(self.ticks), list(self.ticks.values()), fontsize=8)
-        ax.set_xlabel(self.column, fontsize=9)
+        ax.set_xlabel(parameter_label(self.column), fontsize=9)
 
 
 def _lines(frame: pd.DataFrame, axes: Sequence[_Axis], figure: str) -> Figure:
+    """One panel per parameter, one curve per scenario: the mean over the other runs with
+    its 95 % interval as a band (:func:`~sse_cosim.reporting.uncertainty.intervals`). Curves
+    that lie on one another are drawn in their own styles and marked as coinciding; a figure
+    that is never negative is shown from zero, so that a flat result looks flat."""
     fig, grid = plt.subplots(1, len(axes), figsize=(5.5 * len(axes), 4), squeeze=False)
+    values = frame[figure].dropna().astype(float)
     for ax, axis in zip(grid[0], axes, strict=True):
-        for i, (scenario, runs) in enumerate(frame.groupby("scenario", sort=False)):
-            stats = runs.groupby(axis.x)[figure].agg(["mean", "min", "max"]).dropna()
-            if stats.empty:
-                continue
-            ax.plot(stats.index, stats["mean"], "o-", color=f"C{i}", label=scenario)
-            ax.fill_between(stats.index, stats["min"].astype(float),
-                            stats["max"].astype(float), color=f"C{i}", alpha=0.2)
+        groups = intervals(frame.astype({figure: float}), ["scenario", axis.x], figure)
+        curves = [(str(scenario), rows[axis.x].to_numpy(), rows["mean"].to_numpy(), rows)
+                  for scenario, rows in ((scenario, rows.sort_values(axis.x)) for scenario, rows
+                                         in groups.groupby("scenario", sort=False))]
+        labels = plots.coinciding_labels([(name, x, y) for name, x, y, _ in curves])
+        for i, ((_, x, y, rows), label) in enumerate(zip(curves, labels, strict=True)):
+            style = plots.curve_style(i, len(x))
+            ax.plot(x, y, label=label, **style)
+            ax.fill_between(x, rows["low"], rows["high"], color=style["color"], alpha=0.2)
         axis.decorate(ax)
         ax.set_ylabel(figure_label(figure))
+        if (values >= 0.0).all():
+            top = float(np.nanmax(groups[["mean", "high"]].to_numpy(dtype=float)))
+            ax.set_ylim(0.0, 1.1 * top if top > 0.0 else 1.0)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle(f"{figure_label(figure)}: mean over seeds, band from min to max", fontsize=11)
+    fig.suptitle(f"{figure_label(figure)}: mean over seeds, band: its 95 % interval",
+                 fontsize=11)
     fig.tight_layout()
     return fig
 
@@ -274,8 +387,8 @@ def _heat_maps(frame: pd.DataFrame, across: _Axis, down: _Axis, figure: str) -> 
         ax.set_xticks(range(len(across.ticks)), [across.ticks[x] for x in means.columns],
                       fontsize=8)
         ax.set_yticks(range(len(down.ticks)), [down.ticks[y] for y in means.index], fontsize=8)
-        ax.set_xlabel(across.column, fontsize=9)
-        ax.set_ylabel(down.column, fontsize=9)
+        ax.set_xlabel(parameter_label(across.column), fontsize=9)
+        ax.set_ylabel(parameter_label(down.column), fontsize=9)
         ax.set_title(scenario, fontsize=10)
         fig.colorbar(image, ax=ax, label=figure_label(figure))
     fig.suptitle(f"{figure_label(figure)}: mean over seeds", fontsize=11)
@@ -296,11 +409,21 @@ def _identity(value: Any) -> str:
     return json.dumps(value, sort_keys=True)
 
 
-def _tick(value: Any) -> str:
-    return value if isinstance(value, str) else json.dumps(value)
+def value_label(value: Any) -> str:
+    """A parameter value in words: a list of numbers as ``0.5 × 0.5``, others as they are."""
+    if isinstance(value, list) and all(isinstance(v, int | float) for v in value):
+        return " × ".join(f"{v:g}" for v in value)
+    return str(value)
 
 
 _UNITS = {"_mps": "m/s", "_m2": "m²", "_m": "m", "_s": "s"}
+
+
+def parameter_label(column: str) -> str:
+    """A swept parameter in words: ``sensors.*[node!=bus].noise_bound_m`` -> ``noise bound
+    (m) of sensors.*[node!=bus]``, ``shared_noise_bound_m`` -> ``shared noise bound (m)``."""
+    where, _, field = column.rpartition(".")
+    return figure_label(field) + (f" of {where}" if where else "")
 
 
 def figure_label(figure: str) -> str:

@@ -67,6 +67,34 @@ def test_a_sweep_writes_one_row_per_run(local_sweep):
                for key in table["key"] for name in ("trace.csv", "replay.html"))
 
 
+def test_a_sweep_says_what_its_seeds_leave_uncertain(local_sweep, capsys):
+    """sweep_uncertainty.md has each responding figure's interval over the two seeds and its
+    difference between the two noise bounds; the end of the sweep says how many of them
+    exceed the seeds' spread, and --detect how many seeds a stated difference needs."""
+    from sse_cosim.cli.sweep_commands import _finish_sweep
+
+    text = (local_sweep / "sweep_uncertainty.md").read_text(encoding="utf-8")
+    for label in ("## average speed (m/s)", "## time stopped (s)",
+                  "## min distance bus pedestrian (m)"):
+        assert label in text
+    assert "| s2_pedestrian | 0.5 × 0.5 | 2 |" in text
+    assert "s2_pedestrian: average speed (m/s) from sensors.*.noise_bound_m = 0.5 × 0.5 to 1 × 1" \
+        in text
+    _finish_sweep(local_sweep, [("average_speed_mps", 0.5)])
+    out = capsys.readouterr().out
+    assert "average speed (m/s): " in out and "exceed the seeds' spread" in out
+    assert "to tell apart 0.5 in average speed (m/s): " in out
+
+
+def test_a_detection_needs_a_figure_and_a_positive_difference(tmp_path):
+    proc = cli("sweep", S2, "--detect", "speed=0.1", "--out", str(tmp_path / "out"))
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1
+    assert "'speed' is no figure of sweep.csv" in proc.stderr
+    proc = cli("sweep", S2, "--detect", "average_speed_mps=-1", "--out", str(tmp_path / "out"))
+    assert proc.returncode == 2 and "needs a positive difference" in proc.stderr
+    assert not (tmp_path / "out").exists()
+
+
 def test_dask_gives_the_same_rows_bit_for_bit(local_sweep, tmp_path):
     proc = cli("sweep", *SWEEP, "--executor", "dask", "--out", str(tmp_path))
     assert proc.returncode == 0, proc.stderr
@@ -129,6 +157,7 @@ def test_report_embeds_every_figure(local_sweep, tmp_path):
     assert page.count('src="data:image/png;base64,') >= 6  # speeds, key moments, set areas,
     # sweep plots
     assert 'alt="Key moments (paper Fig. 5)"' in page
+    assert "What the seeds leave uncertain" in page
     sweep_runs = os.path.relpath(local_sweep / "runs", tmp_path)
     replays = ["single/replay.html", *(f"{sweep_runs}/{key}/replay.html"
                                        for key in pd.read_csv(local_sweep / "sweep.csv")["key"])]
