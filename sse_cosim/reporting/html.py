@@ -181,7 +181,7 @@ def _runs_section(runs: Sequence[RunFolder], out_dir: Path) -> str:
             f'<div class="card"><h3>{html.escape(run.label)}</h3>'
             f"<p class=\"where\">{html.escape(_shown(run.path))}</p>"
             f"{_command(_run_command(run.summary.get('source', '?'), {}, run.path))}"
-            f"{_replay_link(run.path, out_dir, 'Replay this run')}"
+            f"{_replay_link(run.path, out_dir, 'Replay this run', run.summary)}"
             f'<table class="facts">{facts}</table>{images}</div>'
         )
     return ('<h2 id="runs">Runs</h2><p>Every run outside a sweep; scenario.json in each '
@@ -189,18 +189,27 @@ def _runs_section(runs: Sequence[RunFolder], out_dir: Path) -> str:
             f'<div class="cards">{"".join(cards)}</div>')
 
 
-def _replay_link(folder: Path, out_dir: Path, text: str) -> str:
-    """A link to ``folder``'s replay, relative to the report in ``out_dir``; nothing if the run
-    kept no replay (a summaries-only sweep)."""
-    href = replay_href(folder, out_dir)
+def _replay_link(folder: Path, out_dir: Path, text: str,
+                 summary: Mapping[str, Any] | None = None) -> str:
+    """A link to ``folder``'s replay, relative to the report in ``out_dir``, at the run's key
+    moment (its ``summary``'s first detection); nothing if the run kept no replay (a
+    summaries-only sweep)."""
+    href = replay_href(folder, out_dir, summary)
     return "" if href is None else \
         f'<a class="replay" href="{html.escape(href)}">{html.escape(text)}</a>'
+
+
+def _summary(sweep: SweepFolder, run: Mapping[str, Any]) -> Mapping[str, Any] | None:
+    """A sweep run's summary; None while it has none (failed, not finished)."""
+    outcome = sweep.outcome(run)
+    return None if outcome is None else outcome.summary
 
 
 def _sweep_replays(sweep: SweepFolder, out_dir: Path) -> str:
     """Links to the replays of the sweep's runs (nothing if none kept one)."""
     links = [link for run in sweep.runs
-             if (link := _replay_link(sweep.run_folder(run["key"]), out_dir, run["key"]))]
+             if (link := _replay_link(sweep.run_folder(run["key"]), out_dir, run["key"],
+                                      _summary(sweep, run)))]
     if not links:
         return ""
     return (f"<details><summary>Replays ({len(links)} runs)</summary>"

@@ -86,6 +86,7 @@ def write_run(
     out_dir.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out_dir / SCENARIO,
                       {"source": source, **portable_scenario(scenario, out_dir)})
+    summary = {"source": source, **recorder.summary(route_completed), **(extra or {})}
     if not summary_only:
         # pandas and matplotlib load only here: a sweep's summary-only runs skip ~1 s of imports
         import pandas as pd
@@ -102,12 +103,12 @@ def write_run(
         )
         write_text_atomic(out_dir / REGIONS, "".join(map(region_line, recorder.regions)))
         if recorder.replay is not None:
-            page = replay.replay_page(recorder.replay, scenario, roadmap, label(scenario))
+            page = replay.replay_page(recorder.replay, scenario, roadmap, label(scenario),
+                                      replay.opening_s(summary))
             write_text_atomic(out_dir / replay.REPLAY, page)
         if plots_wanted and not trace.empty:
             _write_plots(out_dir, scenario, recorder, trace, roadmap)
-    summary = {"source": source, **recorder.summary(route_completed), **(extra or {})}
-    write_json_atomic(out_dir / SUMMARY, summary)
+    write_json_atomic(out_dir / SUMMARY, summary)  # last: a folder with it is complete
     return summary
 
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -44,11 +44,26 @@ CM = 100.0  # coordinates are stored in integer centimetres
 STRIP_MARGIN_M = 5.0  # a strip is drawn over its sensor's view box widened by this much
 STRIP_SPAN_M = 1000.0  # half-length of the band built before clipping (longer than any view)
 
-def replay_href(folder: Path, out_dir: Path) -> str | None:
-    """The link from a report in ``out_dir`` to ``folder``'s replay (POSIX, relative); None if
-    the run kept none (a summaries-only sweep)."""
+def replay_href(folder: Path, out_dir: Path, summary: Mapping[str, Any] | None = None
+                ) -> str | None:
+    """The link from a report in ``out_dir`` to ``folder``'s replay (POSIX, relative), at the
+    run's key moment (``#t=``, :func:`opening_s` of its ``summary``) where it has one; None
+    if the run kept no replay (a summaries-only sweep)."""
     page = folder / REPLAY
-    return Path(os.path.relpath(page, out_dir)).as_posix() if page.is_file() else None
+    if not page.is_file():
+        return None
+    at = opening_s(summary or {})
+    anchor = "" if at is None else f"#t={at:g}"
+    return Path(os.path.relpath(page, out_dir)).as_posix() + anchor
+
+
+def opening_s(summary: Mapping[str, Any]) -> float | None:
+    """The run's key moment, where its replay opens: the first detection of a pedestrian by
+    any node (s; ``summary.json``'s ``first_detection``); None without one (the replay opens
+    at the start). A page's ``#t=<s>`` or ``#step=<n>`` opens it elsewhere."""
+    times = [entry["t"] for entry in (summary.get("first_detection") or {}).values()
+             if isinstance(entry, Mapping) and entry.get("t") is not None]
+    return float(min(times)) if times else None
 
 
 LocalSet = tuple[str, str, Zonotope, bool]  # node, pedestrian, position set, detected now
@@ -197,10 +212,13 @@ def _band(normal: np.ndarray, value: float, radius: float,
     return shapely.clip_by_rect(band, *box)
 
 
-def replay_page(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: str) -> str:
+def replay_page(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: str,
+                opens_at_s: float | None = None) -> str:
     """The self-contained page: the template with the run's data in place of ``DATA_MARK``
-    and its polygons in place of ``POLYGONS_MARK``."""
+    and its polygons in place of ``POLYGONS_MARK``; it opens at the step nearest
+    ``opens_at_s`` (the start for None)."""
     data = _replay_data(log, scenario, roadmap, title)  # adds the map to the pool: first
+    data["opens_at_s"] = opens_at_s
     template = resources.files("sse_cosim.reporting").joinpath(TEMPLATE).read_text("utf-8")
     page = template.replace(DATA_MARK, _script_text(json.dumps(data, separators=(",", ":"))), 1)
     return page.replace(POLYGONS_MARK, _script_text(log.pool.to_json()), 1)

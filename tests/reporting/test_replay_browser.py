@@ -4,18 +4,20 @@ from the network and logs no error. Without Chromium these tests fail; they neve
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from sse_cosim.reporting.replay import REPLAY
+from sse_cosim.reporting.replay import REPLAY, replay_href
 from sse_cosim.runner.run import run_scenario_file
 
 pytestmark = [pytest.mark.sumo, pytest.mark.browser]
 ROOT = Path(__file__).resolve().parents[2]
 S3 = ROOT / "scenarios" / "s3_pedestrian.toml"
+S2 = ROOT / "scenarios" / "s2_pedestrian.toml"
 JUNCTION = ROOT / "sumo_net" / "junction"  # a four-arm junction with route-file traffic
 S3_SECONDS = 12.5  # the pedestrian steps onto the zebra at 11.5 s
 PAGE_LIMIT_BYTES_PER_S = 5e6 / 30  # a 30 s run's page stays under 5 MB
@@ -56,6 +58,21 @@ def s3_run(tmp_path_factory) -> Path:
 
 def at(table: pd.DataFrame, t: float) -> pd.DataFrame:
     return table[np.isclose(table["t"], t)]
+
+
+def test_the_page_opens_at_the_first_detection_unless_its_address_names_a_moment(
+        tmp_path, browser):
+    """Opened plain, the replay shows the run's key moment (the first detection of
+    summary.json, the moment report.html links to with #t=; in S2 the car's at 3.3 s), not the
+    bus alone at t = 0; #t=<s> and #step=<n> open it elsewhere."""
+    run_scenario_file(S2, tmp_path / "s2", {"simulation.duration_s": 4.0}, plots=False)
+    summary = json.loads((tmp_path / "s2" / "summary.json").read_text(encoding="utf-8"))
+    first = min(entry["t"] for entry in summary["first_detection"].values())
+    assert first > 1.0
+    assert Replay(browser, tmp_path / "s2").time() == pytest.approx(first)
+    assert Replay(browser, tmp_path / "s2", "#t=2.5").time() == pytest.approx(2.5)
+    assert Replay(browser, tmp_path / "s2", "#step=7").step() == 7
+    assert replay_href(tmp_path / "s2", tmp_path, summary) == f"s2/{REPLAY}#t={first:g}"
 
 
 def test_the_page_draws_the_pedestrian_and_shows_the_level_of_the_step(s3_run, browser):

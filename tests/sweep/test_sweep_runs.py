@@ -161,7 +161,7 @@ def test_report_embeds_every_figure(local_sweep, tmp_path):
     sweep_runs = os.path.relpath(local_sweep / "runs", tmp_path)
     replays = ["single/replay.html", *(f"{sweep_runs}/{key}/replay.html"
                                        for key in pd.read_csv(local_sweep / "sweep.csv")["key"])]
-    assert [link for link in replays if f'class="replay" href="{link}"' not in page] == []
+    assert [link for link in replays if f'class="replay" href="{link}' not in page] == []
     assert page.count("src=") == page.count('src="data:image/png;base64,')
     assert "<link" not in page and "<script" not in page
     assert (tmp_path / "table1.csv").is_file()
