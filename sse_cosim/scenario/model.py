@@ -40,6 +40,7 @@ class Simulation(StrictModel):
 
 
 DEFAULT_SOURCES_DIR = "../sumo_net"
+CROSSING_TOLERANCE_S = 1.0  # a planned step onto a crossing may come this late or early (s)
 
 
 class Network(StrictModel):
@@ -169,8 +170,10 @@ class Pedestrian(StrictModel):
     )
     crossing_tolerance_s: NonNegativeFloat | None = Field(
         None, description="How far (s) its step onto the crossing may be from "
-        "steps_onto_crossing_s before the run stops; left out: one step. A crowd whose "
-        "pedestrians hold each other up on the sidewalk sets more (scenarios/crowd.toml)."
+        "steps_onto_crossing_s before the run stops (at least one step); left out: "
+        f"{CROSSING_TOLERANCE_S:g} s, room for a car's right of way holding it at the kerb for "
+        "a moment. A crowd whose pedestrians hold each other up on the sidewalk sets more "
+        "(scenarios/crowd.toml)."
     )
     crossing: str | None = Field(
         None, description="SUMO id of the crossing its walk takes (e.g. ':C_c0'), where the walk "

@@ -128,7 +128,12 @@ import shapely
 
 from sse_cosim.errors import SimulationError, UserError
 from sse_cosim.estimation.motion import acceleration_bound
-from sse_cosim.scenario.model import AutomatedVehicle, Scenario, present
+from sse_cosim.scenario.model import (
+    CROSSING_TOLERANCE_S,
+    AutomatedVehicle,
+    Scenario,
+    present,
+)
 from sse_cosim.world import checks, demand, walker_jitter
 from sse_cosim.world.checks import CheckSetup, StepFacts
 from sse_cosim.world.checks.motion import MotionCheck
@@ -639,11 +644,12 @@ class SumoWorld:
                                 "node (sensors.<name>.node)")
 
     def _check_steps_onto_crossings(self, snapshot: Snapshot) -> None:
-        """Every planned pedestrian steps onto its crossing within one step of its
-        ``steps_onto_crossing_s``; SUMO holding it up (a person or vehicle in its way, a red
-        light) or letting it step on early stops the run (:class:`SimulationError`, naming
-        the vehicles on that crossing: SUMO keeps a pedestrian off a crossing a vehicle
-        occupies)."""
+        """Every planned pedestrian steps onto its crossing within its
+        ``crossing_tolerance_s`` (:data:`CROSSING_TOLERANCE_S` where left out, at least one
+        step) of its ``steps_onto_crossing_s``; SUMO holding it up longer (a person or
+        vehicle in its way, a red light) or letting it step on earlier stops the run
+        (:class:`SimulationError`, naming the vehicles on that crossing: SUMO keeps a
+        pedestrian off a crossing a vehicle occupies)."""
         time = snapshot.time
         for pid, plan in self.pedestrian_plans.items():
             if pid in self._stepped_on:
@@ -653,7 +659,7 @@ class SumoWorld:
             if on:
                 self._stepped_on[pid] = time
             tolerance = self.scenario.pedestrians[pid].crossing_tolerance_s
-            allowed = self._dt if tolerance is None else max(self._dt, tolerance)
+            allowed = max(self._dt, CROSSING_TOLERANCE_S if tolerance is None else tolerance)
             if abs(time - wanted) <= allowed + TIME_EPS_S or (not on and time < wanted):
                 continue
             when = f"stepped onto it at {time:.2f} s" if on else (

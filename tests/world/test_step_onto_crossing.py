@@ -116,24 +116,43 @@ def test_the_pedestrian_crosses_where_its_crossing_says() -> None:
     assert ":C_c0" in info.value.fix and ":D_c0" in info.value.fix
 
 
-def test_a_pedestrian_off_its_time_stops_the_run(tmp_path: Path,
-                                                 monkeypatch: pytest.MonkeyPatch) -> None:
-    """A timer that says the walk takes 1 s longer than it does: the walker steps on 1 s
-    early, and the world stops the run at that step with one line."""
+def off_by(shift_s: float, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A timer that says every walk takes ``shift_s`` longer than it does: the walker steps
+    on that much early."""
     real = ProbeTimer.__call__
 
     def late(self: ProbeTimer, walks: dict, step_s: float) -> dict[str, float]:
-        return {pid: t + 1.0 for pid, t in real(self, walks, step_s).items()}
+        return {pid: t + shift_s for pid, t in real(self, walks, step_s).items()}
 
     monkeypatch.setattr(ProbeTimer, "__call__", late)
-    sc = scenario("s1_pedestrian", **{**NEAR, f"{PED}.steps_onto_crossing_s": 8.5})
+
+
+def test_a_pedestrian_off_its_time_stops_the_run(tmp_path: Path,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    """2 s early, beyond the default tolerance of 1 s: the world stops the run at that step
+    with one line."""
+    off_by(2.0, monkeypatch)
+    sc = scenario("s1_pedestrian", **{**NEAR, f"{PED}.steps_onto_crossing_s": 10.0})
     with pytest.raises(SimulationError) as info:
         run_world(sc, tmp_path)
     line = str(info.value)
     assert "\n" not in line
-    for words in ("pedestrian 'pedestrian'", ":C_c0", "at 8.5 s", "stepped onto it at 7.50 s",
-                  f"{PED}.steps_onto_crossing_s"):
+    for words in ("pedestrian 'pedestrian'", ":C_c0", "at 10 s", "stepped onto it at 8.00 s",
+                  "more than 1 s off", f"{PED}.steps_onto_crossing_s"):
         assert words in line, (words, line)
+
+
+def test_a_moment_off_its_time_is_within_the_default_tolerance(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """0.5 s early (a car's right of way holds a walker about that long): the run goes on;
+    with the tolerance set to one step it stops."""
+    off_by(0.5, monkeypatch)
+    sc = scenario("s1_pedestrian", **{**NEAR, f"{PED}.steps_onto_crossing_s": 8.5})
+    run_world(sc, tmp_path / "default")
+    strict = scenario("s1_pedestrian", **{**NEAR, f"{PED}.steps_onto_crossing_s": 8.5,
+                                          f"{PED}.crossing_tolerance_s": 0.1})
+    with pytest.raises(SimulationError, match=r"stepped onto it at 8\.00 s"):
+        run_world(strict, tmp_path / "strict")
 
 
 def test_a_timer_walks_the_same_walks_once(net_path: Path, monkeypatch) -> None:
