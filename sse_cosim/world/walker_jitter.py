@@ -91,6 +91,7 @@ import numpy as np
 import shapely
 import sumolib
 
+from sse_cosim.errors import SimulationError
 from sse_cosim.files import write_text_atomic
 from sse_cosim.regions import PolygonRegion
 from sse_cosim.world.acceleration_assumption import AccelerationBounds, needed_jitter
@@ -109,6 +110,7 @@ LEAD_M = 3.0  # how far a walk starts before a walking area and ends beyond it (
 CACHE_FILE_NAME = "walker_jitter.json"
 _EPS_M = 1e-9  # steps longer than v dt by rounding only need no jitter
 GROUND_BAND_M = 0.25  # how far a ground patch reaches around a lone walker's stretch off it (m)
+MEET_RETRIES = 3  # walkers that met walk again alone this many times at most
 
 
 def _off_ground(ground: shapely.Geometry, runs: Sequence[np.ndarray]) -> shapely.Geometry:
@@ -362,14 +364,13 @@ def _walk_junctions(net_path: Path, net: sumolib.net.Net,
     walks = passages(net, areas)
     lengths = [sum(net.getEdge(e).getLength() for e in edges[1:-1]) + 2.0 * LEAD_M
                for _, edges, _, _ in walks]
-    slot = slot_s(max(lengths, default=0.0) / speed_mps, step_s, longest_cycle_s(net_path))
+    # a walk crosses at most two crossings (in by one, out by another): two whole cycles
+    slot = slot_s(max(lengths, default=0.0) / speed_mps, step_s,
+                  2.0 * longest_cycle_s(net_path))
     walkers = [Walker(id=f"w{i}", edges=edges, depart_pos_m=depart, arrival_pos_m=arrival,
-                      speed_mps=speed_mps, depart_s=round(k * slot, 6), radius_m=radius_m)
-               for i, ((_, edges, depart, arrival), k)
-               in enumerate(zip(walks, _slots([w[1] for w in walks]), strict=True))]
-    traces = walk_alone_kept_on_error(net_path, walkers, step_s, "walker_jitter.",
-                                      accel_mps2=accel_mps2)
-    _check_alone(walkers, traces)
+                      speed_mps=speed_mps, depart_s=0.0, radius_m=radius_m)
+               for i, (_, edges, depart, arrival) in enumerate(walks)]
+    traces = _walk_apart(net_path, walkers, step_s, slot, accel_mps2)
     by_junction: dict[str, list[tuple[tuple[str, ...], WalkTrace]]] = {}
     for (junction, edges, _, _), walker in zip(walks, walkers, strict=True):
         by_junction.setdefault(junction, []).append((edges, traces[walker.id]))
@@ -462,16 +463,50 @@ def _slots(walks: Sequence[tuple[str, ...]]) -> list[int]:
     return slots
 
 
-def _check_alone(walkers: Sequence[Walker], traces: dict[str, WalkTrace]) -> None:
-    """Walkers that share an edge did not walk at the same time (else a slot was too short)."""
+def _walk_apart(net_path: Path, walkers: Sequence[Walker], step_s: float, slot_s_: float,
+                accel_mps2: float | None) -> dict[str, WalkTrace]:
+    """Every walker's trace, walked alone: walkers that share an edge depart in different
+    slots of ``slot_s_`` (:func:`_slots`). SUMO may hold a walker longer than a slot (a
+    light, a jam); walkers that met all the same walk again in a simulation of their own,
+    with slots twice as long, up to :data:`MEET_RETRIES` times; then the measurement stops
+    with one line (:class:`~sse_cosim.errors.SimulationError`)."""
+    traces: dict[str, WalkTrace] = {}
+    todo = list(walkers)
+    for _ in range(MEET_RETRIES + 1):
+        slots = _slots([w.edges for w in todo])
+        placed = [replace(w, depart_s=round(k * slot_s_, 6)) for w, k in zip(todo, slots,
+                                                                             strict=True)]
+        walked = walk_alone_kept_on_error(net_path, placed, step_s, "walker_jitter.",
+                                          accel_mps2=accel_mps2)
+        met = _met(placed, walked)
+        traces.update({w.id: walked[w.id] for w in placed if w.id not in met})
+        if not met:
+            return traces
+        todo, slot_s_ = [w for w in todo if w.id in met], 2.0 * slot_s_
+    first = sorted(met)[:4]
+    raise SimulationError(net_path.name, f"walkers {', '.join(first)} of the jitter "
+                          f"measurement still met after {MEET_RETRIES} walks in slots up to "
+                          f"{slot_s_ / 2.0:g} s long (SUMO held them up): measure a smaller "
+                          "scene (a cut of the network, docs/own_network.md), or set "
+                          "estimator.position_jitter_m")
+
+
+def _met(walkers: Sequence[Walker], traces: dict[str, WalkTrace]) -> set[str]:
+    """The walkers that shared an edge with another at the same time (their traces may be
+    pushed by each other's)."""
     spans = {w.id: (traces[w.id].times_s[0], traces[w.id].times_s[-1]) for w in walkers}
-    for i, first in enumerate(walkers):
-        for second in walkers[i + 1:]:
-            if set(first.edges) & set(second.edges):
+    by_edge: dict[str, list[Walker]] = {}
+    for walker in walkers:
+        for edge in set(walker.edges):
+            by_edge.setdefault(edge, []).append(walker)
+    met: set[str] = set()
+    for sharing in by_edge.values():
+        for i, first in enumerate(sharing):
+            for second in sharing[i + 1:]:
                 (a0, a1), (b0, b1) = spans[first.id], spans[second.id]
                 if a0 <= b1 and b0 <= a1:
-                    raise RuntimeError(f"walkers {first.id} and {second.id} met: the jitter "
-                                       "measurement's slots are too short")
+                    met.update((first.id, second.id))
+    return met
 
 
 def _walk_jitter(junction: str, edges: tuple[str, ...], trace: WalkTrace,
