@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import pairwise
@@ -720,6 +720,7 @@ class RunRecorder:
             "collisions": _entries([r["collision"] for r in rows]),
             "route_completed": route_completed,
             "time_stopped_s": round(dt * int(np.sum(speeds < STOPPED_SPEED_MPS)), 6),
+            "first_stop": _first_stop(rows),
             # stop and go: the controller's order to move after its order to stop
             "restarts": sum(before["commanded_speed"] == 0.0 < now["commanded_speed"]
                             for before, now in pairwise(rows)),
@@ -919,6 +920,19 @@ def _frame(t: float, result: StepResult, unobserved: shapely.Geometry,
         truths={pid: (float(xy[0]), float(xy[1])) for pid, xy in truths.items()},
         unobserved=unobserved,
     )
+
+
+def _first_stop(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
+    """When the vehicle first stood after it had moved (its speed below
+    :data:`STOPPED_SPEED_MPS`), and its front's distance to the crossing then (the trace's
+    ``distance_to_crossing``); None if it never did."""
+    moved = False
+    for row in rows:
+        if row["bus_speed"] >= STOPPED_SPEED_MPS:
+            moved = True
+        elif moved:
+            return {"t": row["t"], "bus_distance_to_crossing_m": row.get("distance_to_crossing")}
+    return None
 
 
 def _longest_run(flags: list[bool]) -> int:

@@ -126,6 +126,15 @@ def test_time_stopped_sums_the_steps_below_a_tenth_of_a_metre_per_second():
     assert recorder_with([], []).summary()["time_stopped_s"] == 0.0
 
 
+def test_the_first_stop_is_the_first_standstill_after_moving():
+    """A bus standing at its departure has not stopped yet; the first step below 0.1 m/s
+    after it moved is its first stop (the sweeps' distance at the first stop reads it)."""
+    speeds = [0.0, 0.0, 5.0, 0.09, 0.0, 3.0, 0.0]
+    stop = recorder_with(speeds, [False] * len(speeds)).summary()["first_stop"]
+    assert stop is not None and stop["t"] == pytest.approx(0.3)
+    assert recorder_with([5.0, 5.0], [False, False]).summary()["first_stop"] is None
+
+
 def test_route_completed_comes_from_the_caller():
     recorder = recorder_with([20.0], [False])
     assert recorder.summary(DONE)["route_completed"] is True
