@@ -361,12 +361,11 @@ def _check_speed(net: sumolib.net.Net, edges: list[str], vclass: str, speed: flo
                  source: str) -> None:
     """``speed`` is within the limit of every lane the vehicle may use on its route (SUMO would
     hold it to the limit, and refuse a faster departure): a traffic vehicle keeps one speed."""
-    slowest = min(_route_lanes(net, edges, vclass), key=lambda lane: lane.getSpeed())
-    limit = slowest.getSpeed()
+    lane, limit = _route_limit(net, edges, vclass, min)
     if speed > limit + 1e-9:
         raise UserError(source, field, f"{speed:g} m/s is above the speed limit of lane "
-                        f"{slowest.getID()!r} on the route ({limit:g} m/s), which SUMO would "
-                        "hold the vehicle to", f"use at most {limit:g} m/s")
+                        f"{lane!r} on the route ({limit:g} m/s), which SUMO would hold the "
+                        "vehicle to", f"use at most {limit:g} m/s")
 
 
 def _check_nominal(net: sumolib.net.Net, edges: list[str], vclass: str, speed: float,
@@ -375,12 +374,19 @@ def _check_nominal(net: sumolib.net.Net, edges: list[str], vclass: str, speed: f
     drives each lane at most at the lane's limit (its controller plans with the limits ahead,
     :mod:`sse_cosim.control.limits`), so a nominal speed above every limit could never be
     driven, and its levels (fractions of it) would not mean what they say."""
-    fastest = max(_route_lanes(net, edges, vclass), key=lambda lane: lane.getSpeed())
-    limit = fastest.getSpeed()
+    lane, limit = _route_limit(net, edges, vclass, max)
     if speed > limit + 1e-9:
         raise UserError(source, field, f"{speed:g} m/s is above every speed limit on the "
-                        f"route (the fastest, lane {fastest.getID()!r}, allows {limit:g} m/s): "
-                        "the vehicle could never drive it", f"use at most {limit:g} m/s")
+                        f"route (the fastest, lane {lane!r}, allows {limit:g} m/s): the "
+                        "vehicle could never drive it", f"use at most {limit:g} m/s")
+
+
+def _route_limit(net: sumolib.net.Net, edges: list[str], vclass: str,
+                 pick: Callable[..., sumolib.net.lane.Lane]) -> tuple[str, float]:
+    """The lane ``pick`` (min or max) chooses by speed limit among the lanes a ``vclass``
+    vehicle may use on its route, and that limit (m/s)."""
+    lane = pick(_route_lanes(net, edges, vclass), key=lambda candidate: candidate.getSpeed())
+    return str(lane.getID()), float(lane.getSpeed())
 
 
 def _route_lanes(net: sumolib.net.Net, edges: list[str],
