@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 
 from sse_cosim.world.roadmap import LaneGeometry
 
@@ -31,8 +32,8 @@ class RouteLimits:
     @classmethod
     def of_lanes(cls, lanes: Sequence[LaneGeometry]) -> RouteLimits:
         """The limits of ``lanes``, the route's lanes in order (``RoadMap.route_lanes``)."""
-        lengths = [float(np.linalg.norm(np.diff(lane.shape, axis=0), axis=1).sum())
-                   for lane in lanes]
+        # GEOS's length, as the route line's along-route position measures it
+        lengths = [float(shapely.LineString(lane.shape).length) for lane in lanes]
         return cls(np.cumsum(lengths), np.array([lane.speed_mps for lane in lanes]))
 
     def at(self, s: float) -> float:
