@@ -7,7 +7,8 @@ each figure against the swept parameters (see :func:`sweep_figure`).
 
 Parameter values that are lists (a noise bound ``[0.5, 0.5]``) are JSON strings in the
 table, and are plotted at their largest absolute component (the infinity norm: for a
-noise box ``[r, r]`` that is ``r``), labelled with the list itself.
+noise box ``[r, r]`` that is ``r``), labelled in words (``0.5 × 0.5``).
+``sweep_uncertainty.md`` says what the seeds leave uncertain (:mod:`.uncertainty`).
 """
 
 from __future__ import annotations
@@ -232,11 +233,9 @@ def uncertainty(sweep: SweepFolder, table: pd.DataFrame,
         steps: list[Difference] = []
         for parameter in sweep.parameters:
             column = parameter["column"]
-            cells = _cells(parameter["values"])
-            order = [cells[_identity(v)] for v in parameter["values"]]
-            labels = _level_words(parameter["values"])
+            labels = _level_words(parameter["values"])  # in the order of the values
             others = [c for c in sweep.columns if c != column]
-            steps += differences(groups, column, order, others, figure, labels)
+            steps += differences(groups, column, list(labels), others, figure, labels)
         sigma = pooled_std(groups)
         seeds = int(groups["n"].min())
         shown = groups[keys].assign(
