@@ -25,15 +25,22 @@ COMMANDS = ["batch", "bench", "falsify", "fields", "network", "report", "run", "
 
 
 @pytest.fixture(scope="module")
-def site(tmp_path_factory) -> Iterator[str]:
-    """The built site, served over HTTP on this machine as a reader's server would (its pages
-    are folders, and its search index is loaded by a worker); the address of its root."""
+def built(tmp_path_factory) -> Path:
+    """The site as `make docs` builds it (``--strict``), in a folder of its own."""
     out = tmp_path_factory.mktemp("site")
     done = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir",
                            str(out)], cwd=ROOT, capture_output=True, text=True, timeout=600,
                           env={**os.environ, "NO_MKDOCS_2_WARNING": "1"})
     assert done.returncode == 0, done.stderr[-3000:]
-    server = ThreadingHTTPServer(("127.0.0.1", 0), partial(Quiet, directory=str(out)))
+    return out
+
+
+@pytest.fixture(scope="module")
+def site(built: Path) -> Iterator[str]:
+    """The built site, served over HTTP on this machine as a reader's server would (its search
+    index is loaded by a worker, which a page opened from a file may not start); the address
+    of its root."""
+    server = ThreadingHTTPServer(("127.0.0.1", 0), partial(Quiet, directory=str(built)))
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
     yield f"http://127.0.0.1:{server.server_address[1]}/"
@@ -73,9 +80,20 @@ def test_the_home_page_leads_to_every_part(site: str, page) -> None:
     assert errors == []
 
 
+def test_the_pages_open_from_the_file_system(built: Path, browser) -> None:
+    """`make docs` then opening site/index.html, as the README says: its links lead to pages
+    (files, not folders a browser would list)."""
+    tab = browser.new_page()
+    tab.goto((built / "index.html").as_uri())
+    tab.get_by_role("link", name="your first run").first.click()
+    assert tab.url.endswith("tutorial/first_run.html")
+    assert "make run" in tab.locator("article").inner_text()
+    tab.close()
+
+
 def test_the_fields_page_holds_the_schemas_table(site: str, page) -> None:
     tab, errors = page
-    tab.goto(site + "reference/fields/")
+    tab.goto(site + "reference/fields.html")
     rows = tab.locator("article table tr")
     fields = [line for line in fields_markdown().splitlines() if line.startswith("| `")]
     assert rows.count() == len(fields) + 1  # and its header
@@ -85,7 +103,7 @@ def test_the_fields_page_holds_the_schemas_table(site: str, page) -> None:
 
 def test_the_command_line_page_documents_every_command(site: str, page) -> None:
     tab, errors = page
-    tab.goto(site + "reference/cli/")
+    tab.goto(site + "reference/cli.html")
     text = tab.locator("article").inner_text()
     for command in COMMANDS:
         assert f"sse-cosim {command} [OPTIONS]" in text, command
