@@ -310,18 +310,23 @@ class SceneContext:
         braking = speed**2 / (2.0 * self.bus.comfortable_decel_mps2)
         return speed * cfg.reaction_time_s + braking + cfg.stopping_margin_m
 
+    def limit_on(self, front_s: float, distance: float) -> float:
+        """The slowest speed (m/s) the speed limits may hold the bus to while its front drives
+        ``distance`` m on from ``front_s`` (:meth:`~sse_cosim.control.limits.RouteLimits.least`:
+        the limits on that stretch and just beyond it)."""
+        return self.limits.least(front_s, front_s + distance, self.dynamics.decel)
+
     def top_speed(self, front_s: float, distance: float) -> float:
         """The fastest speed (m/s) the bus can hold while its front drives ``distance`` m on
-        from ``front_s``: its nominal speed, within the speed limits on that stretch and just
-        beyond it (:meth:`~sse_cosim.control.limits.RouteLimits.least`)."""
-        return min(self.bus.nominal_speed_mps, self.limits.least(
-            front_s, front_s + distance, self.dynamics.decel))
+        from ``front_s``: its nominal speed, within :meth:`limit_on`."""
+        return min(self.bus.nominal_speed_mps, self.limit_on(front_s, distance))
 
-    def standstill_clear_time(self, front_s: float, to_clear: float) -> float:
-        """Time (s) the bus, its front at ``front_s``, needs from standstill at its top speed
-        (:meth:`top_speed`) to clear a zone whose far end its front must still travel
-        ``to_clear`` metres to pass."""
-        return self.dynamics.travel_time(to_clear, 0.0, self.top_speed(front_s, to_clear))
+    def standstill_clear_time(self, to_clear: float, limit_mps: float) -> float:
+        """Time (s) the bus needs from standstill, at its nominal speed within ``limit_mps``
+        (:meth:`limit_on` of the way), to clear a zone whose far end its front must still
+        travel ``to_clear`` metres to pass."""
+        return self.dynamics.travel_time(to_clear, 0.0,
+                                         min(self.bus.nominal_speed_mps, limit_mps))
 
 
 @dataclass(frozen=True)
@@ -336,7 +341,7 @@ class ZoneOutlook:
     ``SceneContext.zones``; ``clear_s``: the time the bus needs from standstill to clear it
     (:meth:`SceneContext.standstill_clear_time`); ``limit_mps``: the slowest speed the
     limits may hold the bus to until its rear has cleared it (a pass holds no more;
-    :meth:`~sse_cosim.control.limits.RouteLimits.least`); ``ground``: its walkable ground as far as
+    :meth:`SceneContext.limit_on`); ``ground``: its walkable ground as far as
     the body can still touch it (:func:`_ahead_of_body`; a check's, the recorder's);
     ``lit``: the signalised crossings whose own ground it meets, each its id, that own ground
     and its lights (the route's geometry and the network's programs, for the checks).
@@ -552,14 +557,15 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
         if held and zone.ground is not None:
             arrivals[k] = _lit_arrival(context, zone, held, sources, True)
             in_view_arrivals[k] = _lit_arrival(context, zone, held, in_view, in_view_beyond)
+    limits = [context.limit_on(front_s, to_clear) for _, _, to_clear in ahead]
     return tuple(
         ZoneOutlook(index, zone.start_m - front_s, to_clear,
                     max(float(arrival), floors.get(index, 0.0)), float(in_view_arrival),
-                    context.standstill_clear_time(front_s, to_clear), zone.ground,
+                    context.standstill_clear_time(to_clear, limit), zone.ground,
                     tuple((c.id, c.own, c.lights) for c in (context.lit[i] for i in zone.lit)),
-                    context.limits.least(front_s, front_s + to_clear, context.dynamics.decel))
-        for (index, zone, to_clear), arrival, in_view_arrival
-        in zip(ahead, arrivals, in_view_arrivals, strict=True))
+                    limit)
+        for (index, zone, to_clear), arrival, in_view_arrival, limit
+        in zip(ahead, arrivals, in_view_arrivals, limits, strict=True))
 
 
 def _lit_arrival(context: SceneContext, zone: ConflictZone,
@@ -798,13 +804,13 @@ def _lit_crossings(roadmap: RoadMap, pieces: Sequence[shapely.Geometry], beyond:
     ``pieces`` meet; ``beyond``: the ground beyond the tracked window; ``radius_m``: the
     pedestrians' body radius (how far a walker on a crossing may lie outside its area)."""
     lit = []
+    reach = on_crossing_reach_m(radius_m)
     for crossing in roadmap.crossings:
         own = roadmap.own_grounds.get(crossing.id)
         if own is None:
             continue
         if not any(_meets(piece, own) for piece in pieces):
             continue
-        reach = on_crossing_reach_m(radius_m)
         near = kind.outer(crossing.area.buffer(reach + AREA_TOL_M, join_style="mitre"))
         lit.append(LitCrossing(crossing.id, roadmap.crossing_lights(crossing), own, near,
                                kind.inner(crossing.area.buffer(reach, join_style="mitre")),

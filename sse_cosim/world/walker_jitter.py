@@ -463,10 +463,10 @@ def _slots(walks: Sequence[tuple[str, ...]]) -> list[int]:
     return slots
 
 
-def _walk_apart(net_path: Path, walkers: Sequence[Walker], step_s: float, slot_s_: float,
+def _walk_apart(net_path: Path, walkers: Sequence[Walker], step_s: float, slot_length_s: float,
                 accel_mps2: float | None) -> dict[str, WalkTrace]:
     """Every walker's trace, walked alone: walkers that share an edge depart in different
-    slots of ``slot_s_`` (:func:`_slots`). SUMO may hold a walker longer than a slot (a
+    slots of ``slot_length_s`` (:func:`_slots`). SUMO may hold a walker longer than a slot (a
     light, a jam); walkers that met all the same walk again in a simulation of their own,
     with slots twice as long, up to :data:`MEET_RETRIES` times; then the measurement stops
     with one line (:class:`~sse_cosim.errors.SimulationError`)."""
@@ -474,7 +474,7 @@ def _walk_apart(net_path: Path, walkers: Sequence[Walker], step_s: float, slot_s
     todo = list(walkers)
     for _ in range(MEET_RETRIES + 1):
         slots = _slots([w.edges for w in todo])
-        placed = [replace(w, depart_s=round(k * slot_s_, 6)) for w, k in zip(todo, slots,
+        placed = [replace(w, depart_s=round(k * slot_length_s, 6)) for w, k in zip(todo, slots,
                                                                              strict=True)]
         walked = walk_alone_kept_on_error(net_path, placed, step_s, "walker_jitter.",
                                           accel_mps2=accel_mps2)
@@ -482,11 +482,11 @@ def _walk_apart(net_path: Path, walkers: Sequence[Walker], step_s: float, slot_s
         traces.update({w.id: walked[w.id] for w in placed if w.id not in met})
         if not met:
             return traces
-        todo, slot_s_ = [w for w in todo if w.id in met], 2.0 * slot_s_
+        todo, slot_length_s = [w for w in todo if w.id in met], 2.0 * slot_length_s
     first = sorted(met)[:4]
     raise SimulationError(net_path.name, f"walkers {', '.join(first)} of the jitter "
                           f"measurement still met after {MEET_RETRIES} walks in slots up to "
-                          f"{slot_s_ / 2.0:g} s long (SUMO held them up): measure a smaller "
+                          f"{slot_length_s / 2.0:g} s long (SUMO held them up): measure a smaller "
                           "scene (a cut of the network, docs/own_network.md), or set "
                           "estimator.position_jitter_m")
 
