@@ -5,7 +5,8 @@ asks (speed mode 31), and brakes at the vehicle's deceleration ahead of a lower 
 to reach it at the lane's start. The controller's passes therefore hold at most the slowest
 speed SUMO may allow on the stretch they drive (:meth:`RouteLimits.least`), and its commands
 at most the limit where the front is (:meth:`RouteLimits.at`): docs/controller.md, "Speed
-limits".
+limits". Positions and distances here are SUMO's distance along the route, in which it drives
+the vehicle at its speed (:mod:`sse_cosim.control.odometer`).
 """
 
 from __future__ import annotations
@@ -14,7 +15,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import shapely
 
 from sse_cosim.world.roadmap import LaneGeometry
 
@@ -23,8 +23,8 @@ from sse_cosim.world.roadmap import LaneGeometry
 class RouteLimits:
     """Piecewise-constant limits along the route: lane k spans ``[ends_m[k-1], ends_m[k])``
     (the first from minus infinity, the last to plus infinity) at ``speeds_mps[k]``; shapes
-    (n,) each, ``ends_m`` increasing, measured along the route's centre line as the
-    along-route position is (each lane's geometric length)."""
+    (n,) each, ``ends_m`` increasing, in SUMO's distance along the route (each lane's
+    ``length``, which SUMO drives at the vehicle's speed, whatever its shape's length)."""
 
     ends_m: np.ndarray
     speeds_mps: np.ndarray
@@ -32,9 +32,8 @@ class RouteLimits:
     @classmethod
     def of_lanes(cls, lanes: Sequence[LaneGeometry]) -> RouteLimits:
         """The limits of ``lanes``, the route's lanes in order (``RoadMap.route_lanes``)."""
-        # GEOS's length, as the route line's along-route position measures it
-        lengths = [float(shapely.LineString(lane.shape).length) for lane in lanes]
-        return cls(np.cumsum(lengths), np.array([lane.speed_mps for lane in lanes]))
+        return cls(np.cumsum([lane.length for lane in lanes]),
+                   np.array([lane.speed_mps for lane in lanes]))
 
     def at(self, s: float) -> float:
         """The limit (m/s) at ``s`` m along the route."""

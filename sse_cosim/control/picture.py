@@ -1,9 +1,12 @@
 """The bus's situational picture: its path, the conflict zones on it, what is hidden, and how
 soon a pedestrian could be in each zone.
 
-Pure geometry on the road map (no SUMO). Distances are measured along the bus's route
-centre line from its front bumper; the *path ahead* is that line widened to half the bus
-width plus a margin.
+Pure geometry on the road map (no SUMO). Positions are measured along the bus's route
+centre line (the drawn route); the distances the speed policies drive, stop and clear in
+(a zone outlook's, a stop line's) are SUMO's distance from the front bumper, which a lane
+whose ``length`` differs from its shape's makes longer or shorter than the drawn one
+(:class:`~sse_cosim.control.odometer.RouteOdometer`). The *path ahead* is the centre line
+widened to half the bus width plus a margin.
 
 A **conflict zone** is walkable ground that the bus's body sweeps, widened by a pedestrian's
 radius: the only places where a pedestrian who stays on walkable ground can touch the bus
@@ -68,6 +71,7 @@ import shapely.ops
 
 from sse_cosim.control.kinematics import BusDynamics
 from sse_cosim.control.limits import RouteLimits
+from sse_cosim.control.odometer import RouteOdometer
 from sse_cosim.control.swept import (
     RoutePath,
     SweepPiece,
@@ -183,7 +187,8 @@ class SceneContext:
     kind: RegionKind
     sweep_width_m: float  # the body's sweep: its width and a pedestrian's radius each side
     planned: shapely.Geometry  # the ground that sweep covers along the planned lanes (prepared)
-    limits: RouteLimits  # the speed limits along the route
+    limits: RouteLimits  # the speed limits along the route (in SUMO's distance)
+    odometer: RouteOdometer  # the drawn route to SUMO's distance along it
     stop_lines: tuple[StopLine, ...] = ()  # the route's signalised stop lines, nearest first
     lit: tuple[LitCrossing, ...] = ()  # the signalised crossings the zones meet
     _relevant: dict[tuple[int, float], Region] = field(default_factory=dict, repr=False)
@@ -197,6 +202,7 @@ class SceneContext:
         """Prepare the static geometry for a bus driving ``route_edges`` (regions of
         ``kind``)."""
         route_line = roadmap.route_line(route_edges)
+        lanes = roadmap.route_lanes(route_edges)
         walkable = roadmap.walkable
         corridor = _widened(route_line, 0.5 * bus.width_m + pedestrian_radius)
         sweep = body_sweep(RoutePath.of_lanes(route_lanes(roadmap, route_edges)), bus.length_m,
@@ -223,7 +229,7 @@ class SceneContext:
         return cls(route_line, ground, crossings, bus, config, pedestrians,
                    BusDynamics.of(bus, config, step_length), window, zones, kind,
                    bus.width_m + 2.0 * pedestrian_radius, planned,
-                   RouteLimits.of_lanes(roadmap.route_lanes(route_edges)),
+                   RouteLimits.of_lanes(lanes), RouteOdometer.of_lanes(lanes),
                    _stop_lines(roadmap, route_edges, route_line), lit)
 
     def off_plan_m(self, corners: np.ndarray) -> float:
@@ -273,12 +279,11 @@ class SceneContext:
         cleared it; capped by ``interest_radius_m``. (The paper policy's notion of "near the
         crossing".)"""
         crossing = self.crossing_at(front_s)
-        if crossing is None:
+        if crossing is None or crossing.end_m - front_s + self.bus.length_m <= 0:
             return 0.0
-        to_clear = crossing.end_m - front_s + self.bus.length_m
-        if to_clear <= 0:
-            return 0.0
-        radius = self.pedestrians.reach_during_m(to_clear, self.top_speed(front_s, to_clear))
+        front = self.odometer.drive(front_s)
+        to_clear = self.odometer.drive(crossing.end_m + self.bus.length_m) - front
+        radius = self.pedestrians.reach_during_m(to_clear, self.top_speed(front, to_clear))
         return min(radius, self.config.interest_radius_m)
 
     def path_ahead(self, front_s: float, length: float, margin: float) -> Region:
@@ -310,16 +315,17 @@ class SceneContext:
         braking = speed**2 / (2.0 * self.bus.comfortable_decel_mps2)
         return speed * cfg.reaction_time_s + braking + cfg.stopping_margin_m
 
-    def limit_on(self, front_s: float, distance: float) -> float:
+    def limit_on(self, front_m: float, distance: float) -> float:
         """The slowest speed (m/s) the speed limits may hold the bus to while its front drives
-        ``distance`` m on from ``front_s`` (:meth:`~sse_cosim.control.limits.RouteLimits.least`:
-        the limits on that stretch and just beyond it)."""
-        return self.limits.least(front_s, front_s + distance, self.dynamics.decel)
+        ``distance`` m on from ``front_m`` (both in SUMO's distance;
+        :meth:`~sse_cosim.control.limits.RouteLimits.least`: the limits on that stretch and
+        just beyond it)."""
+        return self.limits.least(front_m, front_m + distance, self.dynamics.decel)
 
-    def top_speed(self, front_s: float, distance: float) -> float:
+    def top_speed(self, front_m: float, distance: float) -> float:
         """The fastest speed (m/s) the bus can hold while its front drives ``distance`` m on
-        from ``front_s``: its nominal speed, within :meth:`limit_on`."""
-        return min(self.bus.nominal_speed_mps, self.limit_on(front_s, distance))
+        from ``front_m`` (SUMO's distance): its nominal speed, within :meth:`limit_on`."""
+        return min(self.bus.nominal_speed_mps, self.limit_on(front_m, distance))
 
     def standstill_clear_time(self, to_clear: float, limit_mps: float) -> float:
         """Time (s) the bus needs from standstill, at its nominal speed within ``limit_mps``
@@ -334,7 +340,8 @@ class ZoneOutlook:
     """One conflict zone ahead, seen from the bus now (m, s).
 
     ``to_start_m``: front bumper to the zone (negative once the front is in it);
-    ``to_clear_m``: how far the front must still travel until the rear has cleared it;
+    ``to_clear_m``: how far the front must still travel until the rear has cleared it (both
+    in SUMO's distance, the one the bus's speed drives);
     ``arrival_s``: the earliest time any pedestrian, known or not, can be in it;
     ``in_view_arrival_s``: the earliest time a pedestrian in view (some node detects it now)
     can be in it, infinite if none can; ``index``: the zone's place in
@@ -362,7 +369,8 @@ class ZoneOutlook:
 class Picture:
     """Everything the speed policies decide on, for one step."""
 
-    front_s: float  # bus front along its route (m)
+    front_s: float  # bus front along its drawn route (m)
+    front_drive_m: float  # the same in SUMO's distance along the route (m)
     speed_mps: float  # the bus's actual speed (m/s)
     # front to the near edge of SceneContext.crossing_at (m); negative once on it; None if the
     # route has no crossing
@@ -377,7 +385,8 @@ class Picture:
     zones: tuple[ZoneOutlook, ...] = ()  # conflict zones not yet cleared, nearest first
     path_clear: bool = True  # from standstill the bus would clear every zone before anyone
     # the nearest signalised stop line ahead: its link, and how far ahead (m) it is while its
-    # light tells traffic to stop (STOP_FOR; None while it lets the bus on, or without one)
+    # light tells traffic to stop (STOP_FOR; None while it lets the bus on, or without one;
+    # SUMO's distance)
     light: Signal | None = None
     stop_line_m: float | None = None
     limit_mps: float = math.inf  # the speed limit where the front is (SUMO holds the bus to it)
@@ -412,6 +421,7 @@ def assess(
     """
     cfg = context.config
     front_s = context.route_line.project(shapely.Point(front_xy))
+    front = context.odometer.drive(front_s)
     crossing = context.crossing_at(front_s)
     to_crossing = None if crossing is None else crossing.start_m - front_s
     crossing_ahead = (crossing is not None and crossing.end_m > front_s
@@ -426,16 +436,17 @@ def assess(
     # the corridors ahead only matter to a known pedestrian's region: none, none built
     near_path = context.path_ahead(front_s, cfg.crossing_horizon_m, cfg.path_margin_m) \
         if sets else context.kind.empty()
-    stopping = context.path_ahead(front_s, context.stopping_distance(speed), 0.0) \
-        if sets else context.kind.empty()
+    stopping = context.path_ahead(front_s, context.odometer.drawn(
+        front + context.stopping_distance(speed)) - front_s, 0.0) if sets else context.kind.empty()
     line = context.next_stop_line(front_s)
     if releases is None:
         releases = context.releases(signals or {})
-    zones = _outlook(context, front_s, [unobserved, *known],
+    zones = _outlook(context, front_s, front, [unobserved, *known],
                      [s for s in in_view if not s.region.is_empty], in_view_beyond, floors or {},
                      releases)
     return Picture(
         front_s=float(front_s),
+        front_drive_m=front,
         speed_mps=float(speed),
         distance_to_crossing=None if to_crossing is None else float(to_crossing),
         crossing_ahead=bool(crossing_ahead),
@@ -449,8 +460,8 @@ def assess(
         path_clear=all(z.arrival_s > z.clear_s for z in zones),
         light=None if line is None else line.signal,
         stop_line_m=None if line is None or _shows(signals or {}, line.signal) not in STOP_FOR
-        else float(line.at_m - front_s),
-        limit_mps=context.limits.at(front_s),
+        else context.odometer.drive(line.at_m) - front,
+        limit_mps=context.limits.at(front),
     )
 
 
@@ -531,7 +542,7 @@ class LightClaims:
                 for key in regions}
 
 
-def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
+def _outlook(context: SceneContext, front_s: float, front: float, sources: Sequence[Source],
              in_view: Sequence[Source], in_view_beyond: bool,
              floors: Mapping[int, float], releases: Sequence[float]) -> tuple[ZoneOutlook, ...]:
     """The zones the bus has not yet cleared, as far as its body can still touch them
@@ -540,11 +551,12 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
     ``in_view``, and beyond the window if ``in_view_beyond`` (every source to every such zone
     in one distance call). A zone on the own ground of a signalised crossing whose light
     holds its walkers (``releases``: per ``context.lit`` the least time until it can let them
-    on, 0 if it does now) gets the later arrival its lights allow (:func:`_lit_arrival`)."""
-    ahead = [(index, zone, zone.end_m + context.bus.length_m - front_s)
-             for index, zone in enumerate(context.zones)]
-    ahead = [(index, _ahead_of_body(context, zone, front_s), to_clear)
-             for index, zone, to_clear in ahead if to_clear > 0.0]
+    on, 0 if it does now) gets the later arrival its lights allow (:func:`_lit_arrival`).
+    ``front_s`` is the front along the drawn route, ``front`` the same in SUMO's distance."""
+    odometer, length = context.odometer, context.bus.length_m
+    ahead = [(index, _ahead_of_body(context, zone, front_s),
+              odometer.drive(zone.end_m + length) - front)
+             for index, zone in enumerate(context.zones) if zone.end_m + length > front_s]
     ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead
              if not zone.polygon.is_empty]
     zones = [zone for _, zone, _ in ahead]
@@ -557,9 +569,9 @@ def _outlook(context: SceneContext, front_s: float, sources: Sequence[Source],
         if held and zone.ground is not None:
             arrivals[k] = _lit_arrival(context, zone, held, sources, True)
             in_view_arrivals[k] = _lit_arrival(context, zone, held, in_view, in_view_beyond)
-    limits = [context.limit_on(front_s, to_clear) for _, _, to_clear in ahead]
+    limits = [context.limit_on(front, to_clear) for _, _, to_clear in ahead]
     return tuple(
-        ZoneOutlook(index, zone.start_m - front_s, to_clear,
+        ZoneOutlook(index, odometer.drive(zone.start_m) - front, to_clear,
                     max(float(arrival), floors.get(index, 0.0)), float(in_view_arrival),
                     context.standstill_clear_time(to_clear, limit), zone.ground,
                     tuple((c.id, c.own, c.lights) for c in (context.lit[i] for i in zone.lit)),

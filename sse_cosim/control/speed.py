@@ -136,22 +136,22 @@ def make_policy(context: SceneContext) -> SafePolicy | PaperPolicy:
 
 @dataclass(frozen=True)
 class Commitment:
-    """A pass proven at ``proven_s`` (the policy's clock), the front then at ``front_s`` and
-    the bus at ``speed_mps``, holding ``command`` (m, m/s)."""
+    """A pass proven at ``proven_s`` (the policy's clock), the front then at ``front_m`` (SUMO's
+    distance along the route) and the bus at ``speed_mps``, holding ``command`` (m, m/s)."""
 
     command: float
     proven_s: float
-    front_s: float
+    front_m: float
     speed_mps: float
 
-    def kept(self, dynamics: BusDynamics, now_s: float, front_s: float, speed: float) -> bool:
-        """Whether the bus, its front at ``front_s`` at ``speed`` now, is no later and no
+    def kept(self, dynamics: BusDynamics, now_s: float, front_m: float, speed: float) -> bool:
+        """Whether the bus, its front at ``front_m`` at ``speed`` now, is no later and no
         slower than the worst case the pass was proven on (:meth:`BusDynamics.pass_profile`):
         then, holding this command or a faster one, it clears the zone no later than proven.
         A bus held back by the world (SUMO's right of way, a leader) is not."""
         reached, least = dynamics.pass_profile(now_s - self.proven_s, self.speed_mps,
                                                self.command)
-        return (front_s - self.front_s >= reached - KEPT_TOLERANCE
+        return (front_m - self.front_m >= reached - KEPT_TOLERANCE
                 and speed >= least - KEPT_TOLERANCE)
 
 
@@ -345,10 +345,10 @@ class SafePolicy:
         held = min(command, zone.limit_mps)
         if dyn.pass_time(zone.to_clear_m, speed_now, held) + dyn.step < zone.arrival_s:
             return Plan(zone.index, "pass", command,
-                        Commitment(held, self.now_s, picture.front_s, speed_now))
+                        Commitment(held, self.now_s, picture.front_drive_m, speed_now))
         committed = self.committed.get(zone.index)
         if committed is not None and held >= committed.command and committed.kept(
-                dyn, self.now_s, picture.front_s, speed_now):
+                dyn, self.now_s, picture.front_drive_m, speed_now):
             return Plan(zone.index, "pass", committed.command, committed)
         return None
 

@@ -53,6 +53,12 @@ PLANNED_LANES = "planned_lanes"
 OFF_PLAN_TOL_M = 1e-6
 """How far (m) a body SUMO reports may lie outside its planned sweep: SUMO's positions are
 doubles, the sweep's model matches them to about 1e-13 m (tests/swept_checks.py)."""
+ROUTE_ODOMETER = "route_odometer"
+"""The assumption a vehicle breaks whose drawn front SUMO's odometer does not match (not one
+a study can list)."""
+ODOMETER_TOL_M = 1e-6
+"""How far (m) SUMO's distance along the route may differ from the controller's, read off
+the drawn front (:class:`~sse_cosim.control.odometer.RouteOdometer`)."""
 
 
 class Laps(Protocol):
@@ -151,6 +157,7 @@ class Ego:
             signals=snapshot.signals,
             releases=releases,
         )
+        self._check_odometer(me, picture, snapshot.time)
         self.arrivals.keep(step, picture, estimate.flags.inconsistent)
         decision = self.policy.decide(
             picture, fallback_floor(estimate.flags.inconsistent, self.controller))
@@ -174,3 +181,23 @@ class Ego:
                 "so SUMO drives it where the planned sweep does not reach (a junction passage "
                 "drawn otherwise): route the vehicle over other edges, and report the network "
                 "with this line (docs/own_network.md)")
+
+    def _check_odometer(self, me: VehicleState, picture: Picture, time_s: float) -> None:
+        """Stop the run (:class:`~sse_cosim.errors.AssumptionBroken`, one line) if SUMO's
+        distance along the route (its odometer, ``me.route_m``) differs from the one the
+        picture read off the drawn front (``picture.front_drive_m``) by more than
+        :data:`ODOMETER_TOL_M`: the distances the controller stops and clears in would not be
+        the ones SUMO drives the vehicle."""
+        if me.route_m is None:
+            return
+        off = abs(picture.front_drive_m - me.route_m)
+        if off > ODOMETER_TOL_M:
+            raise AssumptionBroken(
+                self.scenario_name, ROUTE_ODOMETER,
+                f"automated vehicle {self.id!r} at t={time_s:.2f} s has driven "
+                f"{me.route_m:.3f} m along its route by SUMO's odometer, but its drawn front "
+                f"lies at {picture.front_drive_m:.3f} m of SUMO's distance ({off:.3f} m apart); "
+                "the run stops before it decides on distances SUMO does not drive",
+                "the controller reads SUMO's distance off the route's lanes, each its length "
+                "drawn along its shape (RouteOdometer): report the network with this line "
+                "(docs/own_network.md)")

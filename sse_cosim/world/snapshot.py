@@ -80,6 +80,9 @@ class VehicleState:
     speed: float  # m/s
     type_id: str = ""  # its SUMO vehicle type (route-file vehicles carry sensors by type)
     on_crossings: tuple[str, ...] = ()  # the crossings its body meets, sorted ids
+    # an automated vehicle's front along its route as SUMO counts it (m: its departure
+    # position plus its odometer, from the start of the route's first lane); None for others
+    route_m: float | None = None
 
 
 @dataclass(frozen=True)

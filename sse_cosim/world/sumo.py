@@ -749,12 +749,13 @@ class SumoWorld:
             length, width, type_id = self._static(vid)
             footprint = Footprint(Pose(float(x), float(y), heading(values[libsumo.VAR_ANGLE])),
                                   length, width)
+            if vid in self._automated:
+                self._automated[vid].distance = float(values[libsumo.VAR_DISTANCE])
             vehicles[vid] = VehicleState(
                 id=vid, kind=self._kinds.get(vid, "other"), footprint=footprint,
                 speed=float(values[libsumo.VAR_SPEED]), type_id=type_id,
-                on_crossings=self.roadmap.crossings_meeting(footprint.polygon()))
-            if vid in self._automated:
-                self._automated[vid].distance = float(values[libsumo.VAR_DISTANCE])
+                on_crossings=self.roadmap.crossings_meeting(footprint.polygon()),
+                route_m=self.route_position(vid) if vid in self._automated else None)
         persons: dict[str, PersonState] = {}
         self._previous_lanes = self._person_lanes
         self._previous_centres = self._centres

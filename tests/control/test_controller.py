@@ -53,8 +53,9 @@ def context() -> SceneContext:
 
 
 def picture(**changes) -> Picture:
-    base = dict(front_s=100.0, speed_mps=10.0, distance_to_crossing=98.0, crossing_ahead=False,
-                reach_radius_m=5.0, own_occluded_m2=0.0, unresolved_occluded_m2=0.0,
+    base = dict(front_s=100.0, front_drive_m=100.0, speed_mps=10.0, distance_to_crossing=98.0,
+                crossing_ahead=False, reach_radius_m=5.0, own_occluded_m2=0.0,
+                unresolved_occluded_m2=0.0,
                 pedestrian_near_crossing=False, pedestrian_near_path=False,
                 pedestrian_in_stopping_distance=False)
     return Picture(**{**base, **changes})

@@ -1,5 +1,6 @@
-"""The speed limits along a route (control/limits.py): where each lane's limit holds, and the
-slowest speed SUMO may hold a bus to on a stretch, a lower limit just beyond it included."""
+"""The speed limits along a route (control/limits.py): where each lane's limit holds (in SUMO's
+distance, each lane its length), and the slowest speed SUMO may hold a bus to on a stretch, a
+lower limit just beyond it included."""
 
 from __future__ import annotations
 
@@ -16,18 +17,18 @@ from sse_cosim.world.roadmap import LaneGeometry
 DECEL = 2.0
 
 
-def lane(lane_id: str, xs: list[float], speed: float) -> LaneGeometry:
-    shape = np.array([[x, 0.0] for x in xs])
-    return LaneGeometry(lane_id, lane_id, 0, shape, 3.2, xs[-1] - xs[0] + 5.0, speed)
+def lane(lane_id: str, length: float, speed: float) -> LaneGeometry:
+    """A lane ``length`` m long in SUMO's distance, drawn shorter (its shape does not count)."""
+    shape = np.array([[0.0, 0.0], [0.3 * length, 1.0], [0.8 * length, 0.0]])
+    return LaneGeometry(lane_id, lane_id, 0, shape, 3.2, length, speed)
 
 
-# 100 m at 13.89, a 10 m junction lane at 5, 50 m at 8.33 (the lengths SUMO gives do not count)
-LIMITS = RouteLimits.of_lanes([lane("a", [0.0, 60.0, 100.0], 13.89),
-                               lane(":j", [100.0, 110.0], 5.0),
-                               lane("b", [110.0, 160.0], 8.33)])
+# 100 m at 13.89, a 10 m junction lane at 5, 50 m at 8.33 (SUMO's lengths, not the drawn ones)
+LIMITS = RouteLimits.of_lanes([lane("a", 100.0, 13.89), lane(":j", 10.0, 5.0),
+                               lane("b", 50.0, 8.33)])
 
 
-def test_each_lane_holds_its_limit_along_its_geometric_length():
+def test_each_lane_holds_its_limit_along_its_length_in_sumos_distance():
     assert LIMITS.ends_m.tolist() == [100.0, 110.0, 160.0]
     assert [LIMITS.at(s) for s in (-3.0, 0.0, 99.9, 100.0, 109.9, 110.0, 200.0)] == [
         13.89, 13.89, 13.89, 5.0, 5.0, 8.33, 8.33]

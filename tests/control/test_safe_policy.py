@@ -28,8 +28,9 @@ ZONE_LENGTH = 4.0
 
 
 def picture(speed: float, zones: tuple[ZoneOutlook, ...], front_s: float = 0.0) -> Picture:
-    return Picture(front_s=front_s, speed_mps=speed, distance_to_crossing=0.0, crossing_ahead=True,
-                   reach_radius_m=0.0, own_occluded_m2=0.0, unresolved_occluded_m2=0.0,
+    return Picture(front_s=front_s, front_drive_m=front_s, speed_mps=speed,
+                   distance_to_crossing=0.0, crossing_ahead=True, reach_radius_m=0.0,
+                   own_occluded_m2=0.0, unresolved_occluded_m2=0.0,
                    pedestrian_near_crossing=False, pedestrian_near_path=False,
                    pedestrian_in_stopping_distance=False, zones=zones)
 
