@@ -327,6 +327,11 @@ class SceneContext:
         from ``front_m`` (SUMO's distance): its nominal speed, within :meth:`limit_on`."""
         return min(self.bus.nominal_speed_mps, self.limit_on(front_m, distance))
 
+    def point_at(self, drive_m: float) -> np.ndarray:
+        """The point (2,) of the drawn route at SUMO's distance ``drive_m`` along it (a lane
+        position on the route's first lane: where SUMO puts a front there)."""
+        return np.asarray(self.route_line.interpolate(self.odometer.drawn(drive_m)).coords[0])
+
     def standstill_clear_time(self, to_clear: float, limit_mps: float) -> float:
         """Time (s) the bus needs from standstill, at its nominal speed within ``limit_mps``
         (:meth:`limit_on` of the way), to clear a zone whose far end its front must still

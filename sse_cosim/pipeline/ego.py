@@ -121,6 +121,14 @@ class Ego:
             window=self.context.window,
         )
         self.kind = kind
+        # where SUMO inserts it (its front): its V2X link's position until then
+        self.departure_xy = self.context.point_at(vehicle.depart_pos_m)
+
+    def front(self, snapshot: Snapshot) -> np.ndarray:
+        """Its front bumper (2,) in ``snapshot``; before SUMO has inserted it, where SUMO
+        will (:attr:`departure_xy`)."""
+        me = snapshot.vehicles.get(self.id)
+        return self.departure_xy if me is None else me.footprint.front.position
 
     def step(self, step: int, snapshot: Snapshot, observations: Observations,
              node_views: Mapping[str, NodeView], tracks: Tracks, timer: Laps) -> EgoStep:

@@ -184,9 +184,9 @@ class Sharing:
         self.link = link
         self.model = model
 
-    def send(self, snapshot: Snapshot, messages: Sequence[Outgoing]) -> None:
-        """Queue the messages of the other nodes, at their distance to the receiver now."""
-        receiver_xy = snapshot.vehicles[self.receiver].footprint.front.position
+    def send(self, receiver_xy: np.ndarray, messages: Sequence[Outgoing]) -> None:
+        """Queue the messages of the other nodes, at their distance to the receiver, its front
+        at ``receiver_xy`` (2,) now."""
         for out in messages:
             if out.message.sender != self.receiver:
                 self.link.send(out.message, float(portable.hypot(*(out.position - receiver_xy))),

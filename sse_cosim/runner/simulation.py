@@ -113,10 +113,13 @@ def simulate(
             timer.lap("geometry")
             tracks = observers.step(step, observations)
             timer.lap("local_fusion")
-            if active:  # building a message marks its faults (docs/faults.md): only when sent
+            # every vehicle still to drive listens, one not yet inserted from where SUMO will
+            # insert it: inserted at speed, it starts from the messages in the air
+            listening = [ego for ego in egos if not world.arrived(ego.id)]
+            if listening:  # building a message marks its faults (docs/faults.md): when sent
                 messages = outgoing(step, snapshot, observations, views, tracks, faults, model)
-                for ego in active:
-                    ego.sharing.send(snapshot, messages)
+                for ego in listening:
+                    ego.sharing.send(ego.front(snapshot), messages)
             results = {ego.id: ego.step(step, snapshot, observations, views, tracks, timer)
                        for ego in active}
             for vid, result in results.items():
