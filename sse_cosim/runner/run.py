@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -58,7 +59,10 @@ def run_scenario(
         for watch in watchers:
             watch(result)
 
-    info = simulate(scenario, out_dir / "sumo", source, on_step, on_start=recorder.start)
+    sumo_dir = out_dir / "sumo"
+    info = simulate(scenario, sumo_dir, source, on_step, on_start=recorder.start)
+    if summary_only:  # SUMO's files served the run; one that failed keeps them (its log)
+        shutil.rmtree(sumo_dir)
     extra: dict[str, Any] = dict(info.breaks)
     if watchers:
         extra["margins"] = {watch.name: watch.value(recorder) for watch in watchers}
