@@ -6,7 +6,7 @@ to reach it at the lane's start. The controller's passes therefore hold at most 
 speed SUMO may allow on the stretch they drive (:meth:`RouteLimits.least`), and its commands
 at most the limit where the front is (:meth:`RouteLimits.at`): docs/controller.md, "Speed
 limits". Positions and distances here are SUMO's distance along the route, in which it drives
-the vehicle at its speed (:mod:`sse_cosim.control.odometer`).
+the vehicle at its speed (:meth:`sse_cosim.control.swept.RoutePath.drive`).
 """
 
 from __future__ import annotations

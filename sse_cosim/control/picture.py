@@ -5,7 +5,7 @@ Pure geometry on the road map (no SUMO). Positions are measured along the bus's 
 centre line (the drawn route); the distances the speed policies drive, stop and clear in
 (a zone outlook's, a stop line's) are SUMO's distance from the front bumper, which a lane
 whose ``length`` differs from its shape's makes longer or shorter than the drawn one
-(:class:`~sse_cosim.control.odometer.RouteOdometer`). The *path ahead* is the centre line
+(:meth:`~sse_cosim.control.swept.RoutePath.drive`). The *path ahead* is the centre line
 widened to half the bus width plus a margin.
 
 A **conflict zone** is walkable ground that the bus's body sweeps, widened by a pedestrian's
@@ -71,7 +71,6 @@ import shapely.ops
 
 from sse_cosim.control.kinematics import BusDynamics
 from sse_cosim.control.limits import RouteLimits
-from sse_cosim.control.odometer import RouteOdometer
 from sse_cosim.control.swept import (
     RoutePath,
     SweepPiece,
@@ -188,7 +187,7 @@ class SceneContext:
     sweep_width_m: float  # the body's sweep: its width and a pedestrian's radius each side
     planned: shapely.Geometry  # the ground that sweep covers along the planned lanes (prepared)
     limits: RouteLimits  # the speed limits along the route (in SUMO's distance)
-    odometer: RouteOdometer  # the drawn route to SUMO's distance along it
+    path: RoutePath  # the route as SUMO drives it: the drawn line and SUMO's distance on it
     stop_lines: tuple[StopLine, ...] = ()  # the route's signalised stop lines, nearest first
     lit: tuple[LitCrossing, ...] = ()  # the signalised crossings the zones meet
     _relevant: dict[tuple[int, float], Region] = field(default_factory=dict, repr=False)
@@ -205,8 +204,8 @@ class SceneContext:
         lanes = roadmap.route_lanes(route_edges)
         walkable = roadmap.walkable
         corridor = _widened(route_line, 0.5 * bus.width_m + pedestrian_radius)
-        sweep = body_sweep(RoutePath.of_lanes(route_lanes(roadmap, route_edges)), bus.length_m,
-                           bus.width_m + 2.0 * pedestrian_radius)
+        path = RoutePath.of_lanes(route_lanes(roadmap, route_edges))
+        sweep = body_sweep(path, bus.length_m, bus.width_m + 2.0 * pedestrian_radius)
         planned = swept_region(sweep)
         shapely.prepare(planned)
         corridor = _with_sweep(corridor, _from_start(planned, route_line), walkable)
@@ -229,7 +228,7 @@ class SceneContext:
         return cls(route_line, ground, crossings, bus, config, pedestrians,
                    BusDynamics.of(bus, config, step_length), window, zones, kind,
                    bus.width_m + 2.0 * pedestrian_radius, planned,
-                   RouteLimits.of_lanes(lanes), RouteOdometer.of_lanes(lanes),
+                   RouteLimits.of_lanes(lanes), path,
                    _stop_lines(roadmap, route_edges, route_line), lit)
 
     def off_plan_m(self, corners: np.ndarray) -> float:
@@ -281,8 +280,8 @@ class SceneContext:
         crossing = self.crossing_at(front_s)
         if crossing is None or crossing.end_m - front_s + self.bus.length_m <= 0:
             return 0.0
-        front = self.odometer.drive(front_s)
-        to_clear = self.odometer.drive(crossing.end_m + self.bus.length_m) - front
+        front = self.path.drive(front_s)
+        to_clear = self.path.drive(crossing.end_m + self.bus.length_m) - front
         radius = self.pedestrians.reach_during_m(to_clear, self.top_speed(front, to_clear))
         return min(radius, self.config.interest_radius_m)
 
@@ -326,11 +325,6 @@ class SceneContext:
         """The fastest speed (m/s) the bus can hold while its front drives ``distance`` m on
         from ``front_m`` (SUMO's distance): its nominal speed, within :meth:`limit_on`."""
         return min(self.bus.nominal_speed_mps, self.limit_on(front_m, distance))
-
-    def point_at(self, drive_m: float) -> np.ndarray:
-        """The point (2,) of the drawn route at SUMO's distance ``drive_m`` along it (a lane
-        position on the route's first lane: where SUMO puts a front there)."""
-        return np.asarray(self.route_line.interpolate(self.odometer.drawn(drive_m)).coords[0])
 
     def standstill_clear_time(self, to_clear: float, limit_mps: float) -> float:
         """Time (s) the bus needs from standstill, at its nominal speed within ``limit_mps``
@@ -409,6 +403,7 @@ def assess(
     floors: Mapping[int, float] | None = None,
     signals: Mapping[str, SignalState] | None = None,
     releases: Sequence[float] | None = None,
+    route_m: float | None = None,
 ) -> Picture:
     """The picture at one step.
 
@@ -422,11 +417,14 @@ def assess(
     zone index -> an earliest arrival known from earlier steps (:func:`arrival_floors`);
     ``signals``: the scene's traffic lights by id, as they show now (the bus's own stop
     lines read them); ``releases``: :meth:`SceneContext.releases` of them, if the caller
-    has it already (else worked out here).
+    has it already (else worked out here); ``route_m``: SUMO's distance of the front along
+    the route (its odometer; the world checks that it lies at ``front_xy``), else read off
+    the drawn front (:meth:`~sse_cosim.control.swept.RoutePath.drive`, where a passage drawn
+    without length leaves it between the passage's ends).
     """
     cfg = context.config
     front_s = context.route_line.project(shapely.Point(front_xy))
-    front = context.odometer.drive(front_s)
+    front = context.path.drive(front_s) if route_m is None else route_m
     crossing = context.crossing_at(front_s)
     to_crossing = None if crossing is None else crossing.start_m - front_s
     crossing_ahead = (crossing is not None and crossing.end_m > front_s
@@ -441,8 +439,9 @@ def assess(
     # the corridors ahead only matter to a known pedestrian's region: none, none built
     near_path = context.path_ahead(front_s, cfg.crossing_horizon_m, cfg.path_margin_m) \
         if sets else context.kind.empty()
-    stopping = context.path_ahead(front_s, context.odometer.drawn(
-        front + context.stopping_distance(speed)) - front_s, 0.0) if sets else context.kind.empty()
+    stopping = context.path_ahead(front_s, context.path.point_at(
+        front + context.stopping_distance(speed))[1] - front_s, 0.0) if sets else \
+        context.kind.empty()
     line = context.next_stop_line(front_s)
     if releases is None:
         releases = context.releases(signals or {})
@@ -465,7 +464,7 @@ def assess(
         path_clear=all(z.arrival_s > z.clear_s for z in zones),
         light=None if line is None else line.signal,
         stop_line_m=None if line is None or _shows(signals or {}, line.signal) not in STOP_FOR
-        else context.odometer.drive(line.at_m) - front,
+        else context.path.drive_before(line.at_m) - front,
         limit_mps=context.limits.at(front),
     )
 
@@ -558,9 +557,9 @@ def _outlook(context: SceneContext, front_s: float, front: float, sources: Seque
     holds its walkers (``releases``: per ``context.lit`` the least time until it can let them
     on, 0 if it does now) gets the later arrival its lights allow (:func:`_lit_arrival`).
     ``front_s`` is the front along the drawn route, ``front`` the same in SUMO's distance."""
-    odometer, length = context.odometer, context.bus.length_m
+    path, length = context.path, context.bus.length_m
     ahead = [(index, _ahead_of_body(context, zone, front_s),
-              odometer.drive(zone.end_m + length) - front)
+              path.drive(zone.end_m + length) - front)
              for index, zone in enumerate(context.zones) if zone.end_m + length > front_s]
     ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead
              if not zone.polygon.is_empty]
@@ -576,7 +575,7 @@ def _outlook(context: SceneContext, front_s: float, front: float, sources: Seque
             in_view_arrivals[k] = _lit_arrival(context, zone, held, in_view, in_view_beyond)
     limits = [context.limit_on(front, to_clear) for _, _, to_clear in ahead]
     return tuple(
-        ZoneOutlook(index, odometer.drive(zone.start_m) - front, to_clear,
+        ZoneOutlook(index, path.drive_before(zone.start_m) - front, to_clear,
                     max(float(arrival), floors.get(index, 0.0)), float(in_view_arrival),
                     context.standstill_clear_time(to_clear, limit), zone.ground,
                     tuple((c.id, c.own, c.lights) for c in (context.lit[i] for i in zone.lit)),

@@ -72,7 +72,10 @@ class RoutePath:
     @classmethod
     def of_lanes(cls, lanes: Sequence[tuple[np.ndarray, float]]) -> RoutePath:
         """The path along ``lanes``, each a centre line (k, 2) and its length (m), in order;
-        a lane's start that repeats the previous lane's end is dropped."""
+        a point that repeats the previous one at the same lane position is dropped (a lane's
+        start at the previous lane's end), one that SUMO reaches further on is kept (after a
+        lane drawn without length, such as a junction passage of a point: SUMO's front stands
+        there while its lane position runs over the passage's ``length``)."""
         points: list[np.ndarray] = []
         sigma: list[float] = []
         offset = 0.0
@@ -83,16 +86,46 @@ class RoutePath:
             geometric = float(along[-1])
             scale = length / geometric if geometric > 0.0 else 0.0
             for point, at in zip(shape, along, strict=True):
-                if points and float(np.max(np.abs(point - points[-1]))) <= 1e-9:
+                lane_position = offset + float(at) * scale
+                if points and float(np.max(np.abs(point - points[-1]))) <= 1e-9 \
+                        and lane_position - sigma[-1] <= 1e-9:
                     continue
                 points.append(point)
-                sigma.append(offset + float(at) * scale)
+                sigma.append(lane_position)
             offset += length
         pts = np.array(points)  # (n, 2)
         station = [0.0]
         for p1, p2 in pairwise(pts):
             station.append(station[-1] + ((p2[0] - p1[0]) ** 2 + (p2[1] - p1[1]) ** 2) ** 0.5)
         return cls(pts, np.array(sigma), np.array(station))
+
+    def drive(self, station: float) -> float:
+        """The lane position (m, SUMO's distance along the route: its departure position
+        plus its odometer) at ``station`` m along the drawn line: each lane's stations map
+        linearly onto its length, a gap between two lanes' shapes onto none; before the
+        route and beyond it both advance alike (docs/controller.md, "SUMO's distance"). At a
+        passage drawn without length, SUMO's front stands at one station over the passage's
+        whole length: this gives its far end (where a body must be to have cleared a place
+        there), :meth:`drive_before` its near end (where it must stop to stay before it)."""
+        if station <= self.station[0]:
+            return float(self.sigma[0] + station - self.station[0])
+        if station >= self.station[-1]:
+            return float(self.sigma[-1] + station - self.station[-1])
+        return float(np.interp(station, self.station, self.sigma))
+
+    def drive_before(self, station: float) -> float:
+        """:meth:`drive`, but at a passage drawn without length its near end: the least lane
+        position with the front at ``station``."""
+        k = int(np.searchsorted(self.station, station, side="left"))
+        if 0 < k < len(self.station) and self.station[k] == station:
+            return float(self.sigma[k])
+        return self.drive(station)
+
+    def point_at(self, sigma: float) -> tuple[np.ndarray, float]:
+        """The point (2,) at lane position ``sigma`` and its station (m): where SUMO puts a
+        front there (:meth:`at`; at a gap between lanes, its far end; beyond the route's
+        ends, the end segment extended)."""
+        return self.at(sigma, self.segment(sigma))
 
     def segment(self, sigma: float) -> int:
         """The segment ``i`` (from point i to i + 1) holding lane position ``sigma``: the

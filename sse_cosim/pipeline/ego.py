@@ -53,12 +53,6 @@ PLANNED_LANES = "planned_lanes"
 OFF_PLAN_TOL_M = 1e-6
 """How far (m) a body SUMO reports may lie outside its planned sweep: SUMO's positions are
 doubles, the sweep's model matches them to about 1e-13 m (tests/swept_checks.py)."""
-ROUTE_ODOMETER = "route_odometer"
-"""The assumption a vehicle breaks whose drawn front SUMO's odometer does not match (not one
-a study can list)."""
-ODOMETER_TOL_M = 1e-6
-"""How far (m) SUMO's distance along the route may differ from the controller's, read off
-the drawn front (:class:`~sse_cosim.control.odometer.RouteOdometer`)."""
 
 
 class Laps(Protocol):
@@ -122,7 +116,7 @@ class Ego:
         )
         self.kind = kind
         # where SUMO inserts it (its front): its V2X link's position until then
-        self.departure_xy = self.context.point_at(vehicle.depart_pos_m)
+        self.departure_xy = self.context.path.point_at(vehicle.depart_pos_m)[0]
 
     def front(self, snapshot: Snapshot) -> np.ndarray:
         """Its front bumper (2,) in ``snapshot``; before SUMO has inserted it, where SUMO
@@ -164,8 +158,8 @@ class Ego:
             floors=self.arrivals.floors(step, estimate.flags.inconsistent),
             signals=snapshot.signals,
             releases=releases,
+            route_m=me.route_m,
         )
-        self._check_odometer(me, picture, snapshot.time)
         self.arrivals.keep(step, picture, estimate.flags.inconsistent)
         decision = self.policy.decide(
             picture, fallback_floor(estimate.flags.inconsistent, self.controller))
@@ -189,23 +183,3 @@ class Ego:
                 "so SUMO drives it where the planned sweep does not reach (a junction passage "
                 "drawn otherwise): route the vehicle over other edges, and report the network "
                 "with this line (docs/own_network.md)")
-
-    def _check_odometer(self, me: VehicleState, picture: Picture, time_s: float) -> None:
-        """Stop the run (:class:`~sse_cosim.errors.AssumptionBroken`, one line) if SUMO's
-        distance along the route (its odometer, ``me.route_m``) differs from the one the
-        picture read off the drawn front (``picture.front_drive_m``) by more than
-        :data:`ODOMETER_TOL_M`: the distances the controller stops and clears in would not be
-        the ones SUMO drives the vehicle."""
-        if me.route_m is None:
-            return
-        off = abs(picture.front_drive_m - me.route_m)
-        if off > ODOMETER_TOL_M:
-            raise AssumptionBroken(
-                self.scenario_name, ROUTE_ODOMETER,
-                f"automated vehicle {self.id!r} at t={time_s:.2f} s has driven "
-                f"{me.route_m:.3f} m along its route by SUMO's odometer, but its drawn front "
-                f"lies at {picture.front_drive_m:.3f} m of SUMO's distance ({off:.3f} m apart); "
-                "the run stops before it decides on distances SUMO does not drive",
-                "the controller reads SUMO's distance off the route's lanes, each its length "
-                "drawn along its shape (RouteOdometer): report the network with this line "
-                "(docs/own_network.md)")

@@ -7,32 +7,34 @@ lanes drawn at 0.957 to 1.026 of their length). The paper's decisive case
 (tests/cosim/test_decisive_case.py) runs here on the paper's road with the bus's lane on its
 approach, WC_2 (drawn 198 m), given a length of 120 m and of 250 m in the .net.xml, and the
 bus a nominal speed that moves it along the drawn road at the paper's 20 m/s: the
-controller's stops, passes and limits are in SUMO's distance (control/odometer.py), and the
-run checks every step that SUMO's odometer is where the picture reads it off the drawn front
-(pipeline/ego.py, ``route_odometer``), so the bus gives way as on the paper's road. Drawn
-and driven apart, a stop planned in drawn metres would run 1.65 times its length (the bus
-needed its emergency brake), and a pass would take 1.26 times its time."""
+controller's stops, passes and limits are in SUMO's distance (control/swept.py,
+``RoutePath``), and the run checks every step that SUMO draws the front where its odometer
+puts it on the route (world/checks/odometer.py, ``route_odometer``), so the bus gives way as
+on the paper's road. Drawn and driven apart, a stop planned in drawn metres would run 1.65
+times its length (the bus needed its emergency brake), and a pass would take 1.26 times its
+time."""
 
 from __future__ import annotations
 
 import re
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from sse_cosim.control.picture import SceneContext, Source, assess
+from sse_cosim.control.swept import RoutePath
 from sse_cosim.errors import AssumptionBroken
 from sse_cosim.estimation.motion import motion_model
-from sse_cosim.pipeline.ego import Ego
 from sse_cosim.regions import kind
 from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.scenario.loader import load_scenario
+from sse_cosim.world.checks import Ledger, StepFacts
+from sse_cosim.world.checks.odometer import OdometerCheck
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import load_roadmap
-from sse_cosim.world.snapshot import Footprint, Pose, VehicleState
+from sse_cosim.world.snapshot import Footprint, Pose, Snapshot, VehicleState
 
 pytestmark = pytest.mark.sumo
 ROOT = Path(__file__).resolve().parents[2]
@@ -118,14 +120,18 @@ def test_the_picture_drives_stops_and_clears_in_sumos_distance(tmp_path: Path,
 
 
 def test_a_front_that_sumos_odometer_puts_elsewhere_stops_the_run() -> None:
-    """The check that the picture's distance is SUMO's: 1e-6 m apart is kept, more stops the
-    run in one line naming the vehicle and both distances."""
-    ego = SimpleNamespace(id="bus", scenario_name="scenarios/s.toml")
-    body = Footprint(Pose(100.0, -1.75, 0.0), BUS_LENGTH_M, 2.5)
-    picture = SimpleNamespace(front_drive_m=60.0)
-    Ego._check_odometer(ego, VehicleState("bus", "automated", body, 5.0, route_m=60.0 + 5e-7),
-                        picture, 3.0)
+    """The world's check that the controller's distance is SUMO's (``route_odometer``): a
+    front within 1e-6 m of where the odometer puts it on the route is kept, one farther
+    stops the run in one line naming the vehicle, its odometer and how far off it is."""
+    path = RoutePath.of_lanes([(np.array([[0.0, 0.0], [100.0, 0.0]]), 80.0)])  # drawn 1.25x
+    ledger = Ledger([OdometerCheck({"bus": path})], (), "scenarios/s.toml")
+
+    def at(route_m: float) -> Snapshot:
+        body = Footprint(Pose(50.0, 0.0, 0.0), BUS_LENGTH_M, 2.5)  # SUMO's front at 50 m
+        return Snapshot(3.0, {"bus": VehicleState("bus", "automated", body, 5.0,
+                                                  route_m=route_m)}, {})
+
+    ledger.step(at(40.0 + 5e-7), StepFacts())  # 40 m of SUMO's distance: drawn at 50 m
     with pytest.raises(AssumptionBroken, match=r"route_odometer.*'bus' at t=3\.00 s has driven "
-                       r"60\.400 m .* 60\.000 m"):
-        Ego._check_odometer(ego, VehicleState("bus", "automated", body, 5.0, route_m=60.4),
-                            picture, 3.0)
+                       r"40\.400 m .* its front 0\.500 m from"):
+        ledger.step(at(40.4), StepFacts())

@@ -127,6 +127,7 @@ def test_the_ledger_stops_the_run_in_one_line_unless_the_study_declares_it(roadm
     data = load_scenario_data(REPO / "scenarios" / "s1_pedestrian.toml")
     data["breaks_assumptions"] = ["pedestrian_lights"]
     data["estimator"] = {**data.get("estimator", {}), "position_jitter_m": 1.0}
+    data["automated"] = {"bus": {"route_edges": ["WJ", "JE"]}}  # on this network
     counting = ledger(CheckSetup(validate_scenario(data, "s.toml"), roadmap), "s.toml")
     for snapshot in steps:
         counting.step(snapshot, StepFacts())

@@ -18,7 +18,8 @@ import pytest
 import shapely
 
 from sse_cosim.control.limits import RouteLimits
-from sse_cosim.control.odometer import RouteOdometer
+from sse_cosim.control.picture import route_lanes
+from sse_cosim.control.swept import RoutePath
 from sse_cosim.world.network import netconvert_path
 from sse_cosim.world.roadmap import load_roadmap
 
@@ -69,13 +70,13 @@ def test_sumo_holds_the_front_to_its_lane_and_brakes_no_sooner_than_the_bound(
         tmp_path: Path, fast: float, slow: float) -> None:
     net = three_limits(tmp_path, fast, slow)
     roadmap = load_roadmap(net)
-    lanes = roadmap.route_lanes(ROUTE)
-    limits, odometer = RouteLimits.of_lanes(lanes), RouteOdometer.of_lanes(lanes)
+    limits = RouteLimits.of_lanes(roadmap.route_lanes(ROUTE))
+    path = RoutePath.of_lanes(route_lanes(roadmap, ROUTE))
     line = roadmap.route_line(ROUTE)
     for decel in (1.0, 2.0, 4.5):
         for dt in (0.1, 0.2):
             rows = speeds(tmp_path, net, fast, decel, dt)
-            along = np.array([odometer.drive(s) for s in shapely.line_locate_point(
+            along = np.array([path.drive(s) for s in shapely.line_locate_point(
                 line, shapely.points(rows[:, :2]))])  # SUMO's distance, as the limits
             speed = rows[:, 2]
             # held to the limit where the front is, once its braking step has acted

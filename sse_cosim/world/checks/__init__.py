@@ -20,9 +20,10 @@ from sse_cosim.world.checks.base import (
 from sse_cosim.world.checks.ground import GroundCheck
 from sse_cosim.world.checks.lights import LightsCheck
 from sse_cosim.world.checks.motion import MotionCheck
+from sse_cosim.world.checks.odometer import OdometerCheck
 
-CHECKS: dict[str, type[WorldCheck]] = {
-    check.name: check for check in (MotionCheck, GroundCheck, LightsCheck)  # one entry each
+CHECKS: dict[str, type[WorldCheck]] = {  # one entry each
+    check.name: check for check in (MotionCheck, GroundCheck, LightsCheck, OdometerCheck)
 }
 
 
