@@ -185,7 +185,6 @@ class SceneContext:
     zones: tuple[ConflictZone, ...]
     kind: RegionKind
     sweep_width_m: float  # the body's sweep: its width and a pedestrian's radius each side
-    planned: shapely.Geometry  # the ground that sweep covers along the planned lanes (prepared)
     limits: RouteLimits  # the speed limits along the route (in SUMO's distance)
     path: RoutePath  # the route as SUMO drives it: the drawn line and SUMO's distance on it
     stop_lines: tuple[StopLine, ...] = ()  # the route's signalised stop lines, nearest first
@@ -204,10 +203,9 @@ class SceneContext:
         lanes = roadmap.route_lanes(route_edges)
         walkable = roadmap.walkable
         corridor = _widened(route_line, 0.5 * bus.width_m + pedestrian_radius)
-        path = RoutePath.of_lanes(route_lanes(roadmap, route_edges))
+        path = RoutePath.of_route(lanes)
         sweep = body_sweep(path, bus.length_m, bus.width_m + 2.0 * pedestrian_radius)
         planned = swept_region(sweep)
-        shapely.prepare(planned)
         corridor = _with_sweep(corridor, _from_start(planned, route_line), walkable)
         crossings = _route_crossings(route_line, corridor, [c.area for c in roadmap.crossings],
                                      kind)
@@ -227,31 +225,9 @@ class SceneContext:
             for piece, region, start, end in swept)
         return cls(route_line, ground, crossings, bus, config, pedestrians,
                    BusDynamics.of(bus, config, step_length), window, zones, kind,
-                   bus.width_m + 2.0 * pedestrian_radius, planned,
+                   bus.width_m + 2.0 * pedestrian_radius,
                    RouteLimits.of_lanes(lanes), path,
                    _stop_lines(roadmap, route_edges, route_line), lit)
-
-    def off_plan_m(self, corners: np.ndarray) -> float:
-        """How far (m) the body with its footprint ``corners`` (4, 2), counter-clockwise
-        from the rear right, widened to each side by a pedestrian's radius as the sweep is,
-        lies outside the ground its sweep covers along the planned lanes (:attr:`planned`):
-        the largest distance of its corners and the middles of its sides (0: on the plan).
-        The zones, the arrivals and the along-route position all assume the body there.
-        0 while the front is less than a body length along the route: the sweep puts a back
-        that is not yet on the route at its start, where SUMO puts it on the lane before the
-        route's first one where there is one (turned by up to 2 degrees on the whole town),
-        so the body is checked once it lies on the route's lanes."""
-        front = 0.5 * (corners[1] + corners[2])
-        if self.route_line.project(shapely.Point(front)) < self.bus.length_m:
-            return 0.0
-        right, left = corners[0] - corners[3], corners[3] - corners[0]
-        width = math.hypot(float(left[0]), float(left[1]))
-        grow = 0.5 * (self.sweep_width_m - width) / width
-        wide = corners + grow * np.array([right, right, left, left])  # (4, 2)
-        points = np.vstack([wide, 0.5 * (wide + np.roll(wide, -1, axis=0))])  # (8, 2)
-        if shapely.contains_xy(self.planned, points[:, 0], points[:, 1]).all():
-            return 0.0
-        return float(shapely.distance(self.planned, shapely.points(points)).max())
 
     def releases(self, signals: Mapping[str, SignalState]) -> list[float]:
         """Per crossing of :attr:`lit`, the least time (s) until its light can let its walkers
@@ -848,12 +824,6 @@ def _stop_lines(roadmap: RoadMap, route_edges: Sequence[str],
                       roadmap.link_signals[(a.id, b.id)])
              for a, b in pairwise(lanes) if (a.id, b.id) in roadmap.link_signals]
     return tuple(sorted(lines, key=lambda line: line.at_m))
-
-
-def route_lanes(roadmap: RoadMap, route_edges: Sequence[str]) -> list[tuple[np.ndarray, float]]:
-    """The lanes a vehicle drives along ``route_edges`` (``RoadMap.route_lanes``): each lane's
-    centre line (k, 2) and its length (m)."""
-    return [(lane.shape, lane.length) for lane in roadmap.route_lanes(route_edges)]
 
 
 def _with_sweep(corridor: shapely.Geometry, sweep: shapely.Geometry,

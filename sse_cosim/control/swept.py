@@ -41,9 +41,13 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import pairwise
+from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
+
+if TYPE_CHECKING:
+    from sse_cosim.world.roadmap import LaneGeometry
 
 MAX_TURN_RAD = 0.01
 """Largest turn of the body within one piece of the sweep (the cover's rounding: a 12 m bus's
@@ -68,6 +72,11 @@ class RoutePath:
     points: np.ndarray
     sigma: np.ndarray
     station: np.ndarray
+
+    @classmethod
+    def of_route(cls, lanes: Sequence[LaneGeometry]) -> RoutePath:
+        """The path along a route's lanes in order (``RoadMap.route_lanes``)."""
+        return cls.of_lanes([(lane.shape, lane.length) for lane in lanes])
 
     @classmethod
     def of_lanes(cls, lanes: Sequence[tuple[np.ndarray, float]]) -> RoutePath:

@@ -27,7 +27,6 @@ from sse_cosim.control.picture import (
     assess,
 )
 from sse_cosim.control.speed import Decision, fallback_floor, make_policy
-from sse_cosim.errors import AssumptionBroken
 from sse_cosim.estimation.fusion_centre import BusEstimate
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.occupancy import UnobservedArea
@@ -46,13 +45,7 @@ from sse_cosim.regions import Region, RegionKind
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.sensors import SensorSpec
 from sse_cosim.world.roadmap import RoadMap
-from sse_cosim.world.snapshot import Snapshot, VehicleState
-
-PLANNED_LANES = "planned_lanes"
-"""The assumption a vehicle off its planned lanes breaks (not one a study can list)."""
-OFF_PLAN_TOL_M = 1e-6
-"""How far (m) a body SUMO reports may lie outside its planned sweep: SUMO's positions are
-doubles, the sweep's model matches them to about 1e-13 m (tests/swept_checks.py)."""
+from sse_cosim.world.snapshot import Snapshot
 
 
 class Laps(Protocol):
@@ -129,7 +122,6 @@ class Ego:
         """Receive, screen and fuse, refine, picture and decide (the vehicle is in
         ``snapshot``; every node's messages of ``step`` are already sent to it)."""
         me = snapshot.vehicles[self.id]
-        self._check_on_plan(me, snapshot.time)
         received = self.sharing.receive(step)
         shared = received.picture
         views = views_of(self.id, observations)
@@ -165,21 +157,3 @@ class Ego:
             picture, fallback_floor(estimate.flags.inconsistent, self.controller))
         return EgoStep(self.id, shared, estimate, possible, unknown, self.context.window,
                        picture, decision, (unobserved, *sources.values()))
-
-    def _check_on_plan(self, me: VehicleState, time_s: float) -> None:
-        """Stop the run (:class:`~sse_cosim.errors.AssumptionBroken`, one line) if the
-        vehicle's body has left the lanes its controller plans on by more than
-        :data:`OFF_PLAN_TOL_M`: SUMO drives it on another lane (a lane change, another
-        departure lane), where its zones, arrivals and position along the route are wrong."""
-        off = self.context.off_plan_m(me.footprint.corners())
-        if off > OFF_PLAN_TOL_M:
-            raise AssumptionBroken(
-                self.scenario_name, PLANNED_LANES,
-                f"automated vehicle {self.id!r} at t={time_s:.2f} s has its body {off:.3f} m "
-                "outside the lanes its controller plans on (the route's edges, each on one "
-                "driving lane); the run stops before it decides on a picture of other lanes",
-                "the controller plans on each edge's rightmost driving lane that leads on "
-                "(RoadMap.route_lanes) and SUMO changes none of its lanes of its own accord, "
-                "so SUMO drives it where the planned sweep does not reach (a junction passage "
-                "drawn otherwise): route the vehicle over other edges, and report the network "
-                "with this line (docs/own_network.md)")

@@ -15,7 +15,7 @@ import pytest
 import shapely
 from swept_checks import assert_in_the_way
 
-from sse_cosim.control.picture import SceneContext, route_lanes
+from sse_cosim.control.picture import SceneContext
 from sse_cosim.control.swept import (
     MAX_PIECE_M,
     RoutePath,
@@ -130,7 +130,7 @@ def test_the_straight_routes_of_the_junction_keep_their_zones(roadmap: RoadMap) 
 def test_on_the_right_turn_the_sweep_covers_every_footprint(roadmap: RoadMap) -> None:
     """Footprints with the front at 4,000 stations along the turn (not the pieces' ends) lie in
     the swept region; the old band misses the rear corner by about a metre."""
-    path = RoutePath.of_lanes(route_lanes(roadmap, TURN))
+    path = RoutePath.of_route(roadmap.route_lanes(TURN))
     pieces = body_sweep(path, LENGTH, WIDTH)
     region = swept_region(pieces)
     band = roadmap.route_line(TURN).buffer(0.5 * WIDTH, cap_style="flat")
@@ -147,7 +147,7 @@ def test_the_cover_ahead_holds_every_footprint_to_come_and_none_left_behind(
     """From a front station inside the turn, the footprints with the front there or beyond
     (4,000, off the pieces' ends) lie in the cover ahead; the first footprints of the route do
     not, nor does the rear's position a few metres back."""
-    path = RoutePath.of_lanes(route_lanes(roadmap, TURN))
+    path = RoutePath.of_route(roadmap.route_lanes(TURN))
     pieces = body_sweep(path, LENGTH, WIDTH)
     sigma = 170.0
     front_m = float(np.interp(sigma, path.sigma, path.station))
@@ -169,7 +169,7 @@ def test_a_pedestrian_where_only_the_swinging_rear_reaches_is_a_conflict(
     # a footprint reaches the pedestrian there: the rear corner, while the bus turns; the old
     # zones (corridor and walkable) left it out, and a pedestrian standing there arrives in
     # its zone at once: no pass is possible
-    path = RoutePath.of_lanes(route_lanes(roadmap, TURN))
+    path = RoutePath.of_route(roadmap.route_lanes(TURN))
     touching = [float(np.interp(s, path.sigma, path.station))
                 for s in np.arange(150.0, 200.0, 0.05)
                 if shapely.Polygon(chord_footprint(path, s, LENGTH, WIDTH)).distance(spot)

@@ -14,14 +14,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sse_cosim.control.picture import SceneContext
-from sse_cosim.estimation.motion import motion_model
-from sse_cosim.pipeline.ego import OFF_PLAN_TOL_M
-from sse_cosim.regions import kind
+from sse_cosim.errors import AssumptionBroken
 from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.scenario.loader import load_scenario
+from sse_cosim.world.checks import CheckSetup, Ledger, StepFacts
+from sse_cosim.world.checks.lanes import PlannedLanesCheck
 from sse_cosim.world.network import build_network
 from sse_cosim.world.roadmap import load_roadmap
+from sse_cosim.world.snapshot import Footprint, Pose, Snapshot, VehicleState
 
 pytestmark = pytest.mark.sumo
 ROOT = Path(__file__).resolve().parents[2]
@@ -70,26 +70,30 @@ def test_behind_a_slow_car_the_bus_keeps_its_planned_lane(tmp_path: Path) -> Non
 
 def test_a_body_on_another_lane_is_off_the_plan(tmp_path: Path) -> None:
     """The world's check (``planned_lanes``, exit status 5) still stands guard: a body on the
-    left lane lies a lane's width outside the planned sweep, one on the planned lane not."""
+    left lane lies a lane's width outside the planned sweep and stops the run in one line, one
+    on the planned lane does not."""
     path = tmp_path / "two_lanes.toml"
     path.write_text(SCENARIO)
     sc = load_scenario(path)
     bus = sc.automated["bus"]
-    net = build_network(ROOT / "tests" / "networks" / "two_lanes")
-    context = SceneContext.build(load_roadmap(net), bus.route_edges, bus, sc.controller,
-                                 motion_model(sc.estimator.model_copy(
-                                     update={"position_jitter_m": 0.5}), 0.1),
-                                 sc.pedestrian_radius_m(), 0.1,
-                                 kind("polygon"))
+    roadmap = load_roadmap(build_network(ROOT / "tests" / "networks" / "two_lanes"))
+    check = PlannedLanesCheck.build(CheckSetup(sc, roadmap))
+    sweep = check.sweeps["bus"]
 
     def body(front_x: float, y: float) -> np.ndarray:
         half = 0.5 * bus.width_m
         return np.array([[front_x - bus.length_m, y - half], [front_x, y - half],
                          [front_x, y + half], [front_x - bus.length_m, y + half]])
 
-    assert context.off_plan_m(body(-50.0, -4.8)) == 0.0
-    assert context.off_plan_m(body(-50.0, -1.6)) == pytest.approx(3.2, abs=0.05)
-    assert context.off_plan_m(body(-50.0, -1.6)) > OFF_PLAN_TOL_M
+    assert sweep.off_m(body(-50.0, -4.8), 100.0) == 0.0
+    assert sweep.off_m(body(-50.0, -1.6), 100.0) == pytest.approx(3.2, abs=0.05)
+    assert sweep.off_m(body(-50.0, -1.6), 0.5 * bus.length_m) == 0.0  # its back not on yet
+    ledger = Ledger([check], (), "two_lanes.toml")
+    left = Footprint(Pose(-50.0, -1.6, 0.0), bus.length_m, bus.width_m)
+    with pytest.raises(AssumptionBroken, match=r"\(planned_lanes\): automated vehicle 'bus' "
+                       r"at t=4\.00 s has its body 3\.\d{3} m outside the lanes"):
+        ledger.step(Snapshot(4.0, {"bus": VehicleState("bus", "automated", left, 5.0,
+                                                       route_m=100.0)}), StepFacts())
 
 
 def test_on_one_lane_the_body_stays_in_its_planned_sweep(tmp_path: Path) -> None:

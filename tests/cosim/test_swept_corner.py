@@ -20,7 +20,6 @@ import pytest
 import shapely
 from swept_checks import assert_in_sweep, assert_placed_as_modelled, bus_footprints
 
-from sse_cosim.control.picture import route_lanes
 from sse_cosim.control.swept import RoutePath, chord_footprint
 from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.scenario.loader import load_scenario
@@ -57,7 +56,7 @@ def footprints(tmp_path_factory: pytest.TempPathFactory) -> tuple[list, object, 
 def test_every_footprint_lies_in_the_swept_region(footprints) -> None:
     corners, roadmap, length, width = footprints
     assert len(corners) > 100
-    assert_in_sweep(corners, RoutePath.of_lanes(route_lanes(roadmap, TURN)), length, width)
+    assert_in_sweep(corners, RoutePath.of_route(roadmap.route_lanes(TURN)), length, width)
     # the bus did turn: from east to south
     first, last = corners[0], corners[-1]
     assert (first[1] - first[0])[0] > 0 and (last[1] - last[0])[1] < 0
@@ -68,7 +67,7 @@ def test_every_footprint_lies_in_the_swept_region(footprints) -> None:
 
 def test_the_model_places_the_body_as_sumo_does(footprints) -> None:
     corners, roadmap, length, width = footprints
-    path = RoutePath.of_lanes(route_lanes(roadmap, TURN))
+    path = RoutePath.of_route(roadmap.route_lanes(TURN))
     assert_placed_as_modelled(corners, roadmap.route_line(TURN), path, length, width)
 
 
@@ -111,7 +110,7 @@ CORNER_SPOT = (-8.0, -4.5)  # WJ's sidewalk, 0.5 m before its end: where the ped
 def test_a_pedestrian_waiting_where_the_body_cuts_the_corner_is_given_way_to(
         tmp_path: Path, footprints) -> None:
     _, roadmap, length, width = footprints
-    path = RoutePath.of_lanes(route_lanes(roadmap, TURN))
+    path = RoutePath.of_route(roadmap.route_lanes(TURN))
     reach = min(shapely.Polygon(chord_footprint(path, s, length, width))
                 .distance(shapely.Point(CORNER_SPOT)) for s in np.arange(150.0, 200.0, 0.1))
     assert reach == 0.0  # SUMO's body sweeps over the spot
@@ -163,7 +162,7 @@ def test_a_left_turn_split_inside_the_junction_is_swept_on_both_internal_lanes(
     corners, roadmap = bus_footprints(sc, tmp_path, "left")
     passage = [lane for lane in roadmap.route_lanes(route) if lane.id.startswith(":")]
     assert len(passage) == 2  # split at the internal junction
-    path = RoutePath.of_lanes(route_lanes(roadmap, route))
+    path = RoutePath.of_route(roadmap.route_lanes(route))
     assert_in_sweep(corners, path, bus.length_m, bus.width_m)
     assert (corners[-1][1] - corners[-1][0])[1] > 0  # it turned north
     assert_placed_as_modelled(corners, roadmap.route_line(route), path, bus.length_m,

@@ -32,7 +32,7 @@ from swept_checks import (
     bus_footprints,
 )
 
-from sse_cosim.control.picture import SceneContext, route_lanes
+from sse_cosim.control.picture import SceneContext
 from sse_cosim.control.swept import RoutePath, body_sweep, swept_region
 from sse_cosim.estimation.motion import motion_model
 from sse_cosim.regions import kind
@@ -90,7 +90,7 @@ def test_every_footprint_on_the_town_corners_lies_in_the_swept_region(town_run) 
     bus = sc.automated["bus"]
     passage = [lane for lane in roadmap.route_lanes(ROUTE[:2]) if lane.id.startswith(":")]
     assert len(passage) == 2  # split before the zebra
-    path = RoutePath.of_lanes(route_lanes(roadmap, ROUTE))
+    path = RoutePath.of_route(roadmap.route_lanes(ROUTE))
     assert_in_sweep(corners, path, bus.length_m, bus.width_m)
     line = roadmap.route_line(ROUTE)
     assert_placed_as_modelled(corners, line, path, bus.length_m, bus.width_m)
@@ -132,7 +132,7 @@ def test_a_pedestrian_where_the_front_cuts_the_corner_is_in_the_way(town_run) ->
     assert covering
     behind, left = body_offsets(covering[0], np.array(CUT_IN_SPOT))
     assert 0.0 < behind <= FRONT_PART_M and left < 0.0
-    path = RoutePath.of_lanes(route_lanes(roadmap, ROUTE))
+    path = RoutePath.of_route(roadmap.route_lanes(ROUTE))
     assert spot.within(swept_region(body_sweep(path, bus.length_m, bus.width_m)))
     # the controller's zones: in one, with every front station at which SUMO's body touches
     # the pedestrian, and a pedestrian standing there leaves no pass (whatever the jitter: it

@@ -18,7 +18,6 @@ import pytest
 import shapely
 
 from sse_cosim.control.limits import RouteLimits
-from sse_cosim.control.picture import route_lanes
 from sse_cosim.control.swept import RoutePath
 from sse_cosim.world.network import netconvert_path
 from sse_cosim.world.roadmap import load_roadmap
@@ -71,7 +70,7 @@ def test_sumo_holds_the_front_to_its_lane_and_brakes_no_sooner_than_the_bound(
     net = three_limits(tmp_path, fast, slow)
     roadmap = load_roadmap(net)
     limits = RouteLimits.of_lanes(roadmap.route_lanes(ROUTE))
-    path = RoutePath.of_lanes(route_lanes(roadmap, ROUTE))
+    path = RoutePath.of_route(roadmap.route_lanes(ROUTE))
     line = roadmap.route_line(ROUTE)
     for decel in (1.0, 2.0, 4.5):
         for dt in (0.1, 0.2):

@@ -18,12 +18,14 @@ from sse_cosim.world.checks.base import (
     WorldCheck,
 )
 from sse_cosim.world.checks.ground import GroundCheck
+from sse_cosim.world.checks.lanes import PlannedLanesCheck
 from sse_cosim.world.checks.lights import LightsCheck
 from sse_cosim.world.checks.motion import MotionCheck
 from sse_cosim.world.checks.odometer import OdometerCheck
 
 CHECKS: dict[str, type[WorldCheck]] = {  # one entry each
-    check.name: check for check in (MotionCheck, GroundCheck, LightsCheck, OdometerCheck)
+    check.name: check
+    for check in (MotionCheck, GroundCheck, LightsCheck, PlannedLanesCheck, OdometerCheck)
 }
 
 

@@ -38,8 +38,7 @@ class OdometerCheck(WorldCheck):
     @classmethod
     def build(cls, setup: CheckSetup) -> OdometerCheck | None:
         roadmap = setup.roadmap
-        paths = {vid: RoutePath.of_lanes([(lane.shape, lane.length)
-                                          for lane in roadmap.route_lanes(vehicle.route_edges)])
+        paths = {vid: RoutePath.of_route(roadmap.route_lanes(vehicle.route_edges))
                  for vid, vehicle in setup.scenario.automated.items()}
         return cls(paths) if paths else None
 
