@@ -237,12 +237,15 @@ class RoadMap:
         return self.lane(lane_id).polygon()
 
     def route_length(self, edge_ids: Sequence[str]) -> float:
-        """Length (m) of a vehicle route: the lanes it drives (:meth:`route_lanes`)."""
+        """Length (m) of a vehicle route in SUMO's distance: the lengths of the lanes it
+        drives (:meth:`route_lanes`)."""
         return sum(lane.length for lane in self.route_lanes(edge_ids))
 
     def route_line(self, edge_ids: Sequence[str]) -> shapely.LineString:
         """The centre line a vehicle drives along a route (:meth:`route_lanes`), from the
-        start of the first edge (its length is ``route_length``)."""
+        start of the first edge, as drawn (the lanes' shapes: its length is ``route_length``
+        only where each lane's shape is as long as the lane; docs/controller.md, "SUMO's
+        distance")."""
         coords = np.concatenate([lane.shape for lane in self.route_lanes(edge_ids)])
         keep = np.r_[True, np.any(np.abs(np.diff(coords, axis=0)) > 1e-9, axis=1)]
         return shapely.LineString(coords[keep])
