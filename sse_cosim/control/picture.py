@@ -248,17 +248,17 @@ class SceneContext:
                 return crossing
         return self.crossings[-1] if self.crossings else None
 
-    def reach_radius(self, front_s: float) -> float:
+    def reach_radius(self, front_s: float, front_m: float) -> float:
         """How far from the crossing (:meth:`crossing_at`) an unseen pedestrian can be and
         still reach it before the bus, keeping its nominal speed (:meth:`top_speed`), has
         cleared it; capped by ``interest_radius_m``. (The paper policy's notion of "near the
-        crossing".)"""
+        crossing".) ``front_s``: the front along the drawn route, ``front_m`` the same in
+        SUMO's distance."""
         crossing = self.crossing_at(front_s)
         if crossing is None or crossing.end_m - front_s + self.bus.length_m <= 0:
             return 0.0
-        front = self.path.drive(front_s)
-        to_clear = self.path.drive(crossing.end_m + self.bus.length_m) - front
-        radius = self.pedestrians.reach_during_m(to_clear, self.top_speed(front, to_clear))
+        to_clear = self.path.drive(crossing.end_m + self.bus.length_m) - front_m
+        radius = self.pedestrians.reach_during_m(to_clear, self.top_speed(front_m, to_clear))
         return min(radius, self.config.interest_radius_m)
 
     def path_ahead(self, front_s: float, length: float, margin: float) -> Region:
@@ -277,6 +277,15 @@ class SceneContext:
         if key not in self._relevant:
             self._relevant[key] = crossing.area.dilate(radius)
         return self._relevant[key]
+
+    @cached_property
+    def zone_drives(self) -> tuple[tuple[float, float], ...]:
+        """Per zone of :attr:`zones`, SUMO's distances along the route (m) where the front
+        reaches its near end (:meth:`~sse_cosim.control.swept.RoutePath.drive_before`) and
+        where the rear has cleared it (computed once)."""
+        length = self.bus.length_m
+        return tuple((self.path.drive_before(zone.start_m), self.path.drive(zone.end_m + length))
+                     for zone in self.zones)
 
     @cached_property
     def route_stations(self) -> np.ndarray:
@@ -406,7 +415,7 @@ def assess(
     crossing_ahead = (crossing is not None and crossing.end_m > front_s
                       and crossing.start_m - front_s <= cfg.crossing_horizon_m)
     own_hidden = own_occluded.intersection(unobserved.region)
-    reach = context.reach_radius(front_s)
+    reach = context.reach_radius(front_s, front)
     relevant = context.relevant(crossing, reach) if crossing is not None and reach > 0 \
         else context.kind.empty()
     hidden_in_reach = own_hidden.intersection(relevant)
@@ -533,9 +542,8 @@ def _outlook(context: SceneContext, front_s: float, front: float, sources: Seque
     holds its walkers (``releases``: per ``context.lit`` the least time until it can let them
     on, 0 if it does now) gets the later arrival its lights allow (:func:`_lit_arrival`).
     ``front_s`` is the front along the drawn route, ``front`` the same in SUMO's distance."""
-    path, length = context.path, context.bus.length_m
-    ahead = [(index, _ahead_of_body(context, zone, front_s),
-              path.drive(zone.end_m + length) - front)
+    length, drives = context.bus.length_m, context.zone_drives
+    ahead = [(index, _ahead_of_body(context, zone, front_s), drives[index][1] - front)
              for index, zone in enumerate(context.zones) if zone.end_m + length > front_s]
     ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead
              if not zone.polygon.is_empty]
@@ -551,7 +559,7 @@ def _outlook(context: SceneContext, front_s: float, front: float, sources: Seque
             in_view_arrivals[k] = _lit_arrival(context, zone, held, in_view, in_view_beyond)
     limits = [context.limit_on(front, to_clear) for _, _, to_clear in ahead]
     return tuple(
-        ZoneOutlook(index, path.drive_before(zone.start_m) - front, to_clear,
+        ZoneOutlook(index, drives[index][0] - front, to_clear,
                     max(float(arrival), floors.get(index, 0.0)), float(in_view_arrival),
                     context.standstill_clear_time(to_clear, limit), zone.ground,
                     tuple((c.id, c.own, c.lights) for c in (context.lit[i] for i in zone.lit)),

@@ -89,10 +89,12 @@ def test_level_speeds_are_the_configured_reductions():
 def test_reach_radius_shrinks_as_the_bus_nears_and_vanishes_once_past(context):
     (crossing,) = context.crossings
     start, end = crossing.start_m, crossing.end_m
-    radii = [context.reach_radius(s) for s in (start - 60, start - 30, start - 5)]
+    radii = [context.reach_radius(s, context.path.drive(s))
+             for s in (start - 60, start - 30, start - 5)]
     assert radii[0] > radii[1] > radii[2] > 0
     assert radii[0] <= context.config.interest_radius_m
-    assert context.reach_radius(end + context.bus.length_m + 0.1) == 0.0
+    past = end + context.bus.length_m + 0.1
+    assert context.reach_radius(past, context.path.drive(past)) == 0.0
 
 
 def test_a_pedestrian_in_the_lane_ahead_triggers_an_emergency_stop(context):

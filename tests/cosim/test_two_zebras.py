@@ -120,7 +120,7 @@ def test_the_paper_policys_crossing_is_the_nearest_not_yet_cleared(context: Scen
 def test_a_route_without_crossings_has_no_crossing_ahead(roadmap: RoadMap) -> None:
     context = scene(roadmap, ["DE"])  # from D, past the second zebra, to the dead end
     assert context.crossings == () and context.zones == ()
-    assert context.crossing_at(10.0) is None and context.reach_radius(10.0) == 0.0
+    assert context.crossing_at(10.0) is None and context.reach_radius(10.0, 10.0) == 0.0
     empty = K.empty()
     front = np.array(context.route_line.interpolate(10.0).coords[0])
     picture = assess(context, front, 10.0, empty, Source(empty), [])

@@ -14,8 +14,10 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any, ClassVar
 
+from sse_cosim.control.swept import RoutePath
 from sse_cosim.errors import AssumptionBroken
 from sse_cosim.scenario.model import Scenario
 from sse_cosim.world.roadmap import RoadMap
@@ -53,6 +55,13 @@ class CheckSetup:
     scenario: Scenario
     roadmap: RoadMap
     accel_mps2: float | None = None
+
+    @cached_property
+    def route_paths(self) -> dict[str, RoutePath]:
+        """Each automated vehicle's route as SUMO drives it (its lanes, each its ``length``
+        along its shape), by vehicle id: built once for every check that reads it."""
+        return {vid: RoutePath.of_route(self.roadmap.route_lanes(vehicle.route_edges))
+                for vid, vehicle in self.scenario.automated.items()}
 
     def declares(self, name: str) -> bool:
         """Whether the study lists assumption ``name`` in ``breaks_assumptions``."""

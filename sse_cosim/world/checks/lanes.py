@@ -20,7 +20,7 @@ from typing import ClassVar
 import numpy as np
 import shapely
 
-from sse_cosim.control.swept import RoutePath, body_sweep, swept_region
+from sse_cosim.control.swept import body_sweep, swept_region
 from sse_cosim.world.checks.base import Break, CheckSetup, StepFacts, WorldCheck
 from sse_cosim.world.snapshot import Snapshot
 
@@ -70,10 +70,10 @@ class PlannedLanesCheck(WorldCheck):
 
     @classmethod
     def build(cls, setup: CheckSetup) -> PlannedLanesCheck | None:
-        roadmap, width = setup.roadmap, 2.0 * setup.scenario.pedestrian_radius_m()
+        width = 2.0 * setup.scenario.pedestrian_radius_m()
         sweeps = {}
-        for vid, vehicle in setup.scenario.automated.items():
-            path = RoutePath.of_route(roadmap.route_lanes(vehicle.route_edges))
+        for vid, path in setup.route_paths.items():
+            vehicle = setup.scenario.automated[vid]
             ground = swept_region(body_sweep(path, vehicle.length_m, vehicle.width_m + width))
             shapely.prepare(ground)
             sweeps[vid] = PlannedSweep(ground, vehicle.length_m, vehicle.width_m + width)

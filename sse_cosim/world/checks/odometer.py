@@ -37,9 +37,7 @@ class OdometerCheck(WorldCheck):
 
     @classmethod
     def build(cls, setup: CheckSetup) -> OdometerCheck | None:
-        roadmap = setup.roadmap
-        paths = {vid: RoutePath.of_route(roadmap.route_lanes(vehicle.route_edges))
-                 for vid, vehicle in setup.scenario.automated.items()}
+        paths = setup.route_paths
         return cls(paths) if paths else None
 
     def check(self, snapshot: Snapshot, facts: StepFacts) -> Sequence[Break]:
