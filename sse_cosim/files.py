@@ -1,14 +1,17 @@
-"""Crash-safe file output: every file is written whole or not at all (write, then rename); and
-the reading of the TOML files that plan work (sweeps, campaigns, searches), with one-line
-errors."""
+"""Crash-safe file output: every file is written whole or not at all (write, then rename); a
+file named ``*.gz`` is written gzipped (:func:`write_text_atomic`) and read back as text
+(:func:`read_text`); and the reading of the TOML files that plan work (sweeps, campaigns,
+searches), with one-line errors."""
 
 from __future__ import annotations
 
 import contextlib
+import gzip
 import json
 import os
 import tempfile
 import tomllib
+import zlib
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, TypeVar
@@ -54,11 +57,39 @@ def _umask() -> int:
     return mask
 
 
+GZIP_SUFFIX = ".gz"
+"""A file whose name ends so is written and read gzipped."""
+
+
 def write_text_atomic(target: str | os.PathLike[str], text: str) -> Path:
-    """Write ``text`` (UTF-8) to ``target`` atomically and return the target path."""
+    """Write ``text`` (UTF-8) to ``target`` atomically and return the target path; gzipped if
+    ``target`` ends in :data:`GZIP_SUFFIX`, with no name or time in the header, so that the
+    same text gives the same bytes every time (committed results stay unchanged)."""
+    data = text.encode("utf-8")
+    if Path(target).suffix == GZIP_SUFFIX:
+        data = gzip.compress(data, compresslevel=9, mtime=0)
     with atomic_path(target) as tmp:
-        tmp.write_text(text, encoding="utf-8")
+        tmp.write_bytes(data)
     return Path(target)
+
+
+def refuse_plain(path: Path) -> None:
+    """Refuse in one line (:class:`UserError`) a folder whose ``path`` (``*.gz``) is missing
+    but that holds it plain: an older sse-cosim wrote it so."""
+    plain = path.with_suffix("")
+    if path.suffix == GZIP_SUFFIX and not path.exists() and plain.is_file():
+        raise UserError(str(plain), "", "was written by an older sse-cosim, which did not "
+                        f"gzip it (this one reads {path.name})",
+                        f"gzip it (gzip {plain}) and run the command again")
+
+
+def read_text(path: str | os.PathLike[str]) -> str:
+    """The text (UTF-8) of the file at ``path``, un-gzipped if its name ends in
+    :data:`GZIP_SUFFIX` (:func:`write_text_atomic`)."""
+    data = Path(path).read_bytes()
+    if Path(path).suffix == GZIP_SUFFIX:
+        data = gzip.decompress(data)
+    return data.decode("utf-8")
 
 
 def write_json_atomic(target: str | os.PathLike[str], data: Any) -> Path:
@@ -81,11 +112,12 @@ def portable_path(path: str | os.PathLike[str], start: str | os.PathLike[str] | 
 
 
 def read_plan(path: Path, command: str) -> dict[str, Any]:
-    """The JSON plan a command wrote (``sweep.json``, ``safety.json``); a one-line error
-    naming ``command`` when it is missing or broken."""
+    """The JSON plan a command wrote (``sweep.json``, ``safety.json.gz``); a one-line error
+    naming ``command`` when it is missing or broken (:func:`refuse_plain`)."""
+    refuse_plain(path)
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, json.JSONDecodeError) as exc:
+        return json.loads(read_text(path))
+    except (OSError, EOFError, zlib.error, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise UserError(str(path), "", f"cannot be read ({exc})",
                         f"name a folder written by `{command}`") from None
 

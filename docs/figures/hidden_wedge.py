@@ -8,7 +8,7 @@ truck's front at 186 m and at 183 m.
     sse-cosim run scenarios/s2_no_pedestrian.toml --out runs/wedge_183
     python docs/figures/hidden_wedge.py runs/wedge_186 runs/wedge_183 --t 5.9
 
-Each panel reads the run's regions.jsonl (the unobserved area the controller used) and its
+Each panel reads the run's regions.jsonl.gz (the unobserved area the controller used) and its
 scenario.json (the truck's front and length; the paper road's parking strip spans y = -6 to
 -3.5 m, the zebra x = 198 to 202 m).
 """
@@ -16,6 +16,7 @@ scenario.json (the truck's front and length; the paper road's parking strip span
 from __future__ import annotations
 
 import argparse
+import gzip
 import json
 from pathlib import Path
 
@@ -28,8 +29,8 @@ ZEBRA_X = (198.0, 202.0)  # the zebra (m)
 
 
 def unobserved_at(run: Path, t: float) -> shapely.Geometry:
-    """The unobserved area of ``run`` at time ``t`` (s), as regions.jsonl holds it."""
-    for line in (run / "regions.jsonl").open():
+    """The unobserved area of ``run`` at time ``t`` (s), as regions.jsonl.gz holds it."""
+    for line in gzip.decompress((run / "regions.jsonl.gz").read_bytes()).decode().splitlines():
         record = json.loads(line)
         if record["kind"] == "unobserved" and abs(record["t"] - t) < 1e-6:
             return shapely.MultiPolygon([shapely.Polygon(p[0], p[1:]) for p in

@@ -31,7 +31,7 @@ def run(scenario: Path, out_dir: Path | None, scene_times: tuple[float, ...],
         overrides: tuple[str, ...], margins: tuple[str, ...]) -> None:
     """Run one SCENARIO file in SUMO and write its folder.
 
-    The folder holds trace.csv (one row per step), sets.jsonl (every local and fused
+    The folder holds trace.csv (one row per step), sets.jsonl.gz (every local and fused
     position set), summary.json (speeds, detections, set sizes, violations, and the
     margins asked for with --margin), scenario.json (the resolved scenario) and plots
     (speed, set areas, scenes).

@@ -81,7 +81,7 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
     OUT (results/falsify/<scenario>/ by default) gets:
       report.md              the box, each method's least margin and first failure,
                              the least margin so far by evaluations, the worst cases
-      evaluations.csv        one row per evaluation (after every generation)
+      evaluations.csv.gz     one row per evaluation (after every generation; gzipped)
       falsify_progress.png   least margin against evaluations, per method
       worst_<method>.toml    the worst case, a scenario file: sse-cosim run reproduces it
       worst_<method>/        that run, with its replay
@@ -93,8 +93,8 @@ def falsify(scenario: Path, space_file: Path, objective: str, methods: tuple[str
     the walkable ground) instead of stopping at them; a failure counts only if it began
     before the first break, and the report lists the breaks apart. A search is
     reproducible from its seed; --resume reads back the finished runs of a killed one and
-    goes on where it stopped. evaluations.csv is rewritten after every generation: --resume
-    takes what it records (of the same scenario, objective, seed and box) without running
+    goes on where it stopped. evaluations.csv.gz is rewritten after every generation:
+    --resume takes what it records (of the same scenario, objective, seed and box) without running
     it again, so a search committed part-way goes on where runs/ is gone. A search that
     other code made (falsify.json's code_sha256, a digest of the package's sources) is not
     resumed: exit status 2.

@@ -56,7 +56,7 @@ def safety(campaign_file: Path, out_dir: Path | None, workers: int | None, execu
     and, reported: minimum distance bus-pedestrian (any pedestrian, and the campaign's
     own, "pedestrian"), average speed, time stopped.
 
-    OUT gets safety.json (the plan), runs/<key>/ (summary.json and scenario.json),
+    OUT gets safety.json.gz (the plan), runs/<key>/ (summary.json and scenario.json),
     safety.csv (one row per combination, those not run included) and two heat maps per
     scenario over step-out time x walking speed (safety_<scenario>_average_speed.png,
     safety_<scenario>_min_distance.png). The report, <OUT>.md (results/safety.md by

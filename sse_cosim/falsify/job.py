@@ -5,7 +5,7 @@ writes them (:mod:`sse_cosim.reporting.falsify_report`) after every round, then 
 method's worst case into a scenario file and runs that file again, in full with its replay, to
 show that it reproduces the margin the search saw.
 
-``evaluations.csv`` is the search's ledger: with ``resume``, an evaluation it records as run
+``evaluations.csv.gz`` is the search's ledger: with ``resume``, an evaluation it records as run
 (with a margin) is taken from it, not run again, provided ``falsify.json`` names the same
 search (:data:`SAME_SEARCH`; the scenario compared as it resolves). So a search can be
 committed part-way and go on in a fresh checkout, where the runs' folders are gone. Made by
@@ -37,7 +37,7 @@ from sse_cosim.falsify.search import (
 )
 from sse_cosim.falsify.searchers import SEARCHERS
 from sse_cosim.falsify.space import build_space, load_falsify_file, step_out_path
-from sse_cosim.files import portable_path, write_text_atomic
+from sse_cosim.files import portable_path, refuse_plain, write_text_atomic
 from sse_cosim.reporting import falsify_report as report
 from sse_cosim.reporting.falsify_report import UNFINISHED
 from sse_cosim.reporting.margins import check_margins
@@ -153,6 +153,7 @@ def recorded_outcomes(out_dir: Path, plan: dict[str, Any]) -> dict[str, Recorded
     that failed, or a point not feasible, is planned again). None if the folder holds no
     ledger, and none, with one line saying why, if it holds another search's."""
     plan_file, ledger = out_dir / report.FALSIFY_PLAN, out_dir / report.EVALUATIONS
+    refuse_plain(ledger)
     if not (plan_file.is_file() and ledger.is_file()):
         return {}
     differs = _differs(json.loads(plan_file.read_text()), plan)
@@ -185,11 +186,12 @@ def write_case(setup: SearchSetup, out_dir: Path, method: str, number: int) -> P
     """``method``'s evaluation ``number`` (from 1, as the report counts) of the search in
     ``out_dir`` as a scenario file, ``case_<method>_<number>.toml`` in ``out_dir``.
 
-    Its overrides are those the search's values recorded in ``evaluations.csv`` make (its
+    Its overrides are those the search's values recorded in ``evaluations.csv.gz`` make (its
     step-out times as recorded: the planner timed them), checked against the run's key, so
     that the file is the run the search made; :class:`UserError` if the folder holds no such
     search or evaluation, or if the falsify file or scenario now make other overrides."""
     plan_file, ledger = out_dir / report.FALSIFY_PLAN, out_dir / report.EVALUATIONS
+    refuse_plain(ledger)
     for needed in (plan_file, ledger):
         if not needed.is_file():
             raise UserError(str(needed), "--case", "no search's ledger is here",

@@ -13,7 +13,7 @@ A killed search resumes: with ``resume`` the finished runs are read back, every 
 rebuilt from its seed and told the same margins again, so it proposes the same points and the
 search goes on where it stopped, with the results an uninterrupted search gives. What a search
 has found is also handed to ``checkpoint`` after every round (the job writes it to
-``evaluations.csv``), and a resumed search takes an evaluation from ``recorded`` (those rows,
+``evaluations.csv.gz``), and a resumed search takes an evaluation from ``recorded`` (those rows,
 by key) without its run: a search can go on in another checkout, where ``runs/`` is gone.
 """
 

@@ -5,7 +5,7 @@ Written into the search folder (``results/falsify/<scenario>/``):
 
 - ``falsify.json``: the plan (command, scenario and its digest as it resolves, objective,
   methods, budget, seed, the box);
-- ``evaluations.csv`` (after every generation; the ledger a resumed search reads): one row per
+- ``evaluations.csv.gz`` (after every generation; the ledger a resumed search reads): one row per
   evaluation, in method then evaluation order: its values,
   margin, whether it failed, what it broke, why it did not run;
 - ``falsify_progress.png``: each method's least margin so far against evaluations;
@@ -29,16 +29,16 @@ import tomli_w
 from matplotlib import pyplot as plt
 from matplotlib.figure import Figure
 
-from sse_cosim.files import atomic_path, write_json_atomic, write_text_atomic
+from sse_cosim.files import write_json_atomic, write_text_atomic
 from sse_cosim.reporting import plots
 from sse_cosim.reporting.safety_report import markdown_table
 
 FALSIFY_PLAN = "falsify.json"
-EVALUATIONS = "evaluations.csv"
+EVALUATIONS = "evaluations.csv.gz"  # gzipped: a row per run (files.write_text_atomic)
 PROGRESS_PLOT = "falsify_progress.png"
 REPORT = "report.md"
 UNFINISHED = "route_unfinished"
-"""The column of ``evaluations.csv`` that says whether a run left a route unfinished."""
+"""The column of ``evaluations.csv.gz`` that says whether a run left a route unfinished."""
 CHECKPOINTS = (10, 20, 50, 100, 200, 500, 1000, 2000)
 """Evaluation counts at which the report gives each method's least margin so far."""
 
@@ -123,10 +123,9 @@ def run_command(scenario_file: str, margins: Sequence[str] = ()) -> str:
 
 
 def write_outputs(folder: Path, plan: Mapping[str, Any], table: pd.DataFrame) -> None:
-    """``falsify.json``, ``evaluations.csv`` and the progress plot, written atomically."""
+    """``falsify.json``, ``evaluations.csv.gz`` and the progress plot, written atomically."""
     write_json_atomic(folder / FALSIFY_PLAN, plan)
-    with atomic_path(folder / EVALUATIONS) as tmp:
-        table.to_csv(tmp, index=False)
+    write_text_atomic(folder / EVALUATIONS, table.to_csv(index=False))
     fig = progress_figure(table, plan["methods"], plan["objective"], plan["unit"],
                           plan["scenario"])
     plots.save_figure(fig, folder / PROGRESS_PLOT)

@@ -224,7 +224,7 @@ class MovingTimeToCollision(TimeToCollision):
 class ContainmentDepth:
     """The least depth of a pedestrian's true position in the sets and regions written for it
     (m; negative outside), with where it came: ``sets`` over every local and fused position
-    set (``sets.jsonl``), ``regions`` over every refined region (``regions.jsonl``) at the
+    set (``sets.jsonl.gz``), ``regions`` over every refined region (``regions.jsonl.gz``) at the
     steps its pedestrian stood inside the window where regions are kept (the recorder's
     claim: outside it, every walkable place counts as occupied), and ``accounted`` over the
     area where the controller accounts for pedestrians, each automated vehicle's refined

@@ -1,5 +1,5 @@
-"""A run's folder: ``trace.csv``, ``truth.csv``, ``pedestrians.csv``, ``sets.jsonl``,
-``regions.jsonl``, ``summary.json``, ``scenario.json``, ``replay.html`` and plots (among them
+"""A run's folder: ``trace.csv``, ``truth.csv``, ``pedestrians.csv``, ``sets.jsonl.gz``,
+``regions.jsonl.gz``, ``summary.json``, ``scenario.json``, ``replay.html`` and plots (among them
 ``key_moments.png``) -- or ``error.json`` if the run failed.
 
 Every file is written whole or not at all (:mod:`sse_cosim.files`); ``summary.json`` is
@@ -33,14 +33,14 @@ TRACE = "trace.csv"
 TRUTH = "truth.csv"  # every pedestrian in the scene at every step
 TRUTH_COLUMNS = ["t", "pedestrian", "x", "y", "speed", "heading"]  # m, m/s, rad (or empty)
 PEDESTRIANS = "pedestrians.csv"  # per step, vehicle and pedestrian: its checks and distance
-SETS = "sets.jsonl"
-REGIONS = "regions.jsonl"
+SETS = "sets.jsonl.gz"  # gzipped, as REGIONS (files.write_text_atomic)
+REGIONS = "regions.jsonl.gz"
 SUMMARY = "summary.json"
 SCENARIO = "scenario.json"
 KEY_MOMENTS = "key_moments.png"  # the paper's Fig. 5: the scene at the run's key moments
 ERROR = "error.json"  # instead of summary.json: {"key", "error"}, the one line that stopped it
 RUNS_FOLDER = "runs"  # a batch, sweep or campaign keeps run <key> in <its folder>/runs/<key>/
-DECIMALS = 6  # positions in trace.csv and regions.jsonl: 1e-6 m (a re-check allows 1e-5 m)
+DECIMALS = 6  # positions in trace.csv and regions.jsonl.gz: 1e-6 m (a re-check allows 1e-5 m)
 POSITIONS = ("bus_x", "bus_y", "x", "y")
 
 
@@ -133,7 +133,7 @@ def portable_scenario(scenario: Scenario, out_dir: Path) -> dict:
 
 
 def region_line(record: RegionRecord) -> str:
-    """One line of ``regions.jsonl``: ``{"t", "vehicle", "kind", "track", "polygons"}``
+    """One line of ``regions.jsonl.gz``: ``{"t", "vehicle", "kind", "track", "polygons"}``
     (compact JSON: the regions are most of the file)."""
     line = {"t": record.time, "vehicle": record.vehicle, "kind": record.kind,
             "track": record.track, "polygons": region_polygons(record.region)}
@@ -159,7 +159,7 @@ def _ring(ring: shapely.LinearRing) -> list[list[float]]:
 
 def _write_trace(path: Path, trace: pd.DataFrame) -> None:
     """A table (``trace.csv``, ``truth.csv``, ...): positions to 1e-6 m, so that the truth can
-    be re-checked against ``regions.jsonl`` near a boundary; every other figure to 6
+    be re-checked against ``regions.jsonl.gz`` near a boundary; every other figure to 6
     significant digits."""
     text = trace.copy()
     for column in (c for c in POSITIONS if c in trace):

@@ -22,7 +22,7 @@ Checks stay independent of what they check: the recorder recomputes from what it
 set's position set (:class:`PositionSet`) is computed here from its state estimate's own
 arrays and the scenario's estimator settings, never taken from the estimator's memo
 (``MotionModel.position``), and the containment test reads the very arrays that go into
-``sets.jsonl`` (:func:`zonotope_2d_contains`, written here with its compiled kernels in
+``sets.jsonl.gz`` (:func:`zonotope_2d_contains`, written here with its compiled kernels in
 :mod:`~sse_cosim.reporting.recorder_kernels`, not the sets library's).
 
 The recorder only reads :class:`~sse_cosim.pipeline.result.StepResult`; writing files is
@@ -83,7 +83,7 @@ HalfSpace = tuple[float, float, float]  # (d_x, d_y, b): the points x with |d·(
 
 @dataclass(frozen=True, eq=False)
 class PositionSet:
-    """A pedestrian's position set as the recorder writes it (a line of ``sets.jsonl``) and
+    """A pedestrian's position set as the recorder writes it (a line of ``sets.jsonl.gz``) and
     checks it: ⟨center, generators⟩, ``center`` (2,), ``generators`` (2, e), read-only, and
     its ``area`` (m², :meth:`Zonotope.volume` of the same arrays). The line, the area and the
     containment check read these same arrays."""
@@ -194,7 +194,7 @@ class RegionRecord:
     refined region (``track`` its id) or the unobserved area (``track`` None).
     ``outside``: on the unobserved area's record, every pedestrian who stood outside the
     window in which regions are kept, where that step's regions claim nothing about them
-    (every walkable place counts as occupied there); not written to ``regions.jsonl``."""
+    (every walkable place counts as occupied there); not written to ``regions.jsonl.gz``."""
 
     time: float
     kind: str  # REFINED or UNOBSERVED
@@ -633,7 +633,7 @@ class RunRecorder:
 
     @property
     def set_lines(self) -> list[dict[str, Any]]:
-        """The lines of ``sets.jsonl``: t, vehicle, node, track, kind, then the position set,
+        """The lines of ``sets.jsonl.gz``: t, vehicle, node, track, kind, then the position set,
         ``center`` (2 floats) and ``generators`` (2 rows of e floats)."""
         return [{"t": t, "vehicle": vehicle, "node": node, "track": track, "kind": kind,
                  "center": center.tolist(), "generators": generators.tolist()}

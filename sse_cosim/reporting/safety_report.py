@@ -1,4 +1,4 @@
-"""The safety campaign's report, rebuilt from its plan (``safety.json``) and its run folders.
+"""The safety campaign's report, rebuilt from its plan (``safety.json.gz``) and its run folders.
 
 Every figure comes from a run's ``summary.json``, read by its key (:data:`COLLISIONS` ...). A
 key that a summary lacks is never given a value: the run is left out of that figure, the
@@ -29,7 +29,7 @@ from sse_cosim.files import atomic_path, read_plan, write_text_atomic
 from sse_cosim.reporting import plots
 from sse_cosim.reporting.outputs import RUNS_FOLDER, TaskOutcome, read_outcome
 
-SAFETY_PLAN = "safety.json"
+SAFETY_PLAN = "safety.json.gz"  # gzipped: it lists every run (files.write_text_atomic)
 SAFETY_TABLE = "safety.csv"
 STANDSTILL_LIMIT_S = 3.0
 
@@ -88,7 +88,7 @@ class CampaignFolder:
 
 
 def read_campaign(folder: Path) -> CampaignFolder:
-    """The campaign in ``folder`` (its ``safety.json``)."""
+    """The campaign in ``folder`` (its ``safety.json.gz``)."""
     return CampaignFolder(folder, read_plan(folder / SAFETY_PLAN, "sse-cosim safety"))
 
 

@@ -428,7 +428,7 @@ def _check_disjoint(fixed: Mapping[str, Any], active: Sequence[tuple[Parameter, 
 # -- running ---------------------------------------------------------------------------------
 
 def plan_document(campaign: Campaign, plan: CampaignPlan, command: str) -> dict[str, Any]:
-    """``safety.json``: how the campaign was made, every run and every combination left out
+    """``safety.json.gz``: how the campaign was made, every run and every combination left out
     (what the report reads). Scenario files appear as the campaign file names them."""
     names = dict(zip((p.stem for p in campaign.scenarios), campaign.scenario_names,
                      strict=True))
@@ -461,7 +461,7 @@ def run_campaign(
     command: str,
     execution: Execution,
 ) -> list[TaskOutcome]:
-    """Write ``safety.json``, then run the feasible runs (summaries only) through the sweep's
+    """Write ``safety.json.gz``, then run the feasible runs (summaries only) through the sweep's
     execution path; outcomes in plan order."""
     write_json_atomic(out_dir / SAFETY_PLAN, plan_document(campaign, plan, command))
     return run_planned(plan.runs, out_dir, True, execution, "safety")

@@ -19,6 +19,7 @@ import pandas as pd
 import pytest
 from anonymous_checks import assert_sound_in_every_set_kind
 
+from sse_cosim.files import read_text
 from sse_cosim.runner.run import run_scenario_file
 
 pytestmark = pytest.mark.sumo
@@ -55,7 +56,7 @@ def test_the_pedestrians_abreast_at_the_views_edge_stay_accounted_for(crowd):
 def test_no_set_is_named_after_a_pedestrian(crowd):
     """Sets are the nodes' tracks ('<node>:<id>') and the fused tracks made of them."""
     summary, out = crowd
-    lines = [json.loads(line) for line in (out / "sets.jsonl").open()]
+    lines = [json.loads(line) for line in read_text(out / "sets.jsonl.gz").splitlines()]
     local = {line["track"] for line in lines if line["kind"] == "local"}
     fused = {line["track"] for line in lines if line["kind"] == "fused"}
     assert all(":" in track for track in local)
@@ -68,5 +69,5 @@ def test_the_labelled_default_reproduces_the_published_s3_run(tmp_path):
     results/runs/s3_pedestrian."""
     run_scenario_file(S3, tmp_path, {}, plots=False)
     published = ROOT / "results" / "runs" / "s3_pedestrian"
-    for name in ("trace.csv", "sets.jsonl", "regions.jsonl"):
+    for name in ("trace.csv", "sets.jsonl.gz", "regions.jsonl.gz"):
         assert (tmp_path / name).read_bytes() == (published / name).read_bytes(), name

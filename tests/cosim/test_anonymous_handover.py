@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from sse_cosim.files import read_text
 from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.sets import Zonotope
 
@@ -30,7 +31,7 @@ def test_a_pedestrian_handed_over_beside_a_kept_track_is_accounted_for(tmp_path:
     truth = pd.read_csv(tmp_path / "truth.csv").set_index(["t", "pedestrian"])
     n1 = truth.loc[(16.2, "n1"), ["x", "y"]].to_numpy(dtype=float)
     kept = [Zonotope(np.array(s["center"]), np.array(s["generators"]))
-            for s in map(json.loads, (tmp_path / "sets.jsonl").open())
+            for s in map(json.loads, read_text(tmp_path / "sets.jsonl.gz").splitlines())
             if s["t"] == 16.2 and s["node"] == "car2" and s["kind"] == "local"]
     assert kept and not any(z.contains(n1) for z in kept)  # the traced step: in none of them
     checks = pd.read_csv(tmp_path / "pedestrians.csv")

@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from sse_cosim.files import read_text
 from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.sets import Zonotope
 
@@ -35,9 +36,9 @@ def standing(tmp_path_factory) -> tuple[dict, Path]:
 
 
 def local_sets(out: Path, node: str) -> dict[float, dict[str, Zonotope]]:
-    """Time -> track key -> position set of ``node``'s tracks, from sets.jsonl."""
+    """Time -> track key -> position set of ``node``'s tracks, from sets.jsonl.gz."""
     found: dict[float, dict[str, Zonotope]] = defaultdict(dict)
-    for line in (out / "sets.jsonl").open():
+    for line in read_text(out / "sets.jsonl.gz").splitlines():
         row = json.loads(line)
         if row["kind"] == "local" and row["node"] == node:
             found[row["t"]][row["track"]] = Zonotope(np.array(row["center"]),

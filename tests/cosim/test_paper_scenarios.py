@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 from scipy.optimize import linprog
 
+from sse_cosim.files import read_text
 from sse_cosim.reporting.outputs import RUNS_FOLDER
 from sse_cosim.reporting.paper import read_run_folders, write_paper_report
 from sse_cosim.runner.batch import run_batch
@@ -77,7 +78,7 @@ def test_sets_file_lets_anyone_recheck_containment(batch):
     """Re-check with an LP of our own: exists beta in [-1, 1]^e with G beta = truth - c."""
     folder = batch / RUNS_FOLDER / "s3_pedestrian"
     truth_of = pd.read_csv(folder / "truth.csv").set_index(["t", "pedestrian"])
-    lines = [json.loads(line) for line in (folder / "sets.jsonl").read_text().splitlines()]
+    lines = [json.loads(line) for line in read_text(folder / "sets.jsonl.gz").splitlines()]
     assert {line["kind"] for line in lines} == {"local", "fused"}
     assert {(line["vehicle"], line["track"]) for line in lines} == {("bus", "pedestrian")}
     for line in lines[:: max(len(lines) // 150, 1)]:
@@ -97,7 +98,7 @@ def test_batch_writes_table1_and_figures(batch):
     for name in ("speed_profiles.png", "fig7_set_sizes.png", "fig7_set_sizes.csv"):
         assert (batch / name).stat().st_size > 0
     run = batch / RUNS_FOLDER / "s2_pedestrian"
-    for name in ("trace.csv", "sets.jsonl", "summary.json", "scenario.json", "speed.png",
+    for name in ("trace.csv", "sets.jsonl.gz", "summary.json", "scenario.json", "speed.png",
                  "set_areas.png"):
         assert (run / name).is_file(), name
     assert list(run.glob("scene_t*.png")), "the first shared fusion is drawn"

@@ -9,6 +9,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from sse_cosim.files import read_text
 from sse_cosim.runner.run import run_scenario_file
 
 pytestmark = pytest.mark.sumo
@@ -56,7 +57,7 @@ def test_each_pedestrian_is_held_by_its_own_sets_at_every_step(run):
         assert checks[column].dropna().astype(bool).all(), column
     truth = pd.read_csv(out / "truth.csv")
     assert truth.groupby("t")["pedestrian"].nunique().max() == 3
-    tracks = {json.loads(line)["track"] for line in (out / "sets.jsonl").open()}
+    tracks = {json.loads(line)["track"] for line in read_text(out / "sets.jsonl.gz").splitlines()}
     assert tracks == {"pedestrian", "south", "diagonal"}
 
 

@@ -20,7 +20,7 @@ pytestmark = pytest.mark.sumo
 
 ROOT = Path(__file__).resolve().parents[2]
 SSE_COSIM = Path(sys.executable).with_name("sse-cosim")
-WRITTEN = ("trace.csv", "truth.csv", "pedestrians.csv", "sets.jsonl", "regions.jsonl",
+WRITTEN = ("trace.csv", "truth.csv", "pedestrians.csv", "sets.jsonl.gz", "regions.jsonl.gz",
            "summary.json")
 
 

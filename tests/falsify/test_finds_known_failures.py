@@ -7,7 +7,7 @@
   collision with seeds 2 (at evaluation 72) and 5 (at 45), and came to 1.54, 0.91 and 0.33 m
   with 1, 3 and 4; random search found it with none (1.10 to 2.95 m). The test takes seed 5
   and 48 evaluations (random search: 3.06 m); the same search with OpenBLAS's and NumPy's
-  kernels for another CPU wrote the same evaluations.csv, byte for byte. The search is
+  kernels for another CPU wrote the same evaluations.csv.gz, byte for byte. The search is
   killed after its second generation and resumed: random search's runs are read back from
   their folders, CMA-ES's from the ledger alone (their folders removed, as in a fresh
   checkout), and none is run again.

@@ -42,7 +42,7 @@ from sse_cosim.falsify.space import (
     load_falsify_file,
     scenario_of,
 )
-from sse_cosim.files import write_json_atomic
+from sse_cosim.files import write_json_atomic, write_text_atomic
 from sse_cosim.reporting.falsify_report import EVALUATIONS, FALSIFY_PLAN
 from sse_cosim.runner.safety import ActorPlanner
 from sse_cosim.scenario.loader import (
@@ -482,8 +482,8 @@ def test_a_ledger_gives_its_runs_outcomes_and_only_to_the_same_search(tmp_path: 
     setup = prepare(S3, SPACE, "distance", ("cma",), budget=2, seed=1)
     plan = plan_document(setup, "test", tmp_path)
     write_json_atomic(tmp_path / FALSIFY_PLAN, plan)
-    (tmp_path / EVALUATIONS).write_text(
-        LEDGER_HEAD + ",route_unfinished\n"
+    write_text_atomic(
+        tmp_path / EVALUATIONS, LEDGER_HEAD + ",route_unfinished\n"
         + "cma,0,0,k0,2.5,False,False,,,,,False\n"
         + "cma,1,0,k1,0.0,True,False,12.5,1 collision(s); 2 containment violation(s),,,True\n"
         + "cma,2,0,k2,,False,False,,,cannot reach the zebra,,\n"
@@ -494,7 +494,7 @@ def test_a_ledger_gives_its_runs_outcomes_and_only_to_the_same_search(tmp_path: 
                        ("1 collision(s)", "2 containment violation(s)"), unfinished=True)}
     assert recorded_outcomes(tmp_path, {**plan, "objective": "ttc"}) == {}
     assert recorded_outcomes(tmp_path, {**plan, "scenario_sha256": "0" * 64}) == {}
-    (tmp_path / EVALUATIONS).write_text(LEDGER_HEAD + "\ncma,0,0,k0,2.5,False,False,,,,\n")
+    write_text_atomic(tmp_path / EVALUATIONS, LEDGER_HEAD + "\ncma,0,0,k0,2.5,False,False,,,,\n")
     assert recorded_outcomes(tmp_path, plan) == {  # a ledger from before the column
         "k0": Recorded(2.5, False, False, None, (), unfinished=None)}
 
@@ -518,7 +518,7 @@ def test_resuming_a_longer_search_with_a_smaller_budget_is_refused(tmp_path: Pat
     setup = prepare(S3, SPACE, "distance", ("cma",), budget=2, seed=1)
     plan = plan_document(setup, "test", tmp_path)
     write_json_atomic(tmp_path / FALSIFY_PLAN, plan)
-    (tmp_path / EVALUATIONS).write_text(LEDGER_HEAD + "\ncma,40,3,k40,2.5,False,False,,,,\n")
+    write_text_atomic(tmp_path / EVALUATIONS, LEDGER_HEAD + "\ncma,40,3,k40,2.5,False,False,,,,\n")
     with pytest.raises(UserError, match=r"records 4 generations.*--budget 2"):
         recorded_outcomes(tmp_path, plan)
 
@@ -564,7 +564,7 @@ def test_a_case_the_ledger_does_not_hold_or_ran_otherwise_is_refused(tmp_path: P
     with pytest.raises(UserError, match=r"no search's ledger is here"):
         write_case(setup, tmp_path / "elsewhere", "cma", 5)
     setup, _ = _search_with_one_evaluation(tmp_path, walk_mps=1.234567)  # not what it ran
-    with pytest.raises(UserError, match=r"evaluations.csv: key: cma's evaluation 5 ran with"):
+    with pytest.raises(UserError, match=r"evaluations.csv.gz: key: cma's evaluation 5 ran with"):
         write_case(setup, tmp_path, "cma", 5)
     assert not list(tmp_path.glob("case_*.toml"))
 
@@ -592,3 +592,12 @@ def test_the_progress_line_tells_the_pace_of_the_runs_that_were_made(monkeypatch
     assert pace.lap(30, 3) == "30 run(s) in 01:00, about 03:00 left"
     assert pace.lap(30, 2) == "30 run(s) in 02:00, about 02:59 left"  # 182 s for 61 runs
     assert pace.lap(30, 0) == "30 run(s) in 00:00"
+
+
+def test_a_ledger_an_older_version_wrote_plain_is_refused_not_started_over(tmp_path: Path):
+    setup = prepare(S3, SPACE, "distance", ("cma",), budget=2, seed=1)
+    plan = plan_document(setup, "test", tmp_path)
+    write_json_atomic(tmp_path / FALSIFY_PLAN, plan)
+    (tmp_path / "evaluations.csv").write_text(LEDGER_HEAD + "\ncma,0,0,k0,2.5,False,False,,,,\n")
+    with pytest.raises(UserError, match=r"evaluations.csv: .*older sse-cosim.*gzip"):
+        recorded_outcomes(tmp_path, plan)

@@ -13,6 +13,7 @@ import pandas as pd
 import pytest
 import shapely
 
+from sse_cosim.files import read_text
 from sse_cosim.pipeline.result import StepResult
 from sse_cosim.reporting.margins import (
     ContainmentDepth,
@@ -150,13 +151,13 @@ def _the_time_agrees_with_the_files(summary: dict, out: Path) -> None:
 
 def _the_depth_agrees_with_the_files(summary: dict, out: Path) -> None:
     """Every written set and refined region again as a shapely polygon: the least distance
-    from the truth to its boundary (inside) is the summary's. (regions.jsonl does not hold
+    from the truth to its boundary (inside) is the summary's. (regions.jsonl.gz does not hold
     the window outside which a region claims nothing; in this run the least comes inside it.)"""
     depth = summary["margins"]["containment_depth"]
     truth = {(row.t, row.pedestrian): shapely.Point(row.x, row.y)
              for row in pd.read_csv(out / "truth.csv").itertuples()}
     least = np.inf
-    for line in (out / "sets.jsonl").read_text().splitlines():
+    for line in read_text(out / "sets.jsonl.gz").splitlines():
         record = json.loads(line)
         z = Zonotope.unchecked(np.array(record["center"]), np.array(record["generators"]))
         point = truth.get((record["t"], record["track"]))
@@ -167,7 +168,7 @@ def _the_depth_agrees_with_the_files(summary: dict, out: Path) -> None:
         least = min(least, polygon.boundary.distance(point))
     assert depth["sets"]["least_m"] == pytest.approx(least, abs=1e-6)
     least = np.inf
-    for line in (out / "regions.jsonl").read_text().splitlines():
+    for line in read_text(out / "regions.jsonl.gz").splitlines():
         record = json.loads(line)
         if record["kind"] != REFINED:
             continue
@@ -181,7 +182,7 @@ def _the_depth_agrees_with_the_files(summary: dict, out: Path) -> None:
     accounted = depth["accounted"]
     union = shapely.union_all([
         shapely.Polygon(p[0], p[1:])
-        for line in (out / "regions.jsonl").read_text().splitlines()
+        for line in read_text(out / "regions.jsonl.gz").splitlines()
         if (record := json.loads(line))["t"] == accounted["t"] for p in record["polygons"]])
     point = truth[(accounted["t"], accounted["pedestrian"])]
     assert union.covers(point) and accounted["least_m"] >= 0.0

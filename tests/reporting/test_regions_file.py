@@ -1,11 +1,12 @@
-"""``regions.jsonl``: the regions the controller used, checkable from outside the recorder.
+"""``regions.jsonl.gz``: the regions the controller used, checkable from outside the recorder.
 
 The serialisation round trip is a fast unit test; the soundness re-check runs real SUMO and
-reads the run folder only (``regions.jsonl`` and ``trace.csv``), with shapely of its own.
+reads the run folder only (``regions.jsonl.gz`` and ``trace.csv``), with shapely of its own.
 """
 
 from __future__ import annotations
 
+import gzip
 import json
 from pathlib import Path
 
@@ -88,7 +89,7 @@ def test_pedestrian_is_in_its_refined_region_or_the_unobserved_area(tmp_path, na
     trace = pd.read_csv(tmp_path / TRACE)
     refined: dict[float, dict[str, list[shapely.Polygon]]] = {}
     unobserved: dict[float, list[shapely.Polygon]] = {}
-    for text in (tmp_path / REGIONS).read_text().splitlines():
+    for text in gzip.decompress((tmp_path / REGIONS).read_bytes()).decode().splitlines():
         line = json.loads(text)
         t = round(line["t"], 6)
         if line["kind"] == "unobserved":

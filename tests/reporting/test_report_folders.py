@@ -19,7 +19,7 @@ def test_runs_of_a_safety_campaign_are_not_single_runs(tmp_path):
     plain = finished_run(tmp_path / "runs" / "s1_pedestrian")
     campaign = tmp_path / "safety"
     finished_run(campaign / "runs" / "s1_pedestrian__step_s=9__seed1__abc")
-    (campaign / "safety.json").write_text("{}")
+    (campaign / "safety.json.gz").write_text("{}")
     assert [run.path for run in single_runs([tmp_path], [])] == [plain]
 
 

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 import shapely
 
-from sse_cosim.files import portable_path
+from sse_cosim.files import portable_path, read_text
 from sse_cosim.reporting.outputs import REGIONS, SETS, SUMMARY, TRACE, TRUTH, write_run
 from sse_cosim.reporting.recorder import REFINED, UNOBSERVED, RegionRecord, RunRecorder
 from sse_cosim.scenario.loader import load_scenario
@@ -151,7 +151,7 @@ def test_run_folder_holds_regions_and_the_summary_figures(tmp_path):
     ]
     summary = write_run(tmp_path, recorder.scenario, recorder, None, "test", DONE,
                         plots_wanted=False)
-    lines = [json.loads(line) for line in (tmp_path / REGIONS).read_text().splitlines()]
+    lines = [json.loads(line) for line in read_text(tmp_path / REGIONS).splitlines()]
     assert [(line["t"], line["kind"], line["track"]) for line in lines] == [
         (0.0, "unobserved", None), (0.1, "refined", "pedestrian"), (0.1, "unobserved", None)]
     assert lines[1]["polygons"] == []
