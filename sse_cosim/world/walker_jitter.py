@@ -14,11 +14,13 @@ of each walking area, so it is measured on the network itself:
   to :data:`LEAD_M` along b. A walk that enters by a crossing starts on a sidewalk before the
   crossing's other walking area; one that leaves by a crossing ends on a sidewalk after it.
   So every passage a walker can take is walked, with the sidewalk before and after it --
-  except a turn back: from a sidewalk to one that leads back to the same node (the two sides
-  of a street at a dead end, a loop). On such walking areas SUMO reports walkers up to tens of
-  metres away from the walking area (86 m in one step in the converted Bad Hersfeld): no
-  jitter covers that. The scenarios' walks cross the street over a zebra and do not turn
-  back; a walker that does (a person from a route file) stops its run at that jump.
+  except a turn back (:func:`_turns_back`): a walk that ends on the sidewalk it began on (in
+  over one crossing and back over another), or that crosses nothing and ends on a sidewalk
+  leading back to the same node (the two sides of a street at a dead end, a loop). On such
+  walking areas SUMO reports walkers up to tens of metres away from the walking area (86 m
+  in one step in the converted Bad Hersfeld): no jitter covers that. The scenarios' walks
+  cross the street over a zebra and do not turn back; a walker that does (a person from a
+  route file) stops its run at that jump.
 * **Alone, at the bound.** Every walker walks at the speed bound v, the run's step length and
   SUMO's options of a run (:func:`sse_cosim.world.walk_probe.walk_alone`); walkers whose walks
   share an edge never walk at the same time (slots of :func:`_slots`), so none is pushed by
@@ -290,25 +292,32 @@ def passages(net: sumolib.net.Net, areas: Sequence[sumolib.net.edge.Edge]
                              }.values(), key=lambda e: e.getID())
         for a in neighbours:
             for b in neighbours:
-                if a is b or _turns_back(a, b, _junction(area)):
+                if a is b:
                     continue
                 head = _into(a, area)
                 tail = _out_of(b, area)
                 if head is None or tail is None:
                     continue
                 edges = (*head, area.getID(), *tail)
+                if _turns_back(net, edges, _junction(area)):
+                    continue
                 walks.append((_junction(area), edges,
                               _lead(net.getEdge(edges[0]), toward=_node_of(net, edges[1])),
                               _lead(net.getEdge(edges[-1]), toward=_node_of(net, edges[-2]))))
     return walks
 
 
-def _turns_back(a: sumolib.net.edge.Edge, b: sumolib.net.edge.Edge, junction: str) -> bool:
-    """Whether sidewalks ``a`` and ``b`` both lead from ``junction`` to the same node: a walk
-    from one to the other turns back (a dead end's turn, a loop)."""
-    if "crossing" in (a.getFunction(), b.getFunction()):
+def _turns_back(net: sumolib.net.Net, edges: Sequence[str], junction: str) -> bool:
+    """Whether the walk ``edges`` through a walking area of ``junction`` ends where it began:
+    on the sidewalk it started on (in over one crossing, back over another to the same
+    corner), or, over no crossing, on a sidewalk that leads from ``junction`` to the same
+    node as the first (the two sides of a street at a dead end, a loop)."""
+    first, last = net.getEdge(edges[0]), net.getEdge(edges[-1])
+    if first.getID() == last.getID():
+        return True
+    if len(edges) > 3:  # a crossing on the way: it crosses a street
         return False
-    return _far_end(a, junction) == _far_end(b, junction)
+    return _far_end(first, junction) == _far_end(last, junction)
 
 
 def _far_end(edge: sumolib.net.edge.Edge, junction: str) -> str:
