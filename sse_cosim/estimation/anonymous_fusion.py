@@ -39,6 +39,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 from sse_cosim.estimation.association import (
     MEET_TOL,
     NodeTracks,
@@ -99,7 +101,8 @@ class AnonymousFusionCentre(BaseFusionCentre):
             inputs[name] = {key: every[key] for key in keys}
             if not detected.isdisjoint(keys):
                 in_view.add(name)
-        clear = {name: self._clear(z, nodes) for name, z in estimates.items()}
+        detected_paths = [self._detected_paths(n) for n in nodes]
+        clear = {name: self._clear(z, nodes, detected_paths) for name, z in estimates.items()}
         screen = BusScreen(node=self.node)  # no vote: it needs to know who is who
         flags = step_flags(self.sensors, tracks, screen, bool(shared.inconsistent), self.node)
         return BusEstimate(screen, estimates, flags, inputs, frozenset(in_view)), clear
@@ -113,22 +116,38 @@ class AnonymousFusionCentre(BaseFusionCentre):
     def _fuse(self, sets: Sequence[Zonotope]) -> Zonotope:
         return fuse_sets(sets, self.fusion_method, self.settings, self.model)
 
-    def _clear(self, fused: Zonotope, nodes: Sequence[_Node]) -> list[ClearRegion]:
-        """The views of the nodes none of whose detected tracks meets ``fused`` (module
-        docstring)."""
-        path = self.model.path_set(fused)
-        return [ClearRegion(n.view, n.age) for n in nodes if not n.view.is_empty
-                and not any(self._meet(path, n.tracks[key]) for key in sorted(n.detected)
-                            if key in n.tracks)]
+    def _detected_paths(self, node: _Node) -> _Paths:
+        """The path sets of ``node``'s detected tracks, with their boxes."""
+        paths = [self.model.path_set(node.tracks[key]) for key in sorted(node.detected)
+                 if key in node.tracks]
+        boxes = [z.interval_hull() for z in paths]
+        return _Paths(paths, np.array([b[0] for b in boxes]).reshape(-1, 2),
+                      np.array([b[1] for b in boxes]).reshape(-1, 2))
 
-    def _meet(self, path: Zonotope, estimate: Zonotope) -> bool:
-        """Whether the path set ``path`` meets ``estimate``'s (boxes first, then exactly; both
-        err towards "meets" by :data:`MEET_TOL`)."""
-        other = self.model.path_set(estimate)
-        (lo, hi), (other_lo, other_hi) = path.interval_hull(), other.interval_hull()
-        if (lo > other_hi + MEET_TOL).any() or (other_lo > hi + MEET_TOL).any():
-            return False
-        return not zonotopes_disjoint(path, other, MEET_TOL)
+    def _clear(self, fused: Zonotope, nodes: Sequence[_Node], detected: Sequence[_Paths]
+               ) -> list[ClearRegion]:
+        """The views of the nodes none of whose detected tracks (``detected``, in the nodes'
+        order) meets ``fused`` (module docstring)."""
+        path = self.model.path_set(fused)
+        lo, hi = path.interval_hull()
+        return [ClearRegion(n.view, n.age) for n, paths in zip(nodes, detected, strict=True)
+                if not n.view.is_empty and not paths.meet(path, lo, hi)]
+
+
+@dataclass(frozen=True)
+class _Paths:
+    """Path sets (k of them) and their boxes, lo and hi (k, 2)."""
+
+    sets: list[Zonotope]
+    lo: np.ndarray
+    hi: np.ndarray
+
+    def meet(self, path: Zonotope, lo: np.ndarray, hi: np.ndarray) -> bool:
+        """Whether any of the sets meets ``path`` (box ``lo``, ``hi``): boxes first, then
+        exactly; both err towards "meets" by :data:`MEET_TOL`."""
+        near = np.flatnonzero((self.lo <= hi + MEET_TOL).all(axis=1)
+                              & (lo <= self.hi + MEET_TOL).all(axis=1))
+        return any(not zonotopes_disjoint(path, self.sets[k], MEET_TOL) for k in near)
 
 
 def _senders(shared: SharedPicture) -> list[_Node]:

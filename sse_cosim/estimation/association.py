@@ -114,12 +114,18 @@ from sse_cosim.sets import (
     Zonotope,
     intersect_strips,
     portable,
-    zonotope_facet_strips,
     zonotopes_disjoint,
 )
-from sse_cosim.sets.enclosure import clip_to_strips, enclose_polygon, unit_directions
+from sse_cosim.sets.enclosure_kernels import (
+    clip_to_strips,
+    enclose_polygon,
+    facet_strips,
+    unit_directions,
+    zonotope_vertices,
+)
+from sse_cosim.sets.kernels import contains_2d, full_rank_2d
 from sse_cosim.sets.portable import matmul
-from sse_cosim.sets.zonotope import FloatArray, full_rank
+from sse_cosim.sets.zonotope import FloatArray
 
 MEET_TOL = 1e-6
 """m: strips widened by this before the candidate test (R1), so rounding errs to "meets"."""
@@ -163,10 +169,13 @@ class Association:
 
 @dataclass(frozen=True)
 class _Detections:
-    """This step's detections in arrays: path strips, position boxes (k, 2) lo / hi."""
+    """This step's detections in arrays: path strips (as measured, with unit normals, and
+    about the state), their sets and position boxes (k, 2) lo / hi."""
 
     items: tuple[AnonymousDetection, ...]
     paths: tuple[Strips, ...]
+    units: tuple[Strips, ...]
+    states: tuple[Strips, ...]
     parallelograms: tuple[Zonotope, ...]
     lo: FloatArray
     hi: FloatArray
@@ -178,7 +187,8 @@ class _Detections:
         boxes = [z.interval_hull() for z in sets]
         lo = np.array([b[0] for b in boxes]).reshape(-1, 2)
         hi = np.array([b[1] for b in boxes]).reshape(-1, 2)
-        return cls(tuple(items), paths, sets, lo, hi)
+        return cls(tuple(items), paths, tuple(p.normalized() for p in paths),
+                   tuple(model.state_strips(p) for p in paths), sets, lo, hi)
 
 
 @dataclass(frozen=True)
@@ -346,9 +356,11 @@ def _candidates(scene: _Scene, estimate: Zonotope, skip: str | None = None) -> _
     inside = []
     for d in near:
         sensor = found.items[d].sensor
-        if sensor != skip and _meets(path, found.paths[d]):
+        if sensor != skip and _meets(path, found.units[d]):
             candidates.setdefault(sensor, []).append(int(d))
-            if _inside(found.parallelograms[d], path):
+            # a set inside X has its box in X's box: the box test rules most out first
+            if (found.lo[d] >= lo).all() and (found.hi[d] <= hi).all() \
+                    and _inside(found.parallelograms[d], path):
                 inside.append(int(d))
     polygon = scene.region(path)  # the regions are eroded by the jitter: s in them, p visible
     wholly: set[str] = set()
@@ -385,7 +397,7 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
     With ``split``, the last sensor that sees X in part and has one candidate left comes last
     and its two possibilities are kept apart (R8) instead of their hull.
     """
-    paths = scene.detections.paths
+    states = scene.detections.states
     kept_all, certain, ambiguous = True, [], []
     for sensor in sorted(view.wholly | view.partly):
         candidates = view.candidates.get(sensor, ())
@@ -402,7 +414,7 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
     last = ambiguous.pop(parted[-1]) if parted else None
     estimate = track.estimate
     if certain:
-        estimate = _cut(scene, estimate, Strips.stack([paths[d] for d in certain]))
+        estimate = _cut(scene, estimate, Strips.stack([states[d] for d in certain]))
     estimate = _ambiguous(scene, track, estimate, view, ambiguous)
     unseen = [d for sensor, candidates in view.candidates.items()
               if sensor not in view.wholly | view.partly
@@ -411,7 +423,7 @@ def _correct(scene: _Scene, track: LocalTrack, view: _View, left_out: frozenset[
     if last is None:
         return _finish(scene, track, estimate, track.occupied and kept_all, joined)
     sensor, (d,) = last
-    visible = _finish(scene, track, _cut(scene, estimate, paths[d]), False, [*joined, d])
+    visible = _finish(scene, track, _cut(scene, estimate, states[d]), False, [*joined, d])
     hidden = _finish(scene, track, _hidden(scene, estimate, track.estimate, sensor), False,
                      joined)
     if visible is None:  # off the ground: only the hidden possibility is left
@@ -423,9 +435,9 @@ def _ambiguous(scene: _Scene, track: LocalTrack, estimate: Zonotope, view: _View
                ambiguous: Sequence[tuple[str, Sequence[int]]]) -> Zonotope:
     """R3: ``estimate`` replaced, sensor by sensor, by the hull of that sensor's
     possibilities (``ambiguous``: sensor, candidates used)."""
-    paths = scene.detections.paths
+    states = scene.detections.states
     for sensor, used in ambiguous:
-        options = [_cut(scene, estimate, paths[d]) for d in used]
+        options = [_cut(scene, estimate, states[d]) for d in used]
         if sensor in view.partly:
             options.append(_hidden(scene, estimate, track.estimate, sensor))
         if len(options) == 1:
@@ -463,9 +475,10 @@ def _start(scene: _Scene, d: int, step: int, track_id: int) -> tuple[LocalTrack,
         set(_claimed(track, view))
 
 
-def _cut(scene: _Scene, estimate: Zonotope, path: Strips) -> Zonotope:
-    """X ∩ path strips (Proposition 1) in the state space."""
-    return intersect_strips(estimate, scene.model.state_strips(path), scene.settings.gain_method)
+def _cut(scene: _Scene, estimate: Zonotope, strips: Strips) -> Zonotope:
+    """X ∩ strips about the state (Proposition 1; path strips through
+    ``model.state_strips``)."""
+    return intersect_strips(estimate, strips, scene.settings.gain_method)
 
 
 def _hidden(scene: _Scene, estimate: Zonotope, predicted: Zonotope, sensor: str) -> Zonotope:
@@ -475,9 +488,10 @@ def _hidden(scene: _Scene, estimate: Zonotope, predicted: Zonotope, sensor: str)
     path = scene.model.path_set(predicted)
     corners = scene.region(path).difference(scene.eroded[sensor]).hull_points()
     enclosure = _enclose(corners, path.generators)
-    if enclosure is None:
-        return estimate
-    return _cut(scene, estimate, zonotope_facet_strips(enclosure))
+    if enclosure is None or not full_rank_2d(enclosure.generators):
+        return estimate  # a segment or a point: no facet to cut with (nothing cut is sound)
+    facets = Strips.unchecked(*facet_strips(enclosure.center, enclosure.generators))
+    return _cut(scene, estimate, scene.model.state_strips(facets))
 
 
 def _enclose(points: FloatArray, generators: FloatArray) -> Zonotope | None:
@@ -487,11 +501,11 @@ def _enclose(points: FloatArray, generators: FloatArray) -> Zonotope | None:
         return None
     origin = points.mean(axis=0)  # work about the points: numbers of the set's size
     directions = unit_directions(np.hstack([generators, np.eye(2)]))
-    found = enclose_polygon(points - origin, directions,
-                            float(np.abs(points - origin).max(initial=0.0)) or 1.0)
-    if found is None:
+    centred = np.ascontiguousarray(points - origin)
+    found, center, enclosure_generators = enclose_polygon(
+        centred, directions, float(np.abs(centred).max(initial=0.0)) or 1.0)
+    if not found:
         return None
-    center, enclosure_generators = found
     return Zonotope.unchecked(origin + center, enclosure_generators)
 
 
@@ -510,40 +524,46 @@ def _hull(sets: Sequence[Zonotope], generators: FloatArray) -> Zonotope:
 def _merge(tracks: list[LocalTrack], model: MotionModel, settings: EstimatorSettings
            ) -> list[LocalTrack]:
     """R7: merge near-duplicates (the hull's position area within :data:`MERGE_GROWTH` of the
-    smaller one's) until none is left; the merged track keeps the smaller id."""
+    smaller one's) until none is left, the first pair (by id) first; the merged track keeps
+    the smaller id."""
     tracks = sorted(tracks, key=lambda t: t.track_id)
-    merged = True
-    while merged:
-        merged = False
-        boxes = [model.position(t.estimate).interval_hull() for t in tracks]
-        for i in range(len(tracks)):
-            for j in range(i + 1, len(tracks)):
-                if not _boxes_meet(boxes[i], boxes[j]):
-                    continue
-                untouched = not tracks[i].joined and not tracks[j].joined
-                union = _near_duplicate(tracks[i].estimate, tracks[j].estimate, model,
-                                        untouched)
-                if union is None:
-                    continue
-                first, second = tracks[i], tracks[j]
-                tracks[i] = replace(
-                    first, estimate=settings.reduce(union),
-                    occupied=first.occupied or second.occupied,
-                    joined=tuple(sorted({*first.joined, *second.joined})))
-                del tracks[j]
-                merged = True
-                break
-            if merged:
-                break
+    while (found := _first_duplicate(tracks, model)) is not None:
+        i, j, union = found
+        first, second = tracks[i], tracks[j]
+        tracks[i] = replace(first, estimate=settings.reduce(union),
+                            occupied=first.occupied or second.occupied,
+                            joined=tuple(sorted({*first.joined, *second.joined})))
+        del tracks[j]
     return tracks
 
 
+def _first_duplicate(tracks: Sequence[LocalTrack], model: MotionModel
+                     ) -> tuple[int, int, Zonotope] | None:
+    """The first pair i < j (in that order) of near-duplicates (R7) and their hull, or None.
+    The position boxes of every pair are compared at once; areas first, then hulls."""
+    positions = [model.position(t.estimate) for t in tracks]
+    boxes = [z.interval_hull() for z in positions]
+    lo = np.array([b[0] for b in boxes]).reshape(-1, 2)
+    hi = np.array([b[1] for b in boxes]).reshape(-1, 2)
+    meet = (lo[:, None, :] <= hi[None, :, :]).all(axis=2) \
+        & (lo[None, :, :] <= hi[:, None, :]).all(axis=2)
+    areas = [z.volume() for z in positions]
+    for i, j in zip(*np.nonzero(np.triu(meet, k=1)), strict=True):  # row by row
+        untouched = not tracks[i].joined and not tracks[j].joined
+        union = _near_duplicate(tracks[i].estimate, tracks[j].estimate, model, untouched,
+                                (areas[i], areas[j]))
+        if union is not None:
+            return int(i), int(j), union
+    return None
+
+
 def _near_duplicate(first: Zonotope, second: Zonotope, model: MotionModel,
-                    untouched: bool = False) -> Zonotope | None:
+                    untouched: bool, position_areas: tuple[float, float]) -> Zonotope | None:
     """Their hull when its position area is within :data:`MERGE_GROWTH` of the smaller one's,
     or, for two sets no detection touched this step (``untouched``, R8), of the sum of both
-    areas (overlapping or side by side: the hull adds next to nothing to their union)."""
-    areas = sorted(model.position(z).volume() for z in (first, second))
+    areas (overlapping or side by side: the hull adds next to nothing to their union);
+    ``position_areas``: the two position sets' areas."""
+    areas = sorted(position_areas)
     limit = (1.0 + MERGE_GROWTH) * (areas[0] + areas[1] if untouched else areas[0])
     if areas[1] > limit:
         return None  # the hull is at least as large as the larger one
@@ -563,11 +583,10 @@ def _parallelogram(path: Strips) -> Zonotope:
     return Zonotope(matmul(inverse, path.values[:2]), inverse * path.radii[np.newaxis, :2])
 
 
-def _meets(path_set: Zonotope, strips: Strips) -> bool:
-    """Whether the 2-D set meets the strips widened by :data:`MEET_TOL` (exact clipping)."""
-    unit = strips.normalized()
-    corners = Zonotope.unchecked(np.zeros(2), path_set.generators).vertices()
-    clipped = clip_to_strips(corners, unit.normals,
+def _meets(path_set: Zonotope, unit: Strips) -> bool:
+    """Whether the 2-D set meets the strips ``unit`` (unit normals) widened by
+    :data:`MEET_TOL` (exact clipping)."""
+    clipped = clip_to_strips(zonotope_vertices(path_set.generators), unit.normals,
                              unit.values - matmul(unit.normals, path_set.center),
                              unit.radii + MEET_TOL)
     return len(clipped) > 0
@@ -576,9 +595,9 @@ def _meets(path_set: Zonotope, strips: Strips) -> bool:
 def _inside(inner: Zonotope, path: Zonotope) -> bool:
     """Whether the 2-D set ``inner`` lies inside the 2-D set ``path`` (a strict test: every
     vertex at least :data:`MEET_TOL` inside)."""
-    if not full_rank(path.generators):
+    if not full_rank_2d(path.generators):
         return False
-    return bool(np.all(path.contains(inner.vertices(), tol=-MEET_TOL)))
+    return bool(np.all(contains_2d(path.center, path.generators, inner.vertices(), -MEET_TOL)))
 
 
 @dataclass(frozen=True)
