@@ -663,13 +663,15 @@ def _sole_meeting(estimate: Zonotope, position: Region, other: NodeTracks,
                   model: MotionModel) -> int | None:
     """The id of ``other``'s only track meeting ``estimate`` when ``estimate``'s position set
     (``position``, as a polygon), grown by ``other.reach``, lies wholly in ``other``'s region;
-    else None. The region's bounding box is tested first."""
-    grow = other.reach + VISIBLE_MARGIN
+    else None. That is tested as ``position`` inside the region eroded by as much (the
+    Region contract: a set inside the erosion by d, grown by d, lies in the region), one
+    erosion per node and step (the region keeps it); its bounding box first."""
+    trusted = other.visible.erode(other.reach + VISIBLE_MARGIN)
     x0, y0, x1, y1 = position.bounds
-    vx0, vy0, vx1, vy1 = other.visible.bounds
-    if x0 - grow < vx0 or y0 - grow < vy0 or x1 + grow > vx1 or y1 + grow > vy1:
-        return None  # the grown set pokes out of the region's box
-    if not other.visible.covers(position.dilate(grow)):
+    vx0, vy0, vx1, vy1 = trusted.bounds
+    if trusted.is_empty or x0 < vx0 or y0 < vy0 or x1 > vx1 or y1 > vy1:
+        return None  # the set pokes out of the trusted region's box
+    if not trusted.covers(position):
         return None
     path = model.path_set(estimate)
     box = path.interval_hull()
