@@ -29,7 +29,7 @@ from sse_cosim.regions import Region
 from sse_cosim.reporting.shapes import polygon_parts
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sets import Zonotope
-from sse_cosim.sets.portable import matmul
+from sse_cosim.sets.enclosure_kernels import clip_to_strips
 from sse_cosim.world.roadmap import RoadMap
 
 if TYPE_CHECKING:  # only the types: the recorder reads results, it does not make them
@@ -42,7 +42,6 @@ DATA_MARK = "/*REPLAY_DATA*/"  # where the template takes the data (a JSON objec
 POLYGONS_MARK = "/*REPLAY_POLYGONS*/"  # and the polygons (a JSON array)
 CM = 100.0  # coordinates are stored in integer centimetres
 STRIP_MARGIN_M = 5.0  # a strip is drawn over its sensor's view box widened by this much
-STRIP_SPAN_M = 1000.0  # half-length of the band built before clipping (longer than any view)
 
 def replay_href(folder: Path, out_dir: Path, summary: Mapping[str, Any] | None = None
                 ) -> str | None:
@@ -161,9 +160,11 @@ class ReplayLog:
             box = _view_box(_shape(obs.visible), _shape(obs.occluded))
             for pid, detection in obs.detections.items():
                 s = detection.strips
-                bands.append([name, pid, [
-                    i for normal, value, radius in zip(s.normals, s.values, s.radii, strict=True)
-                    for i in self.pool.add(_band(normal, value, radius, box))]])
+                clipped = (_band(normal, value, radius, box)
+                           for normal, value, radius in zip(s.normals, s.values, s.radii,
+                                                            strict=True))
+                bands.append([name, pid, [self.pool.add_vertices(band) for band in clipped
+                                          if len(band) >= 3]])
         return bands
 
     def _ego(self, result: StepResult, ego: EgoStep) -> dict[str, Any]:
@@ -199,17 +200,16 @@ def _view_box(*regions: shapely.Geometry | None) -> tuple[float, float, float, f
 
 
 def _band(normal: np.ndarray, value: float, radius: float,
-          box: tuple[float, float, float, float] | None) -> shapely.Geometry:
-    """The strip ``|n·x - value| <= radius`` (``normal`` n, shape (2,)) clipped to the
-    rectangle ``box`` (x0, y0, x1, y1); empty without a box."""
+          box: tuple[float, float, float, float] | None) -> np.ndarray:
+    """The vertices (k, 2), in order, of the strip ``|n·x - value| <= radius`` (``normal`` n,
+    shape (2,)) clipped to the rectangle ``box`` (x0, y0, x1, y1): the rectangle cut by the
+    strip's two half-planes (compiled Sutherland-Hodgman); none without a box."""
     if box is None:
-        return shapely.Polygon()
-    norm2 = float(matmul(normal, normal))
-    direction = np.array([-normal[1], normal[0]]) / np.sqrt(norm2)
-    low, high = (normal * (value + side * radius) / norm2 for side in (-1.0, 1.0))
-    span = STRIP_SPAN_M * direction
-    band = shapely.Polygon([low - span, low + span, high + span, high - span])
-    return shapely.clip_by_rect(band, *box)
+        return np.zeros((0, 2))
+    x0, y0, x1, y1 = box
+    corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    return clip_to_strips(corners, np.asarray(normal, dtype=float).reshape(1, 2),
+                          np.array([value]), np.array([radius]))
 
 
 def replay_page(log: ReplayLog, scenario: Scenario, roadmap: RoadMap, title: str,

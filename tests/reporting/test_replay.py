@@ -77,7 +77,7 @@ def test_zonotope_vertices_keep_their_order():
 @pytest.mark.parametrize("normal", [np.array([1.0, 0.0]), np.array([0.6, -1.3])])
 def test_a_band_is_its_strip_inside_the_box(normal):
     box = shapely.box(-10, -10, 10, 10)
-    band = _band(normal, 2.0, 0.5, box.bounds)
+    band = shapely.Polygon(_band(normal, 2.0, 0.5, box.bounds))
     grid = np.stack(np.meshgrid(np.linspace(-9.9, 9.9, 60), np.linspace(-9.9, 9.9, 60)), -1)
     points = grid.reshape(-1, 2)
     gap = np.abs(points @ normal - 2.0) - 0.5
@@ -140,3 +140,11 @@ def test_table1_links_each_runs_replay_relative_to_the_table(tmp_path):
     assert "[S1 with pedestrian](runs/s1_pedestrian/replay.html)" in text
     assert "S2" not in text
     assert replay_links(runs[1:], tmp_path) == ""
+
+
+def test_a_strip_that_misses_the_box_draws_no_band_and_one_over_it_draws_the_box():
+    box = (-10.0, -10.0, 10.0, 10.0)
+    assert len(_band(np.array([0.6, -1.3]), 40.0, 0.5, box)) == 0
+    whole = shapely.Polygon(_band(np.array([1.0, 0.0]), 0.0, 50.0, box))
+    assert whole.equals(shapely.box(*box))
+    assert len(_band(np.array([1.0, 0.0]), 0.0, 1.0, None)) == 0
