@@ -106,6 +106,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from sse_cosim.estimation.association_kernels import candidate_tests
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.estimation.settings import EstimatorSettings, bounded
 from sse_cosim.estimation.vote import interval_hull
@@ -170,16 +171,17 @@ class Association:
 
 @dataclass(frozen=True)
 class _Detections:
-    """This step's detections in arrays: path strips (as measured, with unit normals, and
-    about the state), their sets and position boxes (k, 2) lo / hi."""
+    """This step's detections: path strips (as measured, and about the state), their sets
+    and position boxes (k, 2) lo / hi, and ``stacked``: the strips with unit normals and the
+    sets' vertices in the arrays of :func:`candidate_tests`."""
 
     items: tuple[AnonymousDetection, ...]
     paths: tuple[Strips, ...]
-    units: tuple[Strips, ...]
     states: tuple[Strips, ...]
     parallelograms: tuple[Zonotope, ...]
     lo: FloatArray
     hi: FloatArray
+    stacked: tuple[np.ndarray, ...]
 
     @classmethod
     def of(cls, items: Sequence[AnonymousDetection], model: MotionModel) -> _Detections:
@@ -188,8 +190,27 @@ class _Detections:
         boxes = [z.interval_hull() for z in sets]
         lo = np.array([b[0] for b in boxes]).reshape(-1, 2)
         hi = np.array([b[1] for b in boxes]).reshape(-1, 2)
-        return cls(tuple(items), paths, tuple(p.normalized() for p in paths),
-                   tuple(model.state_strips(p) for p in paths), sets, lo, hi)
+        return cls(tuple(items), paths, tuple(model.state_strips(p) for p in paths), sets,
+                   lo, hi, _stacked([p.normalized() for p in paths], sets))
+
+    def tests(self, path: Zonotope) -> tuple[np.ndarray, np.ndarray]:
+        """R1 for the 2-D ``path`` set against every detection: (meets (k,), inside (k,)),
+        :func:`candidate_tests` with :data:`MEET_TOL`."""
+        normals, values, radii, rows, corners, corner_rows = self.stacked
+        return candidate_tests(path.center, path.generators, normals, values, radii, rows,
+                               corners, corner_rows, self.lo, self.hi, MEET_TOL)
+
+
+def _stacked(units: Sequence[Strips], sets: Sequence[Zonotope]) -> tuple[np.ndarray, ...]:
+    """Strips (unit normals) and sets' vertices stacked with the first row of each: normals
+    (m, 2), values and radii (m,), rows (k + 1,), corners (v, 2), corner rows (k + 1,)."""
+    corners = [z.vertices() for z in sets]
+    return (np.vstack([u.normals for u in units] or [np.zeros((0, 2))]),
+            np.concatenate([u.values for u in units] or [np.zeros(0)]),
+            np.concatenate([u.radii for u in units] or [np.zeros(0)]),
+            np.cumsum([0] + [len(u) for u in units]),
+            np.vstack(corners or [np.zeros((0, 2))]),
+            np.cumsum([0] + [len(c) for c in corners]))
 
 
 @dataclass(frozen=True)
@@ -349,19 +370,15 @@ def _candidates(scene: _Scene, estimate: Zonotope, skip: str | None = None) -> _
     """R1 for one prediction ``estimate``: its candidates per sensor (sensor ``skip`` left out)
     and which sensors see it wholly or in part."""
     path = scene.model.path_set(estimate)
-    lo, hi = path.interval_hull()
     found = scene.detections
-    near = np.flatnonzero((found.lo <= hi + MEET_TOL).all(axis=1)
-                          & (found.hi >= lo - MEET_TOL).all(axis=1))
+    meets, within = found.tests(path)
     candidates: dict[str, list[int]] = {}
     inside = []
-    for d in near:
+    for d in np.flatnonzero(meets):
         sensor = found.items[d].sensor
-        if sensor != skip and _meets(path, found.units[d]):
+        if sensor != skip:
             candidates.setdefault(sensor, []).append(int(d))
-            # a set inside X has its box in X's box: the box test rules most out first
-            if (found.lo[d] >= lo).all() and (found.hi[d] <= hi).all() \
-                    and _inside(found.parallelograms[d], path):
+            if within[d]:
                 inside.append(int(d))
     polygon = scene.region(path)  # the regions are eroded by the jitter: s in them, p visible
     wholly: set[str] = set()
