@@ -45,6 +45,7 @@ from sse_cosim.estimation.association import (
     MEET_TOL,
     NodeTracks,
     associate_nodes,
+    set_boxes,
 )
 from sse_cosim.estimation.bus_fusion import fuse_sets
 from sse_cosim.estimation.bus_screen import BusScreen
@@ -101,8 +102,7 @@ class AnonymousFusionCentre(BaseFusionCentre):
             inputs[name] = {key: every[key] for key in keys}
             if not detected.isdisjoint(keys):
                 in_view.add(name)
-        detected_paths = [self._detected_paths(n) for n in nodes]
-        clear = {name: self._clear(z, nodes, detected_paths) for name, z in estimates.items()}
+        clear = self._clear(estimates, nodes)
         screen = BusScreen(node=self.node)  # no vote: it needs to know who is who
         flags = step_flags(self.sensors, tracks, screen, bool(shared.inconsistent), self.node)
         return BusEstimate(screen, estimates, flags, inputs, frozenset(in_view)), clear
@@ -118,20 +118,29 @@ class AnonymousFusionCentre(BaseFusionCentre):
 
     def _detected_paths(self, node: _Node) -> _Paths:
         """The path sets of ``node``'s detected tracks, with their boxes."""
-        paths = [self.model.path_set(node.tracks[key]) for key in sorted(node.detected)
-                 if key in node.tracks]
-        boxes = [z.interval_hull() for z in paths]
-        return _Paths(paths, np.array([b[0] for b in boxes]).reshape(-1, 2),
-                      np.array([b[1] for b in boxes]).reshape(-1, 2))
+        return _Paths.of([self.model.path_set(node.tracks[key]) for key in sorted(node.detected)
+                          if key in node.tracks])
 
-    def _clear(self, fused: Zonotope, nodes: Sequence[_Node], detected: Sequence[_Paths]
-               ) -> list[ClearRegion]:
-        """The views of the nodes none of whose detected tracks (``detected``, in the nodes'
-        order) meets ``fused`` (module docstring)."""
-        path = self.model.path_set(fused)
-        lo, hi = path.interval_hull()
-        return [ClearRegion(n.view, n.age) for n, paths in zip(nodes, detected, strict=True)
-                if not n.view.is_empty and not paths.meet(path, lo, hi)]
+    def _clear(self, fused: Mapping[str, Zonotope], nodes: Sequence[_Node]
+               ) -> dict[str, list[ClearRegion]]:
+        """Per fused track, the views of the nodes none of whose detected tracks meets it
+        (module docstring), in the nodes' order: every fused track's box against every
+        detected track's at once, node by node, then exactly where they come within
+        :data:`MEET_TOL`."""
+        names = list(fused)
+        paths = _Paths.of([self.model.path_set(fused[name]) for name in names])
+        clear: dict[str, list[ClearRegion]] = {name: [] for name in names}
+        for node in nodes:
+            if node.view.is_empty:
+                continue
+            detected = self._detected_paths(node)
+            near = (detected.lo[None, :, :] <= paths.hi[:, None, :] + MEET_TOL).all(axis=2) \
+                & (paths.lo[:, None, :] <= detected.hi[None, :, :] + MEET_TOL).all(axis=2)
+            for f, name in enumerate(names):
+                if not any(not zonotopes_disjoint(paths.sets[f], detected.sets[k], MEET_TOL)
+                           for k in np.flatnonzero(near[f])):
+                    clear[name].append(ClearRegion(node.view, node.age))
+        return clear
 
 
 @dataclass(frozen=True)
@@ -142,12 +151,9 @@ class _Paths:
     lo: np.ndarray
     hi: np.ndarray
 
-    def meet(self, path: Zonotope, lo: np.ndarray, hi: np.ndarray) -> bool:
-        """Whether any of the sets meets ``path`` (box ``lo``, ``hi``): boxes first, then
-        exactly; both err towards "meets" by :data:`MEET_TOL`."""
-        near = np.flatnonzero((self.lo <= hi + MEET_TOL).all(axis=1)
-                              & (lo <= self.hi + MEET_TOL).all(axis=1))
-        return any(not zonotopes_disjoint(path, self.sets[k], MEET_TOL) for k in near)
+    @classmethod
+    def of(cls, sets: list[Zonotope]) -> _Paths:
+        return cls(sets, *set_boxes(sets))
 
 
 def _senders(shared: SharedPicture) -> list[_Node]:

@@ -187,9 +187,7 @@ class _Detections:
     def of(cls, items: Sequence[AnonymousDetection], model: MotionModel) -> _Detections:
         paths = tuple(model.path_strips(d.strips) for d in items)
         sets = tuple(_parallelogram(p) for p in paths)
-        boxes = [z.interval_hull() for z in sets]
-        lo = np.array([b[0] for b in boxes]).reshape(-1, 2)
-        hi = np.array([b[1] for b in boxes]).reshape(-1, 2)
+        lo, hi = set_boxes(sets)
         return cls(tuple(items), paths, tuple(model.state_strips(p) for p in paths), sets,
                    lo, hi, _stacked([p.normalized() for p in paths], sets))
 
@@ -560,9 +558,7 @@ def _first_duplicate(tracks: Sequence[LocalTrack], model: MotionModel
     """The first pair i < j (in that order) of near-duplicates (R7) and their hull, or None.
     The position boxes of every pair are compared at once; areas first, then hulls."""
     positions = [model.position(t.estimate) for t in tracks]
-    boxes = [z.interval_hull() for z in positions]
-    lo = np.array([b[0] for b in boxes]).reshape(-1, 2)
-    hi = np.array([b[1] for b in boxes]).reshape(-1, 2)
+    lo, hi = set_boxes(positions)
     meet = (lo[:, None, :] <= hi[None, :, :]).all(axis=2) \
         & (lo[None, :, :] <= hi[:, None, :]).all(axis=2)
     areas = [z.volume() for z in positions]
@@ -664,9 +660,7 @@ def associate_nodes(nodes: Sequence[NodeTracks], model: MotionModel, fusion: Fus
             key = group[key]
         return key
 
-    polygons = {key: kind.convex_outer(model.position(sets[key]).vertices()) for key in keys}
-    sole = {(key, other.node): _sole_meeting(sets[key], polygons[key], other, model)
-            for key in keys for other in nodes if other.node != key[0]}
+    sole = _sole_meetings(nodes, keys, [sets[key] for key in keys], model, kind)
     for (key, node), partner in sole.items():
         if partner is not None and sole[((node, partner), key[0])] == key[1]:
             group[root((node, partner))] = root(key)
@@ -677,26 +671,52 @@ def associate_nodes(nodes: Sequence[NodeTracks], model: MotionModel, fusion: Fus
             for m in members.values()]
 
 
-def _sole_meeting(estimate: Zonotope, position: Region, other: NodeTracks,
-                  model: MotionModel) -> int | None:
-    """The id of ``other``'s only track meeting ``estimate`` when ``estimate``'s position set
-    (``position``, as a polygon), grown by ``other.reach``, lies wholly in ``other``'s region;
-    else None. That is tested as ``position`` inside the region eroded by as much (the
-    Region contract: a set inside the erosion by d, grown by d, lies in the region), one
-    erosion per node and step (the region keeps it); its bounding box first."""
-    trusted = other.visible.erode(other.reach + VISIBLE_MARGIN)
-    x0, y0, x1, y1 = position.bounds
-    vx0, vy0, vx1, vy1 = trusted.bounds
-    if trusted.is_empty or x0 < vx0 or y0 < vy0 or x1 > vx1 or y1 > vy1:
-        return None  # the set pokes out of the trusted region's box
-    if not trusted.covers(position):
-        return None
-    path = model.path_set(estimate)
-    box = path.interval_hull()
-    meeting = []
-    for tid, z in sorted(other.tracks.items()):
-        other_path = model.path_set(z)
-        if _boxes_meet(box, other_path.interval_hull(), MEET_TOL) and \
-                not zonotopes_disjoint(path, other_path, MEET_TOL):
-            meeting.append(tid)
-    return meeting[0] if len(meeting) == 1 else None
+def _sole_meetings(nodes: Sequence[NodeTracks], keys: Sequence[tuple[str, int]],
+                   estimates: Sequence[Zonotope], model: MotionModel, kind: RegionKind
+                   ) -> dict[tuple[tuple[str, int], str], int | None]:
+    """For every track (``keys``, ``estimates``) and every other node: the id of that node's
+    only track meeting it when the track's position set, grown by the node's reach, lies
+    wholly in the node's region; else None.
+
+    That is tested as the position set inside the region eroded by as much (the Region
+    contract: a set inside the erosion by d, grown by d, lies in the region), one erosion per
+    node and step (the region keeps it). Boxes first, every track's against every other
+    node's at once; a position set's polygon is made only for a region whose box holds it.
+    """
+    positions = [model.position(z) for z in estimates]
+    paths = [model.path_set(z) for z in estimates]
+    position_lo, position_hi = set_boxes(positions)
+    path_lo, path_hi = set_boxes(paths)
+    polygons: dict[int, Region] = {}
+    sole: dict[tuple[tuple[str, int], str], int | None] = {}
+    for other in nodes:
+        ids = sorted(other.tracks)
+        others = [model.path_set(other.tracks[tid]) for tid in ids]
+        lo, hi = set_boxes(others)
+        trusted = other.visible.erode(other.reach + VISIBLE_MARGIN)
+        x0, y0, x1, y1 = trusted.bounds
+        held = (position_lo[:, 0] >= x0) & (position_lo[:, 1] >= y0) \
+            & (position_hi[:, 0] <= x1) & (position_hi[:, 1] <= y1) & (not trusted.is_empty)
+        near = (lo[None, :, :] <= path_hi[:, None, :] + MEET_TOL).all(axis=2) \
+            & (path_lo[:, None, :] <= hi[None, :, :] + MEET_TOL).all(axis=2)
+        for i, key in enumerate(keys):
+            if key[0] == other.node:
+                continue
+            sole[(key, other.node)] = None
+            if not held[i]:
+                continue  # the set pokes out of the trusted region's box
+            if i not in polygons:
+                polygons[i] = kind.convex_outer(positions[i].vertices())
+            if not trusted.covers(polygons[i]):
+                continue
+            meeting = [ids[k] for k in np.flatnonzero(near[i])
+                       if not zonotopes_disjoint(paths[i], others[k], MEET_TOL)]
+            sole[(key, other.node)] = meeting[0] if len(meeting) == 1 else None
+    return sole
+
+
+def set_boxes(sets: Sequence[Zonotope]) -> tuple[FloatArray, FloatArray]:
+    """The sets' boxes: lo, hi (k, 2)."""
+    boxes = [z.interval_hull() for z in sets]
+    return (np.array([b[0] for b in boxes]).reshape(-1, 2),
+            np.array([b[1] for b in boxes]).reshape(-1, 2))
