@@ -25,7 +25,7 @@ import pandas as pd
 
 from sse_cosim import __version__
 from sse_cosim.errors import UserError
-from sse_cosim.files import write_text_atomic
+from sse_cosim.files import GZIP_SUFFIX, write_text_atomic
 from sse_cosim.reporting.falsify_report import FALSIFY_PLAN
 from sse_cosim.reporting.outputs import KEY_MOMENTS
 from sse_cosim.reporting.paper import (
@@ -86,8 +86,10 @@ def write_report(folders: Sequence[Path], out_dir: Path, command: str) -> list[P
 
 def single_runs(folders: Sequence[Path], sweeps: Sequence[SweepFolder]) -> list[RunFolder]:
     """Finished runs under ``folders`` that belong to no sweep, safety campaign or falsify
-    search (which have reports of their own), each once."""
-    campaigns = [plan.parent for root in folders for name in (SAFETY_PLAN, FALSIFY_PLAN)
+    search (which have reports of their own), each once. A campaign an older version wrote,
+    its plan not yet gzipped, is one too (its own report asks for the plan gzipped)."""
+    plans = (SAFETY_PLAN, SAFETY_PLAN.removesuffix(GZIP_SUFFIX), FALSIFY_PLAN)
+    campaigns = [plan.parent for root in folders for name in plans
                  for plan in Path(root).rglob(name)]
     roots = [folder.resolve() for folder in [*(sweep.path for sweep in sweeps), *campaigns]]
     unique = {run.path.resolve(): run for run in read_run_folders(folders)}

@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
 from sse_cosim.reporting.html import single_runs
 
 
@@ -15,11 +17,13 @@ def finished_run(folder: Path) -> Path:
     return folder
 
 
-def test_runs_of_a_safety_campaign_are_not_single_runs(tmp_path):
+@pytest.mark.parametrize("plan", ["safety.json.gz", "safety.json"])
+def test_runs_of_a_safety_campaign_are_not_single_runs(tmp_path, plan):
+    """Whether the campaign is this version's or an older one's, whose plan was plain."""
     plain = finished_run(tmp_path / "runs" / "s1_pedestrian")
     campaign = tmp_path / "safety"
     finished_run(campaign / "runs" / "s1_pedestrian__step_s=9__seed1__abc")
-    (campaign / "safety.json.gz").write_text("{}")
+    (campaign / plan).write_text("{}")
     assert [run.path for run in single_runs([tmp_path], [])] == [plain]
 
 
