@@ -5,7 +5,10 @@ check, on plain float64 arrays:
   position rows beside its jitter box, each entry plus 0.0, as NumPy's ufuncs add it);
 - :func:`halfspaces_2d` for the half-spaces of a 2-D zonotope (reference
   :func:`~sse_cosim.reporting.recorder.zonotope_2d_halfspaces_reference`) and
-  :func:`contains_2d` for :func:`~sse_cosim.reporting.recorder.zonotope_2d_contains`.
+  :func:`contains_2d` for :func:`~sse_cosim.reporting.recorder.zonotope_2d_contains`;
+- :func:`encoded_cm` for the replay's polygons in integer centimetres (reference
+  :func:`~sse_cosim.reporting.replay.encode_reference`; ``rint`` rounds half to even, as
+  NumPy's).
 
 Each does its reference's IEEE 754 operations (elementwise +, -, *, /, sqrt, abs and
 comparisons, each correctly rounded) in the same order, every sum from the left, and no fused
@@ -128,3 +131,24 @@ def contains_2d(center: FloatArray, generators: FloatArray, point: FloatArray,
         if not abs(halfspaces[r, 0] * x + halfspaces[r, 1] * y) <= halfspaces[r, 2]:
             return False
     return True
+
+
+@njit(cache=True)
+def encoded_cm(points: FloatArray, per_m: float) -> NDArray[np.int32]:
+    """The replay's encoding of ``points`` (k >= 1, 2) in m (``replay._encode``): each point
+    times ``per_m``, rounded half to even to an int32, then the first point and the steps
+    between neighbours that are not zero, flattened (2 + 2s,)."""
+    k = points.shape[0]
+    out = np.empty(2 * k, dtype=np.int32)
+    last_x = np.int32(np.rint(points[0, 0] * per_m))
+    last_y = np.int32(np.rint(points[0, 1] * per_m))
+    out[0], out[1] = last_x, last_y
+    count = 2
+    for i in range(1, k):
+        x = np.int32(np.rint(points[i, 0] * per_m))
+        y = np.int32(np.rint(points[i, 1] * per_m))
+        if x != last_x or y != last_y:
+            out[count], out[count + 1] = x - last_x, y - last_y
+            count += 2
+        last_x, last_y = x, y
+    return out[:count].copy()

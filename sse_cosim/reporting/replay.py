@@ -26,6 +26,7 @@ import shapely
 
 from sse_cosim.control.speed import SpeedLevel
 from sse_cosim.regions import Region
+from sse_cosim.reporting.recorder_kernels import encoded_cm
 from sse_cosim.reporting.shapes import polygon_parts
 from sse_cosim.scenario.model import Scenario, present
 from sse_cosim.sets import Zonotope
@@ -115,8 +116,16 @@ class PolygonPool:
 
 
 def _encode(points: np.ndarray) -> bytes:
-    """Points, shape (k, 2), in m as integer cm: the first point, then the steps between
-    neighbours, flattened, as int32 bytes; repeated points are dropped."""
+    """Points, shape (k >= 1, 2), in m as integer cm: the first point, then the steps between
+    neighbours, flattened, as int32 bytes; repeated points are dropped (compiled:
+    :func:`~sse_cosim.reporting.recorder_kernels.encoded_cm`; reference
+    :func:`encode_reference`)."""
+    xy = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
+    return encoded_cm(xy, CM).tobytes()
+
+
+def encode_reference(points: np.ndarray) -> bytes:
+    """:func:`_encode` in NumPy, the compiled kernel's reference."""
     cm = np.rint(np.asarray(points, dtype=float).reshape(-1, 2) * CM).astype(np.int32)
     steps = np.diff(cm, axis=0)
     return np.concatenate([cm[0], steps[steps.any(axis=1)].ravel()]).tobytes()
