@@ -120,9 +120,8 @@ from sse_cosim.sets import (
 )
 from sse_cosim.sets.enclosure_kernels import (
     clip_to_strips,
-    enclose_polygon,
+    enclose_points,
     facet_strips,
-    unit_directions,
     zonotope_vertices,
 )
 from sse_cosim.sets.kernels import contains_2d, full_rank_2d
@@ -512,17 +511,13 @@ def _hidden(scene: _Scene, estimate: Zonotope, predicted: Zonotope, sensor: str)
 
 def _enclose(points: FloatArray, generators: FloatArray) -> Zonotope | None:
     """A 2-D zonotope holding conv(``points``) (k, 2), along the directions of
-    ``generators`` (2, e) and the axes; None if there are no points."""
+    ``generators`` (2, e) and the axes (compiled: :func:`enclose_points`); None if there are
+    no points or no enclosure was accepted."""
     if len(points) == 0:
         return None
-    origin = points.mean(axis=0)  # work about the points: numbers of the set's size
-    directions = unit_directions(np.hstack([generators, np.eye(2)]))
-    centred = np.ascontiguousarray(points - origin)
-    found, center, enclosure_generators = enclose_polygon(
-        centred, directions, float(np.abs(centred).max(initial=0.0)) or 1.0)
-    if not found:
-        return None
-    return Zonotope.unchecked(origin + center, enclosure_generators)
+    found, center, enclosure = enclose_points(np.ascontiguousarray(points, dtype=np.float64),
+                                              np.ascontiguousarray(generators))
+    return Zonotope.unchecked(center, enclosure) if found else None
 
 
 def _hull(sets: Sequence[Zonotope], generators: FloatArray) -> Zonotope:
@@ -561,11 +556,17 @@ def _first_duplicate(tracks: Sequence[LocalTrack], model: MotionModel
     lo, hi = set_boxes(positions)
     meet = (lo[:, None, :] <= hi[None, :, :]).all(axis=2) \
         & (lo[None, :, :] <= hi[:, None, :]).all(axis=2)
-    areas = [z.volume() for z in positions]
-    for i, j in zip(*np.nonzero(np.triu(meet, k=1)), strict=True):  # row by row
-        untouched = not tracks[i].joined and not tracks[j].joined
-        union = _near_duplicate(tracks[i].estimate, tracks[j].estimate, model, untouched,
-                                (areas[i], areas[j]))
+    areas = np.array([z.volume() for z in positions])
+    touched = np.array([bool(t.joined) for t in tracks], dtype=bool)
+    first, second = np.nonzero(np.triu(meet, k=1))  # row by row
+    untouched = ~touched[first] & ~touched[second]
+    smaller = np.minimum(areas[first], areas[second])
+    larger = np.maximum(areas[first], areas[second])
+    # _near_duplicate's first test for every pair at once: the larger within the limit
+    possible = larger <= (1.0 + MERGE_GROWTH) * np.where(untouched, smaller + larger, smaller)
+    for i, j, both in zip(first[possible], second[possible], untouched[possible], strict=True):
+        union = _near_duplicate(tracks[i].estimate, tracks[j].estimate, model, bool(both),
+                                (float(areas[i]), float(areas[j])))
         if union is not None:
             return int(i), int(j), union
     return None

@@ -347,6 +347,33 @@ def enclose_intersection(generators: FloatArray, normals: FloatArray, values: Fl
     return found, center, enclosure, polygon
 
 
+@njit(cache=True)
+def enclose_points(points: FloatArray, generators: FloatArray
+                   ) -> tuple[bool, FloatArray, FloatArray]:
+    """A 2-D zonotope holding conv(``points``) (k >= 1, 2), along the directions of
+    ``generators`` (2, e) and the axes: (found, c (2,), G (2, k')), worked about the points'
+    mean (numbers of the set's size, not of its position), by :func:`enclose_polygon` with the
+    points' largest offset from the mean as the size (1 if none); found is False as there."""
+    k = points.shape[0]
+    total_x = total_y = 0.0
+    for i in range(k):  # numpy's mean over axis 0: row after row
+        total_x += points[i, 0]
+        total_y += points[i, 1]
+    origin = np.array([total_x / k, total_y / k])
+    e = generators.shape[1]
+    columns = np.zeros((2, e + 2))
+    columns[:, :e] = generators
+    columns[0, e], columns[1, e + 1] = 1.0, 1.0
+    centred = np.empty((k, 2))
+    size = 0.0
+    for i in range(k):
+        centred[i, 0], centred[i, 1] = points[i, 0] - origin[0], points[i, 1] - origin[1]
+        size = max(size, abs(centred[i, 0]), abs(centred[i, 1]))
+    found, center, enclosure = enclose_polygon(centred, unit_directions(columns),
+                                               size if size > 0.0 else 1.0)
+    return found, origin + center, enclosure
+
+
 EXACT_RTOL = 1e-8
 """An enclosure whose area is within this of the polygon's counts as exact (nothing that
 holds the polygon is smaller)."""

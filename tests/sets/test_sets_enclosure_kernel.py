@@ -183,3 +183,31 @@ def test_compiled_full_rank_and_area_are_the_references(zonotope):
     vertices = zonotope.vertices()
     assert abs(kernels.polygon_area(vertices) - enclosure.polygon_area(vertices)) \
         <= shoelace_tolerance(vertices)
+
+
+def _enclose_points_reference(points: np.ndarray, generators: np.ndarray) -> Zonotope | None:
+    """``enclose_points`` from the NumPy reference's pieces: about the points' mean, along the
+    generators' and the axes' directions."""
+    origin = points.mean(axis=0)
+    found = enclosure.enclose_polygon(points - origin, enclosure.unit_directions(
+        np.hstack([generators, np.eye(2)])), float(np.abs(points - origin).max()) or 1.0)
+    return None if found is None else Zonotope(origin + found[0], found[1])
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_compiled_enclosure_of_points_matches_the_reference_and_holds_them(seed):
+    """Far from the origin too (UTM-sized): the area within 1e-8 of the reference's, and
+    every point inside, with no slack."""
+    rng = np.random.default_rng(seed)
+    offset = (0.0, 5.7e6)[seed % 2] * np.array([0.09, 1.0])
+    points = rng.normal(size=(int(rng.integers(1, 25)), 2)) * rng.uniform(0.1, 5) + offset
+    generators = rng.normal(size=(2, int(rng.integers(0, 6))))
+    found, center, enclosure_generators = kernels.enclose_points(points, generators)
+    reference = _enclose_points_reference(points, generators)
+    assert found == (reference is not None)
+    if not found:
+        return
+    compiled = Zonotope(center, enclosure_generators)
+    scale = float(np.abs(points - points.mean(axis=0)).max()) or 1.0
+    assert compiled.volume() == pytest.approx(reference.volume(), rel=1e-8, abs=1e-12 * scale**2)
+    assert compiled.contains(points, tol=0.0).all()
