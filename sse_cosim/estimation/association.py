@@ -538,7 +538,8 @@ def _merge(tracks: list[LocalTrack], model: MotionModel, settings: EstimatorSett
     smaller one's) until none is left, the first pair (by id) first; the merged track keeps
     the smaller id."""
     tracks = sorted(tracks, key=lambda t: t.track_id)
-    while (found := _first_duplicate(tracks, model)) is not None:
+    rejected: set[tuple[Zonotope, Zonotope]] = set()  # pairs found apart: the same sets again
+    while (found := _first_duplicate(tracks, model, rejected)) is not None:
         i, j, union = found
         first, second = tracks[i], tracks[j]
         tracks[i] = replace(first, estimate=settings.reduce(union),
@@ -548,10 +549,12 @@ def _merge(tracks: list[LocalTrack], model: MotionModel, settings: EstimatorSett
     return tracks
 
 
-def _first_duplicate(tracks: Sequence[LocalTrack], model: MotionModel
-                     ) -> tuple[int, int, Zonotope] | None:
+def _first_duplicate(tracks: Sequence[LocalTrack], model: MotionModel,
+                     rejected: set[tuple[Zonotope, Zonotope]]) -> tuple[int, int, Zonotope] | None:
     """The first pair i < j (in that order) of near-duplicates (R7) and their hull, or None.
-    The position boxes of every pair are compared at once; areas first, then hulls."""
+    The position boxes of every pair are compared at once; areas first, then hulls, but not
+    for a pair of sets in ``rejected`` (the same objects: found apart before), to which the
+    pairs found apart now are added."""
     positions = [model.position(t.estimate) for t in tracks]
     lo, hi = set_boxes(positions)
     meet = (lo[:, None, :] <= hi[None, :, :]).all(axis=2) \
@@ -565,10 +568,13 @@ def _first_duplicate(tracks: Sequence[LocalTrack], model: MotionModel
     # _near_duplicate's first test for every pair at once: the larger within the limit
     possible = larger <= (1.0 + MERGE_GROWTH) * np.where(untouched, smaller + larger, smaller)
     for i, j, both in zip(first[possible], second[possible], untouched[possible], strict=True):
-        union = _near_duplicate(tracks[i].estimate, tracks[j].estimate, model, bool(both),
-                                (float(areas[i]), float(areas[j])))
+        pair = (tracks[i].estimate, tracks[j].estimate)
+        if pair in rejected:
+            continue
+        union = _near_duplicate(*pair, model, bool(both), (float(areas[i]), float(areas[j])))
         if union is not None:
             return int(i), int(j), union
+        rejected.add(pair)
     return None
 
 
