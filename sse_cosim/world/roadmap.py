@@ -259,12 +259,18 @@ class RoadMap:
             if not self._edge_lanes.get(edge_id):
                 raise self._missing(edge_id, "normal edge" if edge_id in self.edge_lengths
                                     else "edge", "a driving lane")
-        chain = lane_chain(edge_ids, lambda e: [g.index for g in self._edge_lanes[e]],
-                           self.lane_links)
+        def indices(edge_id: str) -> list[int]:
+            return [g.index for g in self._edge_lanes[edge_id]]
+
+        chain = lane_chain(edge_ids, indices, self.lane_links)
         if chain is None:
+            first, second = chain_break(edge_ids, indices, self.lane_links) or edge_ids[:2]
             raise UserError(str(self.net_path), f"route {' '.join(edge_ids)!r}",
-                            "has no lane of one edge that leads on to the next on a driving "
-                            "lane", "list consecutive edges that a bus can drive lane to lane")
+                            f"cannot be driven lane to lane: no lane of edge {first!r} leads "
+                            f"onto a lane of {second!r} that leads on along the route (the "
+                            "automated vehicle changes no lanes)",
+                            "route it over edges it can drive lane to lane, or add the "
+                            "connection to the network (docs/own_network.md)")
         lanes = []
         for edge_id, (index, via) in zip(edge_ids, chain, strict=True):
             lanes.append(next(g for g in self._edge_lanes[edge_id] if g.index == index))
@@ -546,11 +552,9 @@ def lane_chain(edges: Sequence[str], lanes: Callable[[str], Sequence[int]],
     """Per edge of a route its lane index and the internal lane into the next edge ("" for
     the last edge, or a connection without one): on each edge the rightmost lane (the least
     index of ``lanes(edge)``) from which the rest of the route can be driven lane to lane
-    over ``links``; None if none can. Pure: no network here."""
-    able = [set(lanes(edges[-1]))]  # the lanes of each edge the rest can be driven from
-    for a, b in reversed(list(pairwise(edges))):
-        able.insert(0, {i for i, j, _ in links.get((a, b), ()) if j in able[0]}
-                    & set(lanes(a)))
+    over ``links``; None if none can (:func:`chain_break` names where). Pure: no network
+    here."""
+    able = _able_lanes(edges, lanes, links)
     if not able[0]:
         return None
     chain, lane = [], min(able[0])
@@ -560,3 +564,23 @@ def lane_chain(edges: Sequence[str], lanes: Callable[[str], Sequence[int]],
         chain.append((lane, via))
         lane = lane_b
     return [*chain, (lane, "")]
+
+
+def chain_break(edges: Sequence[str], lanes: Callable[[str], Sequence[int]],
+                links: Mapping[tuple[str, str], Sequence[LaneLink]]) -> tuple[str, str] | None:
+    """The two consecutive edges of a route, the last such pair, where no lane of the first
+    leads onto a lane of the second from which the rest of the route can be driven lane to
+    lane (None if :func:`lane_chain` finds a chain)."""
+    able = _able_lanes(edges, lanes, links)
+    empty = [k for k in range(len(edges) - 1) if not able[k]]
+    return (edges[empty[-1]], edges[empty[-1] + 1]) if empty else None
+
+
+def _able_lanes(edges: Sequence[str], lanes: Callable[[str], Sequence[int]],
+                links: Mapping[tuple[str, str], Sequence[LaneLink]]) -> list[set[int]]:
+    """Per edge the lanes from which the rest of the route can be driven lane to lane."""
+    able = [set(lanes(edges[-1]))]
+    for a, b in reversed(list(pairwise(edges))):
+        able.insert(0, {i for i, j, _ in links.get((a, b), ()) if j in able[0]}
+                    & set(lanes(a)))
+    return able

@@ -4,7 +4,7 @@ lane into the next edge; pure, on hand-made links."""
 
 from __future__ import annotations
 
-from sse_cosim.world.roadmap import lane_chain
+from sse_cosim.world.roadmap import chain_break, lane_chain
 
 LANES = {"A": [1, 2], "B": [1, 2], "C": [1]}.__getitem__
 
@@ -29,3 +29,13 @@ def test_of_two_links_from_one_lane_the_rightmost_that_leads_on() -> None:
 def test_a_route_no_lane_leads_along_has_no_chain() -> None:
     assert lane_chain(["A", "C"], LANES, {("A", "B"): ((1, 1, ""),)}) is None
     assert lane_chain(["A"], LANES, {}) == [(1, "")]
+
+
+def test_the_break_named_is_the_pair_where_no_lane_leads_on() -> None:
+    """A leads onto B's right lane only, and only B's left lane leads into C: a bus that
+    changes no lanes cannot drive it, and the pair to mend is (A, B), not (B, C)."""
+    links = {("A", "B"): ((1, 1, ""), (2, 1, "")), ("B", "C"): ((2, 1, ""),)}
+    assert lane_chain(["A", "B", "C"], LANES, links) is None
+    assert chain_break(["A", "B", "C"], LANES, links) == ("A", "B")
+    assert chain_break(["A", "C"], LANES, {}) == ("A", "C")
+    assert chain_break(["A", "B"], LANES, links) is None
