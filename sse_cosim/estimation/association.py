@@ -604,18 +604,20 @@ def _parallelogram(path: Strips) -> Zonotope:
     return Zonotope(matmul(inverse, path.values[:2]), inverse * path.radii[np.newaxis, :2])
 
 
-def _meets(path_set: Zonotope, unit: Strips) -> bool:
+def meets_reference(path_set: Zonotope, unit: Strips) -> bool:
     """Whether the 2-D set meets the strips ``unit`` (unit normals) widened by
-    :data:`MEET_TOL` (exact clipping)."""
+    :data:`MEET_TOL` (exact clipping): the reference of
+    :func:`~sse_cosim.estimation.association_kernels.candidate_tests`'s ``meets``."""
     clipped = clip_to_strips(zonotope_vertices(path_set.generators), unit.normals,
                              unit.values - matmul(unit.normals, path_set.center),
                              unit.radii + MEET_TOL)
     return len(clipped) > 0
 
 
-def _inside(inner: Zonotope, path: Zonotope) -> bool:
+def inside_reference(inner: Zonotope, path: Zonotope) -> bool:
     """Whether the 2-D set ``inner`` lies inside the 2-D set ``path`` (a strict test: every
-    vertex at least :data:`MEET_TOL` inside)."""
+    vertex at least :data:`MEET_TOL` inside): the reference of
+    :func:`~sse_cosim.estimation.association_kernels.candidate_tests`'s ``inside``."""
     if not full_rank_2d(path.generators):
         return False
     return bool(np.all(contains_2d(path.center, path.generators, inner.vertices(), -MEET_TOL)))

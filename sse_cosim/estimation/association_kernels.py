@@ -4,8 +4,8 @@ cached on disk).
 :func:`candidate_tests` tests one prediction's path set against every detection of the step:
 whether their boxes come within the tolerance, whether the set meets the detection's strips
 widened by it (exact clipping of the set's polygon, as
-:func:`~sse_cosim.estimation.association._meets`), and whether the detection's set lies
-inside it with that margin (as :func:`~sse_cosim.estimation.association._inside`, after the
+:func:`~sse_cosim.estimation.association.meets_reference`), and whether the detection's set lies
+inside it with that margin (as :func:`~sse_cosim.estimation.association.inside_reference`, after the
 box test). It calls the same compiled clipping, vertex, rank and containment kernels as those
 functions, which stay the reference (``tests/estimation/test_association_kernels.py``); the
 centre's projection on a strip normal is summed here, so a result may differ from theirs only

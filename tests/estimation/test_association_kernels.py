@@ -1,7 +1,8 @@
 """The association's compiled candidate test (``association_kernels.candidate_tests``) gives
-the decisions of its references, ``association._meets`` and ``association._inside`` (after
-the box tests), on random predictions and detections: the same, except where the reference's
-own answer turns within 1e-9 m of its tolerance (a vertex within rounding of an edge)."""
+the decisions of its references, ``association.meets_reference`` and
+``association.inside_reference`` (after the box tests), on random predictions and detections:
+the same, except where the reference's own answer turns within 1e-9 m of its tolerance (a
+vertex within rounding of an edge)."""
 
 from __future__ import annotations
 
@@ -35,14 +36,14 @@ def random_detections(rng: np.random.Generator, count: int) -> list[AnonymousDet
 
 
 def reference(found: _Detections, path: Zonotope, tol: float) -> tuple[np.ndarray, np.ndarray]:
-    """``_meets`` and ``_inside`` as ``_candidates`` called them, box tests first."""
+    """The references as ``_candidates`` called them before the kernel, box tests first."""
     lo, hi = path.interval_hull()
     meets = np.zeros(len(found.items), dtype=bool)
     inside = np.zeros(len(found.items), dtype=bool)
     for d, strips in enumerate(found.paths):
         near = (found.lo[d] <= hi + tol).all() and (found.hi[d] >= lo - tol).all()
         unit = strips.normalized()
-        meets[d] = near and association._meets(path, Strips.unchecked(
+        meets[d] = near and association.meets_reference(path, Strips.unchecked(
             unit.normals, unit.values, unit.radii + tol - MEET_TOL))
         inside[d] = meets[d] and (found.lo[d] >= lo).all() and (found.hi[d] <= hi).all() \
             and _inside(found.parallelograms[d], path, tol)
@@ -51,7 +52,7 @@ def reference(found: _Detections, path: Zonotope, tol: float) -> tuple[np.ndarra
 
 def _inside(inner: Zonotope, path: Zonotope, tol: float) -> bool:
     if tol == MEET_TOL:
-        return association._inside(inner, path)
+        return association.inside_reference(inner, path)
     return full_rank_2d(path.generators) and bool(
         np.all(path.contains(inner.vertices(), tol=-tol)))
 
