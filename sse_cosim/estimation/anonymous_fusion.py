@@ -45,6 +45,7 @@ from sse_cosim.estimation.association import (
     MEET_TOL,
     NodeTracks,
     associate_nodes,
+    boxes_meet,
     set_boxes,
 )
 from sse_cosim.estimation.bus_fusion import fuse_sets
@@ -134,8 +135,7 @@ class AnonymousFusionCentre(BaseFusionCentre):
             if node.view.is_empty:
                 continue
             detected = self._detected_paths(node)
-            near = (detected.lo[None, :, :] <= paths.hi[:, None, :] + MEET_TOL).all(axis=2) \
-                & (paths.lo[:, None, :] <= detected.hi[None, :, :] + MEET_TOL).all(axis=2)
+            near = boxes_meet(paths.lo, paths.hi, detected.lo, detected.hi, MEET_TOL)
             for f, name in enumerate(names):
                 if not any(not zonotopes_disjoint(paths.sets[f], detected.sets[k], MEET_TOL)
                            for k in np.flatnonzero(near[f])):

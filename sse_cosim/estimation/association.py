@@ -557,8 +557,7 @@ def _first_duplicate(tracks: Sequence[LocalTrack], model: MotionModel,
     pairs found apart now are added."""
     positions = [model.position(t.estimate) for t in tracks]
     lo, hi = set_boxes(positions)
-    meet = (lo[:, None, :] <= hi[None, :, :]).all(axis=2) \
-        & (lo[None, :, :] <= hi[:, None, :]).all(axis=2)
+    meet = boxes_meet(lo, hi, lo, hi)
     areas = np.array([z.volume() for z in positions])
     touched = np.array([bool(t.joined) for t in tracks], dtype=bool)
     first, second = np.nonzero(np.triu(meet, k=1))  # row by row
@@ -699,15 +698,13 @@ def _sole_meetings(nodes: Sequence[NodeTracks], keys: Sequence[tuple[str, int]],
     polygons: dict[int, Region] = {}
     sole: dict[tuple[tuple[str, int], str], int | None] = {}
     for other in nodes:
-        ids = sorted(other.tracks)
-        others = [model.path_set(other.tracks[tid]) for tid in ids]
-        lo, hi = set_boxes(others)
+        rows = [i for i, key in enumerate(keys) if key[0] == other.node]  # its tracks
+        ids = [keys[i][1] for i in rows]
         trusted = other.visible.erode(other.reach + VISIBLE_MARGIN)
         x0, y0, x1, y1 = trusted.bounds
         held = (position_lo[:, 0] >= x0) & (position_lo[:, 1] >= y0) \
             & (position_hi[:, 0] <= x1) & (position_hi[:, 1] <= y1) & (not trusted.is_empty)
-        near = (lo[None, :, :] <= path_hi[:, None, :] + MEET_TOL).all(axis=2) \
-            & (path_lo[:, None, :] <= hi[None, :, :] + MEET_TOL).all(axis=2)
+        near = boxes_meet(path_lo, path_hi, path_lo[rows], path_hi[rows], MEET_TOL)
         for i, key in enumerate(keys):
             if key[0] == other.node:
                 continue
@@ -719,9 +716,17 @@ def _sole_meetings(nodes: Sequence[NodeTracks], keys: Sequence[tuple[str, int]],
             if not trusted.covers(polygons[i]):
                 continue
             meeting = [ids[k] for k in np.flatnonzero(near[i])
-                       if not zonotopes_disjoint(paths[i], others[k], MEET_TOL)]
+                       if not zonotopes_disjoint(paths[i], paths[rows[k]], MEET_TOL)]
             sole[(key, other.node)] = meeting[0] if len(meeting) == 1 else None
     return sole
+
+
+def boxes_meet(first_lo: FloatArray, first_hi: FloatArray, second_lo: FloatArray,
+               second_hi: FloatArray, tol: float = 0.0) -> np.ndarray:
+    """Whether each box of the first (lo, hi (n, 2)) and each of the second (m, 2) overlap,
+    or come within ``tol``: (n, m) bool (:func:`_boxes_meet` for every pair at once)."""
+    return (second_lo[None, :, :] <= first_hi[:, None, :] + tol).all(axis=2) \
+        & (first_lo[:, None, :] <= second_hi[None, :, :] + tol).all(axis=2)
 
 
 def set_boxes(sets: Sequence[Zonotope]) -> tuple[FloatArray, FloatArray]:

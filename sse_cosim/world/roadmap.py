@@ -264,7 +264,7 @@ class RoadMap:
 
         chain = lane_chain(edge_ids, indices, self.lane_links)
         if chain is None:
-            first, second = chain_break(edge_ids, indices, self.lane_links) or edge_ids[:2]
+            first, second = chain_break(edge_ids, indices, self.lane_links)  # a pair: no chain
             raise UserError(str(self.net_path), f"route {' '.join(edge_ids)!r}",
                             f"cannot be driven lane to lane: no lane of edge {first!r} leads "
                             f"onto a lane of {second!r} that leads on along the route (the "
