@@ -65,6 +65,10 @@ the step."""
 OWN_GROUND_TOL_M = 1e-6
 """How far (m) beyond the other walkable ground a crossing's own ground begins: SUMO's positions
 beside it round within far less (:attr:`RoadMap.own_grounds`)."""
+MITRE_LIMIT = 5.0
+"""The mitre limit of the other ground's offset in :attr:`RoadMap.own_grounds` (shapely's
+default): no point of the offset lies farther than this many times the offset from the ground
+it grows, so ground farther from a crossing than :func:`_reach` cannot cut it."""
 IN_ORDER = frozenset({"static", "actuated", "delay_based"})
 """Signal program types whose phases run in order (unless a phase names its successor)."""
 
@@ -197,18 +201,33 @@ class RoadMap:
         :attr:`junction_margin_m`, :attr:`stray_m` and :data:`OWN_GROUND_TOL_M` -- where a
         walker's centre can only be while it walks on that crossing (the ``pedestrian_lights``
         check holds SUMO to it: SUMO's walkers on a walking area reach into a crossing's area,
-        0.09 m on tests/networks/two_lanes/, within the position jitter)."""
+        0.09 m on tests/networks/two_lanes/, within the position jitter). Each crossing is
+        cut by the pieces of ground near it only (:meth:`_near_ground`), not the whole town's
+        (36 s a crossing on the whole converted town before)."""
+        grow = self.junction_margin_m + self.stray_m + OWN_GROUND_TOL_M
+        pieces, tree, owners = self._ground_pieces
         grounds = {}
-        for crossing in self.crossings:
+        for k, crossing in enumerate(self.crossings):
             if not crossing.signals:
                 continue
-            others = shapely.union_all(
-                [self.sidewalks, *(c.area for c in self.crossings if c is not crossing),
-                 *self.ground_patches.values()])
-            grow = self.junction_margin_m + self.stray_m + OWN_GROUND_TOL_M
+            near = tree.query(crossing.area, predicate="dwithin", distance=_reach(grow))
+            others = shapely.union_all([pieces[i] for i in sorted(near) if owners[i] != k])
             grounds[crossing.id] = shapely.difference(
-                crossing.area, others.buffer(grow, join_style="mitre"))
+                crossing.area, others.buffer(grow, join_style="mitre", mitre_limit=MITRE_LIMIT))
         return grounds
+
+    @functools.cached_property
+    def _ground_pieces(self) -> tuple[list[shapely.Geometry], shapely.STRtree, list[int]]:
+        """The walkable ground in pieces (each part of the sidewalks, each crossing's area,
+        each measured patch's parts), their tree, and each piece's crossing (its index in
+        :attr:`crossings`; -1 for the others)."""
+        patches = [self.ground_patches[node] for node in sorted(self.ground_patches)]
+        pieces = [*shapely.get_parts(self.sidewalks), *(c.area for c in self.crossings),
+                  *(part for patch in patches for part in shapely.get_parts(patch))]
+        sidewalk_parts = int(shapely.get_num_geometries(self.sidewalks))
+        owners = [-1] * sidewalk_parts + list(range(len(self.crossings)))
+        owners += [-1] * (len(pieces) - len(owners))
+        return pieces, shapely.STRtree(pieces), owners
 
     @functools.cached_property
     def crossing_ids(self) -> frozenset[str]:
@@ -544,6 +563,12 @@ def _lane_links(net: sumolib.net.Net, extent: SceneExtent | None = None
             if links:
                 result[(edge.getID(), to_edge.getID())] = tuple(links)
     return result
+
+
+def _reach(grow: float) -> float:
+    """How far (m) from a crossing's area the ground grown by ``grow`` (m) with mitred corners
+    can cut it: :data:`MITRE_LIMIT` times the offset, and a metre for rounding."""
+    return MITRE_LIMIT * grow + 1.0
 
 
 def lane_chain(edges: Sequence[str], lanes: Callable[[str], Sequence[int]],
