@@ -67,14 +67,14 @@ patches (:class:`sse_cosim.world.sumo.SumoWorld`).
 
 Cache: a JSON file per network, the built network's folder for one built from sources
 (``walker_jitter.json`` beside ``road.net.xml``), else ``$XDG_CACHE_HOME/sse-cosim`` by the
-content hash of the ``.net.xml``; its entries are keyed by SUMO's version, the step length,
-the speed bound and the pedestrian's size (and a_max for the bounded-acceleration model),
-and hold each junction's jitter and the walk that needed it, and the walk's pieces off the
-plain ground (exact, as hex WKB; an entry written before they were kept has none and is
-measured again). The cache keeps what SUMO did, not what the code makes of it: the ground
-patch is drawn from those pieces at every load, so a change to the patch's band or to the
-Region layer's dilation takes effect without a stale patch. It is written atomically; only
-the junctions not measured yet are walked.
+hash of the ``.net.xml`` (:func:`net_digest`: converting the same sources again keeps it); its
+entries are keyed by SUMO's version, the step length, the speed bound and the pedestrian's size
+(and a_max for the bounded-acceleration model), and hold each junction's jitter and the walk
+that needed it, and the walk's pieces off the plain ground (exact, as hex WKB; an entry written
+before they were kept has none and is measured again). The cache keeps what SUMO did, not what
+the code makes of it: the ground patch is drawn from those pieces at every load, so a change to
+the patch's band or to the Region layer's dilation takes effect without a stale patch. It is
+written atomically; only the junctions not measured yet are walked.
 """
 
 from __future__ import annotations
@@ -82,6 +82,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import sys
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -113,6 +114,8 @@ CACHE_FILE_NAME = "walker_jitter.json"
 _EPS_M = 1e-9  # steps longer than v dt by rounding only need no jitter
 GROUND_BAND_M = 0.25  # how far a ground patch reaches around a lone walker's stretch off it (m)
 MEET_RETRIES = 3  # walkers that met walk again alone this many times at most
+_PROLOG_PART = re.compile(rb"\s*(?:<\?xml.*?\?>|<!--.*?-->)", re.DOTALL)
+"""A part of an XML file before its first element: its declaration or a comment."""
 
 
 def _off_ground(ground: shapely.Geometry, runs: Sequence[np.ndarray]) -> shapely.Geometry:
@@ -219,16 +222,24 @@ class JitterCache:
 
 
 def cache_path(net_path: Path) -> Path:
-    """Where the measurements of the network at ``net_path`` are kept."""
+    """Where the measurements of the network at ``net_path`` are kept: a build's folder, or
+    the user cache by :func:`net_digest`."""
     net_path = Path(net_path).resolve()
     if net_path.name == NET_FILE_NAME and net_path.parent.parent.name == BUILD_DIR_NAME:
         return net_path.parent / CACHE_FILE_NAME  # a build: its folder is keyed by content
-    digest = hashlib.sha256()
-    with net_path.open("rb") as stream:
-        for block in iter(lambda: stream.read(1 << 20), b""):
-            digest.update(block)
     root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return root / "sse-cosim" / f"{digest.hexdigest()[:16]}.{CACHE_FILE_NAME}"
+    return root / "sse-cosim" / f"{net_digest(net_path)[:16]}.{CACHE_FILE_NAME}"
+
+
+def net_digest(net_path: Path) -> str:
+    """The SHA-256 (hex) of a network file's bytes from its first element on: netconvert
+    writes the time and its options in a comment before it, so converting the same sources
+    again keeps the measurements."""
+    data = Path(net_path).read_bytes()
+    start = 0
+    while match := _PROLOG_PART.match(data, start):
+        start = match.end()
+    return hashlib.sha256(data[start:].lstrip()).hexdigest()
 
 
 def measure(net_path: Path, net: sumolib.net.Net | None, extent: SceneExtent | None,

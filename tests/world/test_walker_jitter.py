@@ -5,6 +5,7 @@ cached; a run takes it by default, keeps a larger one and refuses a smaller one.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import shutil
 from pathlib import Path
@@ -165,3 +166,21 @@ def test_a_run_takes_the_measured_jitter_keeps_a_larger_one_and_refuses_a_smalle
                   f"{measured.jitter_m:.3f} m SUMO's lone walkers need", "junction 'C'",
                   "leave estimator.position_jitter_m out"):
         assert words in err, (words, err)
+
+
+def test_a_network_converted_again_keeps_its_measurements(tmp_path: Path) -> None:
+    """The cache of a network file outside a build is keyed by its bytes from the first element
+    on: netconvert's header comment (the time of the conversion, its options) moves nothing;
+    a change to the network itself does."""
+    body = b'<net version="1.20">\n    <edge id="a"/>\n</net>\n'
+    first, again, other = tmp_path / "first.net.xml", tmp_path / "again.net.xml", \
+        tmp_path / "other.net.xml"
+    first.write_bytes(b'<?xml version="1.0" encoding="UTF-8"?>\n\n<!-- generated on 2026-12-07T'
+                      b'07:15:04 by Eclipse SUMO netconvert\n<netconvertConfiguration/>\n-->\n\n'
+                      + body)
+    again.write_bytes(b'<?xml version="1.0" encoding="UTF-8"?>\n<!-- generated on 2026-12-08T'
+                      b'09:00:00 -->\n<!-- a second comment -->\n' + body)
+    other.write_bytes(body.replace(b'"a"', b'"b"'))
+    assert walker_jitter.cache_path(first) == walker_jitter.cache_path(again)
+    assert walker_jitter.cache_path(first) != walker_jitter.cache_path(other)
+    assert walker_jitter.net_digest(other) == hashlib.sha256(other.read_bytes()).hexdigest()
