@@ -120,11 +120,14 @@ _PROLOG_PART = re.compile(rb"\s*(?:<\?xml.*?\?>|<!--.*?-->)", re.DOTALL)
 
 def _off_ground(ground: shapely.Geometry, runs: Sequence[np.ndarray]) -> shapely.Geometry:
     """Where the walk pieces ``runs`` (each (k, 2)) are off the plain ``ground``: each stretch
-    of consecutive positions off it, with the position before and after, as a line (a point
-    for a single position); empty if none is off."""
+    of consecutive positions off it (apart from it: neither in it nor on its boundary), with
+    the position before and after, as a line (a point for a single position); empty if none
+    is off. ``ground`` is prepared here (in place) for the point tests."""
+    shapely.prepare(ground)
     lines = []
     for xy in runs:
-        off = shapely.distance(ground, shapely.points(xy.reshape(-1, 2))) > 0.0
+        xy = xy.reshape(-1, 2)
+        off = ~shapely.intersects_xy(ground, xy[:, 0], xy[:, 1])
         for first, last in _stretches(off):
             piece = xy[max(first - 1, 0):last + 2]
             lines.append(shapely.LineString(piece) if len(piece) > 1
