@@ -18,6 +18,10 @@ from dataclasses import dataclass
 
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
 
+SPEED_UP_LOOKAHEAD_S = 1.0
+"""How long (s) a command that speeds the bus up must keep its plans before a stop could be
+ordered (no chatter; :class:`~sse_cosim.control.speed.SafePolicy`)."""
+
 
 @dataclass(frozen=True)
 class BusDynamics:
@@ -51,6 +55,20 @@ class BusDynamics:
         top = speed + self.accel * r
         return speed * r + 0.5 * self.accel * r * r + top * self.step + top * top / (
             2.0 * self.decel)
+
+    def lookahead_steps(self, command: float, speed: float) -> int:
+        """How many steps ``command`` is held before a stop could be ordered: none for a stop
+        (the stop itself, ordered now), one for a command that holds or slows the bus, and
+        :data:`SPEED_UP_LOOKAHEAD_S` for one that speeds it up."""
+        if command == 0.0:
+            return 0
+        return 1 if command <= speed else max(1, round(SPEED_UP_LOOKAHEAD_S / self.step))
+
+    def lookahead_distance(self, speed: float, top: float) -> float:
+        """How far (m) the bus may drive, from ``speed`` now, before a stop could be ordered
+        under any command up to ``top`` (its :meth:`lookahead_steps`, at the faster of the
+        two: a held command moves the speed toward it)."""
+        return max(self.lookahead_steps(top, speed), 1) * self.step * max(speed, top)
 
     def stopping_time(self, speed: float) -> float:
         """Time (s) until a comfortable stop ordered now has the bus standing (the same worst

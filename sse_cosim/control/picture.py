@@ -299,6 +299,12 @@ class SceneContext:
         braking = speed**2 / (2.0 * self.bus.comfortable_decel_mps2)
         return speed * cfg.reaction_time_s + braking + cfg.stopping_margin_m
 
+    def within_reach(self, front_m: float, speed: float) -> list[int]:
+        """The zones whose plans a command can need, with the front at ``front_m`` (SUMO's
+        distance) at ``speed`` (:func:`within_reach`)."""
+        return within_reach(self.zone_drives, front_m, speed, self.dynamics,
+                            self.bus.nominal_speed_mps, self.config.stopping_margin_m)
+
     def limit_on(self, front_m: float, distance: float) -> float:
         """The slowest speed (m/s) the speed limits may hold the bus to while its front drives
         ``distance`` m on from ``front_m`` (both in SUMO's distance;
@@ -430,7 +436,7 @@ def assess(
     line = context.next_stop_line(front_s)
     if releases is None:
         releases = context.releases(signals or {})
-    zones = _outlook(context, front_s, front, [unobserved, *known],
+    zones = _outlook(context, front_s, front, speed, [unobserved, *known],
                      [s for s in in_view if not s.region.is_empty], in_view_beyond, floors or {},
                      releases)
     return Picture(
@@ -531,10 +537,34 @@ class LightClaims:
                 for key in regions}
 
 
-def _outlook(context: SceneContext, front_s: float, front: float, sources: Sequence[Source],
-             in_view: Sequence[Source], in_view_beyond: bool,
+def within_reach(drives: Sequence[tuple[float, float]], front_m: float, speed: float,
+                 dynamics: BusDynamics, top_mps: float, margin_m: float) -> list[int]:
+    """The zones (indices into ``drives``, in route order) whose plans a command can need:
+    ``drives`` holds per zone, in route order, where the front reaches it and where the rear
+    has cleared it (m, SUMO's distance), the front is at ``front_m`` and the bus at ``speed``,
+    its commands at most ``top_mps``. A zone is left out when it begins at least a
+    comfortable stop (:meth:`~sse_cosim.control.kinematics.BusDynamics.stopping_distance` at
+    ``top_mps`` or ``speed``, the faster) and ``margin_m`` (the stopping margin) beyond where
+    the last stop can be ordered -- after any command's look-ahead, or after the far end of a
+    nearer zone kept (a pass of it). Every plan then stops before it, whatever its arrival
+    (docs/controller.md, "Zones beyond the plans' reach"), and so before every zone beyond
+    it: no arrival need be worked out for them."""
+    stop = dynamics.stopping_distance(max(speed, top_mps)) + margin_m
+    reach = dynamics.lookahead_distance(speed, top_mps) + stop
+    kept = []
+    for index, (start, end) in enumerate(drives):
+        if start - front_m >= reach:
+            break
+        kept.append(index)
+        reach = max(reach, end - front_m + stop)
+    return kept
+
+
+def _outlook(context: SceneContext, front_s: float, front: float, speed: float,
+             sources: Sequence[Source], in_view: Sequence[Source], in_view_beyond: bool,
              floors: Mapping[int, float], releases: Sequence[float]) -> tuple[ZoneOutlook, ...]:
-    """The zones the bus has not yet cleared, as far as its body can still touch them
+    """The zones the bus has not yet cleared and a plan can reach
+    (:meth:`SceneContext.within_reach` at ``speed``), as far as its body can still touch them
     (:func:`_ahead_of_body`), with the earliest arrival from ``sources`` (and from beyond the
     window; never before its ``floors``) and from the pedestrians in view alone: their regions
     ``in_view``, and beyond the window if ``in_view_beyond`` (every source to every such zone
@@ -544,7 +574,8 @@ def _outlook(context: SceneContext, front_s: float, front: float, sources: Seque
     ``front_s`` is the front along the drawn route, ``front`` the same in SUMO's distance."""
     length, drives = context.bus.length_m, context.zone_drives
     ahead = [(index, _ahead_of_body(context, zone, front_s), drives[index][1] - front)
-             for index, zone in enumerate(context.zones) if zone.end_m + length > front_s]
+             for index in context.within_reach(front, speed)
+             if (zone := context.zones[index]).end_m + length > front_s]
     ahead = [(index, zone, to_clear) for index, zone, to_clear in ahead
              if not zone.polygon.is_empty]
     zones = [zone for _, zone, _ in ahead]

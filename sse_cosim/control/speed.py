@@ -41,7 +41,6 @@ from sse_cosim.scenario.model import Controller
 
 STANDING_MPS = 1e-3  # below this the bus counts as standing
 KEPT_TOLERANCE = 1e-6  # m and m/s: a bus this close to a pass's worst case still keeps it
-SPEED_UP_LOOKAHEAD_S = 1.0  # a faster command must keep its plans this long (no chatter)
 
 
 class SpeedLevel(IntEnum):
@@ -171,9 +170,10 @@ class SafePolicy:
     """The fastest level that keeps a safe plan for every conflict zone ahead.
 
     For a candidate command the bus is predicted one step ahead (the command acts over the
-    next step; :data:`SPEED_UP_LOOKAHEAD_S` for a command that speeds the bus up, so that it
-    does not accelerate only to brake at the next step; not at all for a stop, which is the
-    comfortable stop ordered now); from there, per zone, one of three plans must hold:
+    next step; :data:`~sse_cosim.control.kinematics.SPEED_UP_LOOKAHEAD_S` for a command that
+    speeds the bus up, so that it does not accelerate only to brake at the next step; not at
+    all for a stop, which is the comfortable stop ordered now; ``BusDynamics.lookahead_steps``);
+    from there, per zone, one of three plans must hold:
 
     - **stop** before the zone: the comfortable stopping distance (reaction time included)
       plus ``stopping_margin_m`` fits before it;
@@ -254,8 +254,7 @@ class SafePolicy:
         # a stop command is the comfortable stop itself, ordered now (its reaction time and
         # step are in the stopping distance); any other command is held a step (a speed-up:
         # the look-ahead) before a stop could be ordered
-        steps = 0 if command == 0.0 else 1 if command <= picture.speed_mps else max(
-            1, round(SPEED_UP_LOOKAHEAD_S / dyn.step))
+        steps = dyn.lookahead_steps(command, picture.speed_mps)
         position, speed = 0.0, picture.speed_mps
         for _ in range(steps):
             position, speed = dyn.advance(position, speed, command)

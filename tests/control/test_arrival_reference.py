@@ -35,7 +35,7 @@ def test_no_arrival_is_later_than_the_exact_reference_and_the_mean_is_within_5_p
     rows, summary = arrivals.run(str(ROOT / "scenarios" / f"{name}.toml"))
     figures = arrivals.figures(rows)
     print(name, figures)
-    assert figures["finite"] > 50  # zones were ahead, with sources, at many steps
+    assert figures["finite"] > 40  # zones within the plans' reach, with sources, at many steps
     assert figures["later_than_reference"] == 0, figures
     assert figures["ratio_of_means"] >= TARGET
     assert summary["collisions"] == summary["containment_violations"] == 0

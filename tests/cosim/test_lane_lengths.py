@@ -94,9 +94,9 @@ def test_the_bus_gives_way_without_contact_violation_or_emergency(run):
 @pytest.mark.parametrize("length_m", LENGTHS_M)
 def test_the_picture_drives_stops_and_clears_in_sumos_distance(tmp_path: Path,
                                                                length_m: float) -> None:
-    """From the front at drawn x = 100 on WC_2 the zebra's zone starts and is cleared at the
-    distances SUMO drives: WC_2's drawn metres scaled to its length, then the junction and CE
-    as drawn."""
+    """From the front 10 drawn metres before the zebra's zone on WC_2 (within the plans'
+    reach) the zone starts and is cleared at the distances SUMO drives: WC_2's drawn metres
+    scaled to its length, then the junction and CE as drawn."""
     scenario = load_scenario(ROOT / "scenarios" / "s3_pedestrian.toml")
     bus = scenario.automated["bus"]
     model = motion_model(scenario.estimator.model_copy(update={"position_jitter_m": 0.3}), 0.1)
@@ -108,15 +108,16 @@ def test_the_picture_drives_stops_and_clears_in_sumos_distance(tmp_path: Path,
             drawn_m - DRAWN_M + length_m)
 
     nobody = Source(K.empty())
-    picture = assess(context, np.array([100.0, -1.75]), 10.0, K.empty(), nobody, [])
     zone = context.zones[0]
+    front = zone.start_m - 10.0
+    picture = assess(context, np.array([front, -1.75]), 10.0, K.empty(), nobody, [])
     assert zone.start_m <= DRAWN_M < zone.end_m + BUS_LENGTH_M
     outlook = picture.zones[0]
-    assert outlook.to_start_m == pytest.approx(driven(zone.start_m) - driven(100.0))
+    assert outlook.to_start_m == pytest.approx(driven(zone.start_m) - driven(front))
     assert outlook.to_clear_m == pytest.approx(
-        driven(zone.end_m + BUS_LENGTH_M) - driven(100.0))
-    assert picture.front_s == pytest.approx(100.0)
-    assert picture.front_drive_m == pytest.approx(driven(100.0))
+        driven(zone.end_m + BUS_LENGTH_M) - driven(front))
+    assert picture.front_s == pytest.approx(front)
+    assert picture.front_drive_m == pytest.approx(driven(front))
 
 
 def test_a_front_that_sumos_odometer_puts_elsewhere_stops_the_run() -> None:
