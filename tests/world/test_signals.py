@@ -8,6 +8,7 @@ J, link 4 the walkers onto its crossing ':J_c0', program 77 s green for the cars
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 from world_helpers import REPO
@@ -110,6 +111,27 @@ def test_a_light_off_its_program_or_a_walker_off_its_crossing_or_on_it_unseen_br
     elsewhere = check(roadmap, (80.5, state(2, 0.5), walker(None, x=0.0, y=-3.0)))
     assert len(elsewhere) == 1 and "is on crossing :J_c0's own ground" in elsewhere[0]
     assert check(roadmap, (80.5, state(2, 0.5), walker(None, x=0.0, y=-6.5))) == []
+
+
+@pytest.mark.sumo
+def test_a_light_the_network_defines_no_program_for_gives_no_bound_and_is_not_checked(
+        roadmap):
+    """A rail signal's states come from the trains (the whole converted town's '1201668353'
+    lets walkers onto a crossing and showed 'rO' at t = 0): with no program in the network
+    its crossing gets no bound, and its states break nothing; a light with programs still
+    must keep to them."""
+    rail = SignalState("0", 1, "rO", 0.0)
+    lights = LightsCheck(roadmap, 0.25)
+    found = lights.check(Snapshot(0.0, persons={"w": walker(None)},
+                                  signals={"rail": rail, "J": state(0, 10.0)}), StepFacts())
+    assert found == []
+    found = lights.check(Snapshot(0.1, persons={"w": walker(None)},
+                                  signals={"rail": rail, "J": SignalState("0", 0, "GGGGG", 1.0)}),
+                         StepFacts())
+    assert [brk.record["light"] for brk in found] == ["J"]
+    (crossing,) = roadmap.crossings
+    on_rail = replace(crossing, signals=(("rail", 1),))
+    assert roadmap.crossing_lights(on_rail).release_s({"rail": rail}) == 0.0
 
 
 @pytest.mark.sumo

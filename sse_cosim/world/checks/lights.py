@@ -5,8 +5,12 @@ who is not on a signalised crossing while its light shows red does not step onto
 the light can change, so it arrives in a zone on that crossing no sooner than that. Three
 statements, each checked every step:
 
-1. every traffic light of the scene runs a program of the network, showing its current phase's
-   state (the bound :func:`~sse_cosim.world.signals.earliest_release_s` reads the program);
+1. every traffic light of the scene for which the network defines programs runs one of them,
+   showing its current phase's state (the bound
+   :func:`~sse_cosim.world.signals.earliest_release_s` reads the program). A light the
+   network defines no program for (a rail signal, whose states SUMO works out as trains come)
+   gives no bound (:meth:`~sse_cosim.world.signals.CrossingLights.release_s` is 0 for it at
+   every step), so no claim rests on its states and they are not checked;
 2. no walker steps onto a crossing while its light shows red (SUMO's walkers wait for their
    green; the snapshot's state is the one SUMO moved the walkers under);
 3. a walker on a crossing has its centre within the crossing's area grown by
@@ -59,6 +63,7 @@ class LightsCheck(WorldCheck):
         # a walker off the crossing stays out of its own ground: one tree of them all
         self.own_ids = list(roadmap.own_grounds)
         self.own_tree = shapely.STRtree(list(roadmap.own_grounds.values()))
+        self.programmed = {light for light, _ in roadmap.programs}  # statement 1's lights
         self._on: dict[str, str | None] = {}  # walker -> its crossing at the previous step
 
     @classmethod
@@ -75,6 +80,8 @@ class LightsCheck(WorldCheck):
     def _programs(self, snapshot: Snapshot) -> list[Break]:
         found = []
         for light, state in snapshot.signals.items():
+            if light not in self.programmed:
+                continue
             program = self.roadmap.programs.get((light, state.program))
             expected = None if program is None or state.phase >= len(program.phases) \
                 else program.phases[state.phase].state
