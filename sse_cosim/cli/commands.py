@@ -34,7 +34,7 @@ def run(scenario: Path, out_dir: Path | None, scene_times: tuple[float, ...],
     The folder holds trace.csv (one row per step), sets.jsonl.gz (every local and fused
     position set), summary.json (speeds, detections, set sizes, violations, and the
     margins asked for with --margin), scenario.json (the resolved scenario) and plots
-    (speed, set areas, scenes).
+    (speed, set areas, scenes). On a terminal a bar shows the simulated time as it runs.
     """
     from sse_cosim.errors import UserError
     from sse_cosim.runner.parameters import blame_assignments, load_with_assignments
@@ -44,7 +44,7 @@ def run(scenario: Path, out_dir: Path | None, scene_times: tuple[float, ...],
     resolved, owners = load_with_assignments(scenario, overrides)
     try:
         summary = run_scenario(resolved, str(scenario), out_dir, scene_times=scene_times,
-                               margins=margins)
+                               margins=margins, progress=True)
     except UserError as exc:  # a check on the road network: --set may have set the field
         raise blame_assignments(exc, owners, always=False) from None
     _echo_summary(summary, out_dir)

@@ -7,6 +7,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from tqdm import tqdm
+
 from sse_cosim.files import portable_path
 from sse_cosim.pipeline.result import StepResult
 from sse_cosim.reporting.margins import MARGINS, check_margins
@@ -41,26 +43,36 @@ def run_scenario(
     plots: bool = True,
     summary_only: bool = False,
     margins: Sequence[str] = (),
+    progress: bool = False,
 ) -> dict:
     """Simulate ``scenario`` (read from ``source``) and write its outputs to ``out_dir``.
 
     ``source`` is recorded (and named in messages) relative to the current folder where it
     lies below it, so that a results folder holds no machine path. ``margins``: the names of
     the margins (:data:`~sse_cosim.reporting.margins.MARGINS`) the summary gets under
-    ``margins``; none, no such key."""
+    ``margins``; none, no such key. ``progress``: a bar of the simulated time on standard
+    error while it runs, where that is a terminal."""
     source = portable_path(source)
     check_margins(margins, scenario, source)
     recorder = RunRecorder(scenario, tuple(scene_times),
                            replay=None if summary_only else ReplayLog())
     watchers = [MARGINS[name](scenario) for name in margins]
 
+    bar = tqdm(total=scenario.simulation.duration_s, desc=scenario.name, unit="s",
+               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:g} s simulated "
+               "[{elapsed}<{remaining}]", disable=None if progress else True,
+               dynamic_ncols=True, leave=False)
+    step_s = scenario.simulation.step_length_s
+
     def on_step(result: StepResult) -> None:
         recorder(result)
         for watch in watchers:
             watch(result)
+        bar.update(step_s)
 
     sumo_dir = out_dir / "sumo"
-    info = simulate(scenario, sumo_dir, source, on_step, on_start=recorder.start)
+    with bar:
+        info = simulate(scenario, sumo_dir, source, on_step, on_start=recorder.start)
     if summary_only:  # SUMO's files served the run; one that failed keeps them (its log)
         shutil.rmtree(sumo_dir)
     extra: dict[str, Any] = dict(info.breaks)
