@@ -202,7 +202,7 @@ class RoadMap:
         walker's centre can only be while it walks on that crossing (the ``pedestrian_lights``
         check holds SUMO to it: SUMO's walkers on a walking area reach into a crossing's area,
         0.09 m on tests/networks/two_lanes/, within the position jitter). Each crossing is
-        cut by the pieces of ground near it only (:meth:`_near_ground`), not the whole town's
+        cut by the pieces of ground near it only (:attr:`_ground_pieces`), not the whole town's
         (36 s a crossing on the whole converted town before)."""
         grow = self.junction_margin_m + self.stray_m + OWN_GROUND_TOL_M
         pieces, tree, owners = self._ground_pieces
