@@ -170,7 +170,8 @@ def network(network_path: Path, step_length_s: float | None, speed_mps: float | 
     crossings, which the walkable ground takes in (sse_cosim/world/walker_jitter.py;
     measured once per network and setting, then read from the cache). A run whose scenario leaves
     estimator.position_jitter_m out takes the value measured on its scene's part of the
-    network.
+    network: the junctions its walkers walk through and those near its automated vehicles'
+    routes (sse_cosim/world/extent.py, "The jitter's scope").
     """
     from sse_cosim.scenario.model import Estimator, Pedestrian, Simulation
     from sse_cosim.world.network import build_network, check_net_file

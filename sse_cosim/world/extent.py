@@ -23,20 +23,38 @@ its extent is the whole network (:func:`scene_extent` returns None).
 An edge belongs to the extent when the bounding box of its lanes meets one of the boxes; on a
 network that lies within them all (the paper's road, the junction) every edge does, and the
 road map is the same as the whole network's, built in the same order.
+
+The jitter's scope (:class:`JitterScope`). Of the extent's junctions, the walkers' jitter is
+measured (:mod:`sse_cosim.world.walker_jitter`) at those a run's assumption is about:
+
+- every junction at an end of an edge a walker of the scene walks or stands on (a scenario
+  pedestrian's planned path, a route file's walk given edge by edge): the scene's true walkers
+  pass no other, and the world checks every step that each keeps the assumption;
+- every junction with a walking area within reach of an automated vehicle's route: its
+  controller tracks hidden ground within ``interest_radius_m`` of the crossings and walkable
+  ground its body sweeps (docs/controller.md), so the walkers it reasons about are assumed to
+  keep the jitter measured there, whether or not the scene puts a true walker there (a scene
+  with its pedestrian and one without assume the same).
+
+A junction that is neither decides nothing (a city's junction 115 m from the route that no
+walker uses no longer refuses a run). Where some person's walk is left to SUMO's router (a
+route file's ``from``/``to``), the scope is every junction of the extent.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+import shapely
 import sumolib
 
 from sse_cosim.scenario.model import present
 
 if TYPE_CHECKING:
     from sse_cosim.scenario.model import Scenario
+    from sse_cosim.world.roadmap import RoadMap
 
 MAX_MEASURED_JITTER_M = 2.0  # the most a measured jitter may be (m): the extent reaches that far
 SLACK_M = 10.0  # beyond the margin's terms: lane widths, a pedestrian's radius, rounding
@@ -120,3 +138,47 @@ def _widened(box: Box, margin: float) -> Box:
 def _merged(boxes: Iterable[Box]) -> list[Box]:
     """The boxes without duplicates, in first-seen order."""
     return list(dict.fromkeys(boxes))
+
+
+@dataclass(frozen=True)
+class JitterScope:
+    """The junctions whose walkers' jitter a run assumes (module docstring, "The jitter's
+    scope"): those at an end of one of ``walked_edges`` and those with a walking area within
+    ``reach_m`` of ``seeds`` (the ground the automated vehicles' controllers track hidden
+    ground around: their bodies' sweeps and the crossings these meet)."""
+
+    seeds: shapely.Geometry
+    reach_m: float
+    walked_edges: frozenset[str]
+
+    def junctions(self, net: sumolib.net.Net,
+                  areas: Sequence[sumolib.net.edge.Edge]) -> frozenset[str]:
+        """Of the junctions of the walking areas ``areas`` of ``net``, the scope's: a walking
+        area counts as near the seeds when the convex hull of its outline is."""
+        walked = {node.getID() for edge in self.walked_edges if net.hasEdge(edge)
+                  for node in (net.getEdge(edge).getFromNode(), net.getEdge(edge).getToNode())}
+        if self.seeds.is_empty or not areas:
+            return frozenset(walked)
+        hulls = shapely.convex_hull([shapely.MultiPoint(area.getLanes()[0].getShape())
+                                     for area in areas])
+        near = shapely.dwithin(hulls, self.seeds, self.reach_m)
+        return frozenset(walked | {area.getFromNode().getID()
+                                   for area, close in zip(areas, near, strict=True) if close})
+
+
+def jitter_scope(scenario: Scenario, roadmap: RoadMap,
+                 walked_edges: frozenset[str] | None) -> JitterScope | None:
+    """The jitter's scope of ``scenario`` on ``roadmap``, its walkers walking or standing on
+    ``walked_edges`` (None: some walk is left to SUMO's router, so every junction of the
+    extent: returns None). The seeds are each automated vehicle's route line widened by its
+    body's length and width (its sweep, turning included) and the crossings that meets; the
+    reach is the tracked window's radius, twice the jitter the extent allows for, and
+    :data:`SLACK_M`."""
+    if walked_edges is None:
+        return None
+    sweeps = [roadmap.route_line(av.route_edges).buffer(av.length_m + av.width_m)
+              for av in present(scenario.automated).values()]
+    swept = shapely.union_all(sweeps)
+    crossings = [c.area for c in roadmap.crossings if swept.intersects(c.area)]
+    reach = scenario.controller.interest_radius_m + 2.0 * scene_jitter(scenario) + SLACK_M
+    return JitterScope(shapely.union_all([swept, *crossings]), reach, walked_edges)

@@ -19,6 +19,13 @@ time, are refused.
 
 Ids. The project's own actors and types (``bus``, ``truck``, ``car``, ``pedestrian``) are
 reserved: a route file may not reuse them.
+
+Where persons walk. A person whose every stage is a walk given edge by edge (``<walk
+edges="...">``) or a stop on an edge or lane walks those edges and the junctions between them
+only: SUMO follows the listed edges. :attr:`RouteFiles.walked_edges` gathers them, so that the
+walkers' jitter is measured where they walk (:mod:`sse_cosim.world.extent`). A walk SUMO
+routes itself (``from``/``to``, a ``route`` or a stop's id), a ``personTrip`` or a ride may
+take a person anywhere: then it is None.
 """
 
 from __future__ import annotations
@@ -38,11 +45,13 @@ DETERMINISTIC_ATTRIBUTES = ("speedDev", "sigma")
 
 @dataclass(frozen=True)
 class RouteFiles:
-    """The checked route files: their ``paths`` (in the scenario's order) and the ids of the
-    vehicle and person types they declare (``type_ids``)."""
+    """The checked route files: their ``paths`` (in the scenario's order), the ids of the
+    vehicle and person types they declare (``type_ids``) and every edge their persons walk or
+    stand on (``walked_edges``; None: a person SUMO routes itself, module docstring)."""
 
     paths: tuple[Path, ...]
     type_ids: frozenset[str]
+    walked_edges: frozenset[str] | None = frozenset()
 
 
 def read_route_files(paths: Sequence[str], reserved_ids: Iterable[str],
@@ -52,6 +61,7 @@ def read_route_files(paths: Sequence[str], reserved_ids: Iterable[str],
     reserved = frozenset(reserved_ids)
     roots = [(Path(p), _parse(Path(p), source)) for p in paths]
     declared: set[str] = set()
+    walked: set[str] | None = set()
     for path, root in roots:
         for element in root.iter():
             if element.tag in TYPE_TAGS:
@@ -66,7 +76,27 @@ def read_route_files(paths: Sequence[str], reserved_ids: Iterable[str],
                                 "write its persons out, each departing at 0")
             if element.tag in DEMAND_TAGS:
                 _check_demand(path, element, declared, reserved, source)
-    return RouteFiles(tuple(path for path, _ in roots), frozenset(declared))
+            if element.tag == "person" and walked is not None:
+                edges = person_edges(element)
+                walked = None if edges is None else walked | edges
+    return RouteFiles(tuple(path for path, _ in roots), frozenset(declared),
+                      None if walked is None else frozenset(walked))
+
+
+def person_edges(person: ET.Element) -> set[str] | None:
+    """The edges a ``<person>`` walks or stands on, or None where SUMO may route it anywhere
+    (module docstring)."""
+    edges: set[str] = set()
+    for stage in person:
+        if stage.tag == "param":
+            continue
+        if stage.tag == "walk" and "edges" in stage.attrib:
+            edges.update(stage.attrib["edges"].split())
+        elif stage.tag == "stop" and ("edge" in stage.attrib or "lane" in stage.attrib):
+            edges.add(stage.attrib.get("edge") or stage.attrib["lane"].rpartition("_")[0])
+        else:
+            return None
+    return edges
 
 
 def _parse(path: Path, source: str) -> ET.Element:

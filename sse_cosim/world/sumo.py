@@ -138,7 +138,13 @@ from sse_cosim.world import checks, demand, walker_jitter
 from sse_cosim.world.checks import CheckSetup, StepFacts
 from sse_cosim.world.checks.motion import MotionCheck
 from sse_cosim.world.demand import ActorPlan, PedestrianPlan
-from sse_cosim.world.extent import MAX_MEASURED_JITTER_M, SceneExtent, scene_extent
+from sse_cosim.world.extent import (
+    MAX_MEASURED_JITTER_M,
+    JitterScope,
+    SceneExtent,
+    jitter_scope,
+    scene_extent,
+)
 from sse_cosim.world.network import NetworkBuildError, scenario_net_path
 from sse_cosim.world.roadmap import (
     RoadMap,
@@ -189,14 +195,16 @@ def sumo_version() -> str:
 
 def measure_walkers(net_path: Path, roadmap: RoadMap, extent: SceneExtent | None,
                     speed_mps: float, step_s: float, radius_m: float,
-                    accel_mps2: float | None = None) -> walker_jitter.NetworkJitter:
+                    accel_mps2: float | None = None,
+                    scope: JitterScope | None = None) -> walker_jitter.NetworkJitter:
     """The jitter SUMO's lone walkers need on the walking areas of ``roadmap`` (of the network
-    at ``net_path``) in ``extent`` (all for None), and where they leave its plain ground
-    (:mod:`sse_cosim.world.walker_jitter`, cached); with ``accel_mps2`` (a motion model that
-    bounds the acceleration), walkers ramped within it and the jitter that model needs."""
+    at ``net_path``) in ``extent`` (all for None) at the junctions of ``scope`` (all for None),
+    and where they leave its plain ground (:mod:`sse_cosim.world.walker_jitter`, cached); with
+    ``accel_mps2`` (a motion model that bounds the acceleration), walkers ramped within it and
+    the jitter that model needs."""
     return walker_jitter.measure(
         net_path, roadmap.net, extent, roadmap.ground, speed_mps, step_s, radius_m,
-        sumo_version(), accel_mps2)
+        sumo_version(), accel_mps2, scope)
 
 
 @dataclass
@@ -482,14 +490,26 @@ class SumoWorld:
                                   "run)") from exc
 
     def _measure(self) -> walker_jitter.NetworkJitter:
-        """What SUMO's lone walkers need on the scene's walking areas: the jitter and each
-        junction's ground margin (:mod:`sse_cosim.world.walker_jitter`, cached)."""
+        """What SUMO's lone walkers need on the scene's walking areas in the jitter's scope:
+        the jitter and each junction's ground margin (:mod:`sse_cosim.world.walker_jitter`,
+        cached)."""
         assert self._roadmap is not None and self._net_path is not None
         net = self._roadmap.net  # None: the whole network (route files)
         return measure_walkers(self._net_path, self._roadmap,
                                None if net is None else scene_extent(self.scenario, net),
                                self.scenario.estimator.max_pedestrian_speed_mps, self._dt,
-                               self.scenario.pedestrian_radius_m(), self._accel)
+                               self.scenario.pedestrian_radius_m(), self._accel,
+                               jitter_scope(self.scenario, self._roadmap,
+                                            self._walked_edges()))
+
+    def _walked_edges(self) -> frozenset[str] | None:
+        """Every edge a walker of the scene walks or stands on: the pedestrians' planned paths
+        and the route files' persons' (None: SUMO routes some person itself)."""
+        assert self._plan is not None
+        files = self._route_files.walked_edges
+        if files is None:
+            return None
+        return files | {edge for plan in self._plan.pedestrians.values() for edge in plan.path}
 
     def _with_jitter(self, measured: walker_jitter.NetworkJitter) -> Scenario:
         """The scenario with the position jitter its network needs: its own where it sets one

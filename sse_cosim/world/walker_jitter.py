@@ -60,10 +60,12 @@ of each walking area, so it is measured on the network itself:
 
 A run takes the largest over the junctions of the walking areas in its scene's extent
 (:mod:`sse_cosim.world.extent`: the pedestrians of a run cannot walk beyond it before the run
-ends). Every step of every run still checks the assumption on the true walk, so a walker that
-strays more than measured (a crowd, a stripe the measurement did not walk) stops the run with
-exit status 5 and never goes unnoticed; so does a walker off the walkable ground with its
-patches (:class:`sse_cosim.world.sumo.SumoWorld`).
+ends) that the jitter's scope holds: where the scene's walkers walk, and near the automated
+vehicles' routes (:class:`~sse_cosim.world.extent.JitterScope`). Every step of every run still
+checks the assumption on the true walk, so a walker that strays more than measured (a crowd, a
+stripe the measurement did not walk) stops the run with exit status 5 and never goes
+unnoticed; so does a walker off the walkable ground with its patches
+(:class:`sse_cosim.world.sumo.SumoWorld`).
 
 Cache: a JSON file per network, the built network's folder for one built from sources
 (``walker_jitter.json`` beside ``road.net.xml``), else ``$XDG_CACHE_HOME/sse-cosim`` by the
@@ -99,7 +101,7 @@ from sse_cosim.files import write_text_atomic
 from sse_cosim.regions import PolygonRegion
 from sse_cosim.world.acceleration_assumption import AccelerationBounds, needed_jitter
 from sse_cosim.world.assumptions import MotionBounds, admits, least_jitter, path_jitter
-from sse_cosim.world.extent import SceneExtent
+from sse_cosim.world.extent import JitterScope, SceneExtent
 from sse_cosim.world.network import BUILD_DIR_NAME, NET_FILE_NAME
 from sse_cosim.world.walk_probe import (
     Walker,
@@ -247,16 +249,21 @@ def net_digest(net_path: Path) -> str:
 
 def measure(net_path: Path, net: sumolib.net.Net | None, extent: SceneExtent | None,
             ground: shapely.Geometry, speed_mps: float, step_s: float, radius_m: float,
-            sumo_version: str, accel_mps2: float | None = None) -> NetworkJitter:
+            sumo_version: str, accel_mps2: float | None = None,
+            scope: JitterScope | None = None) -> NetworkJitter:
     """The jitter SUMO's walkers need on the walking areas of ``net`` (the network at
-    ``net_path``, read here if None) in ``extent`` (all of them for None), and each junction's
-    patch beyond the plain ``ground``, measured where the cache lacks a junction or its patch;
-    with ``accel_mps2``, for the bounded-acceleration model (module docstring)."""
+    ``net_path``, read here if None) in ``extent`` (all of them for None) at the junctions of
+    ``scope`` (every one for None), and each junction's patch beyond the plain ``ground``,
+    measured where the cache lacks a junction or its patch; with ``accel_mps2``, for the
+    bounded-acceleration model (module docstring)."""
     if net is None:
         net = sumolib.net.readNet(str(net_path), withInternal=True,
                                   withPedestrianConnections=True)
     areas = [e for e in net.getEdges(withInternal=True) if e.getFunction() == "walkingarea"
              and (extent is None or extent.holds(e))]
+    if scope is not None:
+        held = scope.junctions(net, areas)
+        areas = [area for area in areas if _junction(area) in held]
     wanted = sorted({_junction(area) for area in areas})
     cache = JitterCache(net_path)
     key = cache_key(sumo_version, step_s, speed_mps, radius_m, accel_mps2)

@@ -131,6 +131,28 @@ def test_deterministic_route_files_pass_with_their_types(tmp_path: Path) -> None
                               str(JUNCTION / "traffic.rou.xml")], RESERVED, "s")
     assert files.type_ids == {"cav", "background", "walker"}
     assert files.paths == (GIVEN / "traffic.rou.xml", JUNCTION / "traffic.rou.xml")
+    assert files.walked_edges == {"EC"}  # the walking person's one edge; no other person
+
+
+WALKER = '<vType id="w" vClass="pedestrian" speedDev="0" sigma="0"/>'
+
+
+@pytest.mark.parametrize(("persons", "walked"), [
+    ('<person id="p" type="w" depart="0"><stop lane="WC_0" duration="5"/>'
+     '<walk edges="WC CE"/></person><person id="q" type="w" depart="0">'
+     '<param key="k" value="v"/><walk edges="EC"/></person>', {"WC", "CE", "EC"}),
+    ('<person id="p" type="w" depart="0"><walk edges="WC CE"/></person>'
+     '<person id="q" type="w" depart="0"><walk from="EC" to="CW"/></person>', None),
+    ('<person id="p" type="w" depart="0"><personTrip from="WC" to="CE"/></person>', None),
+    ('<person id="p" type="w" depart="0"><stop busStop="s" duration="5"/>'
+     '<walk edges="WC"/></person>', None),
+])
+def test_the_edges_persons_walk_are_known_unless_sumo_routes_them(
+        tmp_path: Path, persons: str, walked: set[str] | None) -> None:
+    """Walks given edge by edge (and stops on an edge or lane) tell where a route file's
+    persons walk; a walk SUMO routes, a person trip or a stop at a stop's id does not."""
+    path = write(tmp_path / "walkers.rou.xml", routes(WALKER + persons))
+    assert read_route_files([str(path)], RESERVED, "s").walked_edges == walked
 
 
 @pytest.mark.parametrize(("body", "words"), [

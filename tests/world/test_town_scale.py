@@ -17,7 +17,7 @@ from world_helpers import REPO, scenario
 
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.world import demand
-from sse_cosim.world.extent import scene_extent
+from sse_cosim.world.extent import jitter_scope, scene_extent
 from sse_cosim.world.network import build_network, netconvert_path
 from sse_cosim.world.roadmap import RoadMap, load_roadmap, load_scene_roadmap
 from sse_cosim.world.walkgraph import WalkGraph
@@ -155,3 +155,45 @@ def test_a_bus_on_a_straight_lane_of_the_whole_town_drives_through(town: Path,
     assert bus["route_completed"] and bus["time_stopped_s"] == 0.0
     assert bus["level_share"]["nominal"] == 1.0
     assert bus["longest_needless_hold_s"] == 0.0
+
+
+def test_the_jitter_is_measured_near_the_route_and_where_walkers_walk(town: Path) -> None:
+    """Of a long scene's extent (the whole town, 900 s), the jitter's scope holds the junctions
+    near the bus's route, the junctions the pedestrian walks through, and those of a route
+    file's person far away; not the rest of the town (world/extent.py, "The jitter's scope")."""
+    sc = scenario("s3_pedestrian", **{**TOWN_SCENE, "network.net_file": str(town),
+                                      "simulation.duration_s": 900.0})
+    roadmap = load_scene_roadmap(town, sc)
+    net = roadmap.net
+    assert net is not None
+    extent = scene_extent(sc, net)
+    assert extent is not None
+    areas = [e for e in net.getEdges(withInternal=True)
+             if e.getFunction() == "walkingarea" and extent.holds(e)]
+    walk = frozenset(["30610462#2", ":338474020_w0", ":338474020_c0", ":338474020_w1",
+                      "-30610462#2"])
+    route = roadmap.route_line(ROUTE)
+    scope = jitter_scope(sc, roadmap, walk)
+    assert scope is not None
+    assert scope.seeds.covers(route.buffer(12.0))  # the bus's sweep
+    zebra = next(c for c in roadmap.crossings if c.id == ":338474020_c0")
+    assert scope.seeds.covers(zebra.area)  # the zebra on it
+    hull = {a.getID(): shapely.convex_hull(shapely.MultiPoint(a.getLanes()[0].getShape()))
+            for a in areas}
+    held = scope.junctions(net, areas)
+    everywhere = {a.getFromNode().getID() for a in areas}
+    assert "338474020" in held  # the zebra the pedestrian crosses
+    assert len(held) < len(everywhere) / 10  # the extent reaches 2.25 km around the route
+    for area in areas:  # held: exactly the junctions with a walking area near the seeds
+        near = shapely.distance(hull[area.getID()], scope.seeds) <= scope.reach_m
+        assert (area.getFromNode().getID() in held) >= near
+    assert all(shapely.distance(hull[a.getID()], scope.seeds) > scope.reach_m
+               for a in areas if a.getFromNode().getID() not in held)
+    far = next(e for e in net.getEdges() if e.allows("pedestrian")
+               and shapely.distance(route, shapely.Point(e.getFromNode().getCoord())) > 500.0
+               and shapely.distance(route, shapely.Point(e.getToNode().getCoord())) > 500.0)
+    with_far = jitter_scope(sc, roadmap, walk | {far.getID()})
+    assert with_far is not None
+    ends = {far.getFromNode().getID(), far.getToNode().getID()}
+    assert with_far.junctions(net, areas) == held | ends
+    assert jitter_scope(sc, roadmap, None) is None  # a walk SUMO routes: the whole extent
