@@ -9,6 +9,7 @@ import contextlib
 import gzip
 import json
 import os
+import struct
 import tempfile
 import tomllib
 import zlib
@@ -33,21 +34,31 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     gets the mode a plain ``open`` gives (0666 less the umask), not the temporary file's 0600.
     """
     target = Path(target)
+    tmp = _part_beside(target)
+    try:
+        yield tmp
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        _put_in_place(tmp, target)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def _part_beside(target: Path) -> Path:
+    """A new empty temporary file beside ``target`` (see :func:`atomic_path`)."""
     target.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp_name = tempfile.mkstemp(
         prefix=f".{target.stem}.", suffix=f".part{target.suffix}", dir=target.parent
     )
     os.close(fd)
-    tmp = Path(tmp_name)
-    try:
-        yield tmp
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        tmp.chmod(0o666 & ~_umask())
-        os.replace(tmp, target)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    return Path(tmp_name)
+
+
+def _put_in_place(tmp: Path, target: Path) -> None:
+    """Give the written ``tmp`` a plain file's mode and rename it onto ``target``."""
+    tmp.chmod(0o666 & ~_umask())
+    os.replace(tmp, target)
 
 
 def _umask() -> int:
@@ -61,15 +72,64 @@ GZIP_SUFFIX = ".gz"
 """A file whose name ends so is written and read gzipped."""
 
 
+_GZIP_HEADER = b"\x1f\x8b\x08\x00" + bytes(4) + b"\x02\x03"
+"""The header of every gzip file written here: deflate, no name, time 0, level 9 (XFL 2),
+Unix (the bytes ``gzip.compress(data, 9, mtime=0)`` of Python 3.11 writes)."""
+
+
+class AtomicGzip:
+    """A gzipped text file written in pieces (:meth:`write`) and renamed onto ``target`` by
+    :meth:`finish` alone, as :func:`atomic_path` does: only the compressed text is held, and
+    the bytes are those of the whole text at once (deflate's output does not depend on how
+    its input is cut). A run that stops before :meth:`finish` calls :meth:`discard`, which
+    removes the part written."""
+
+    def __init__(self, target: str | os.PathLike[str]) -> None:
+        self.target = Path(target)
+        self._tmp = _part_beside(self.target)
+        self._file = open(self._tmp, "wb")  # noqa: SIM115 -- closed by finish or discard
+        self._file.write(_GZIP_HEADER)
+        self._deflate = zlib.compressobj(9, zlib.DEFLATED, -zlib.MAX_WBITS)
+        self._crc = 0
+        self._size = 0
+
+    def write(self, text: str) -> None:
+        """Append ``text`` (UTF-8)."""
+        data = text.encode("utf-8")
+        self._crc = zlib.crc32(data, self._crc)
+        self._size += len(data)
+        self._file.write(self._deflate.compress(data))
+
+    def finish(self) -> Path:
+        """Close the file and put it in place; returns the target path."""
+        self._file.write(self._deflate.flush())
+        self._file.write(struct.pack("<II", self._crc, self._size & 0xFFFFFFFF))
+        self._file.flush()
+        os.fsync(self._file.fileno())
+        self._file.close()
+        _put_in_place(self._tmp, self.target)
+        return self.target
+
+    def discard(self) -> None:
+        """Close and remove what was written, unless :meth:`finish` put it in place."""
+        self._file.close()
+        self._tmp.unlink(missing_ok=True)
+
+
 def write_text_atomic(target: str | os.PathLike[str], text: str) -> Path:
     """Write ``text`` (UTF-8) to ``target`` atomically and return the target path; gzipped if
-    ``target`` ends in :data:`GZIP_SUFFIX`, with no name or time in the header, so that the
-    same text gives the same bytes every time (committed results stay unchanged)."""
-    data = text.encode("utf-8")
+    ``target`` ends in :data:`GZIP_SUFFIX` (:class:`AtomicGzip`), with no name or time in the
+    header, so that the same text gives the same bytes every time (committed results stay
+    unchanged)."""
     if Path(target).suffix == GZIP_SUFFIX:
-        data = gzip.compress(data, compresslevel=9, mtime=0)
+        gz = AtomicGzip(target)
+        try:
+            gz.write(text)
+            return gz.finish()
+        finally:
+            gz.discard()
     with atomic_path(target) as tmp:
-        tmp.write_bytes(data)
+        tmp.write_bytes(text.encode("utf-8"))
     return Path(target)
 
 

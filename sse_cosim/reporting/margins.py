@@ -53,6 +53,7 @@ class Margin(Protocol):
     name: ClassVar[str]
     help: ClassVar[str]
     labelled_only: ClassVar[bool]  # needs sets that name their pedestrian
+    reads_regions: ClassVar[bool]  # needs the recorder to keep every step's regions
 
     def __call__(self, result: StepResult) -> None: ...
 
@@ -141,6 +142,7 @@ class MovingDistance:
     help: ClassVar[str] = ("least distance between a moving automated vehicle (0.1 m/s or "
                            "faster) and a pedestrian (m)")
     labelled_only: ClassVar[bool] = False
+    reads_regions: ClassVar[bool] = False
 
     scenario: Scenario
 
@@ -170,6 +172,7 @@ class TimeToCollision:
     help: ClassVar[str] = ("least time until an automated vehicle and a pedestrian touch if both "
                            "keep their velocity (s); 0 at a collision")
     labelled_only: ClassVar[bool] = False
+    reads_regions: ClassVar[bool] = False
 
     moving_only: ClassVar[bool] = False  # count only the steps a vehicle moves
 
@@ -243,6 +246,7 @@ class ContainmentDepth:
                            "sets and refined regions, and inside the area the controller "
                            "accounts for (m); negative outside")
     labelled_only: ClassVar[bool] = True
+    reads_regions: ClassVar[bool] = True
 
     scenario: Scenario
 
@@ -277,6 +281,7 @@ class AccountedDepth:
     help: ClassVar[str] = ("least depth of a pedestrian inside the refined regions and the "
                            "unobserved area together (m); negative outside; any association")
     labelled_only: ClassVar[bool] = False
+    reads_regions: ClassVar[bool] = True
 
     scenario: Scenario
 
@@ -305,7 +310,8 @@ def _regions_depths(recorder: RunRecorder, truths: dict[tuple[float, str], tuple
     for t, pid in truths:
         present.setdefault(t, []).append(pid)
     regions, accounted = _Least(), _Least()
-    for (t, vehicle), group in groupby(recorder.regions, key=lambda r: (r.time, r.vehicle)):
+    for (t, vehicle), group in groupby(recorder.regions.records,
+                                      key=lambda r: (r.time, r.vehicle)):
         records = list(group)
         outside = next(r for r in records if r.kind == UNOBSERVED).outside
         inside = [pid for pid in present.get(t, []) if pid not in outside]
@@ -381,6 +387,7 @@ class CrossingBlocked:
     help: ClassVar[str] = ("longest time an automated vehicle stood on a crossing while a "
                            "pedestrian stood waiting at it, at its kerb or on it (s)")
     labelled_only: ClassVar[bool] = False
+    reads_regions: ClassVar[bool] = False
 
     scenario: Scenario
     _open: dict[str, _Blocking] = field(default_factory=dict)  # vehicle -> its stretch now

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import shapely
 
-from sse_cosim.files import atomic_path, write_json_atomic, write_text_atomic
+from sse_cosim.files import AtomicGzip, atomic_path, write_json_atomic, write_text_atomic
 from sse_cosim.reporting import replay
 from sse_cosim.reporting.recorder import RegionRecord, RunRecorder
 from sse_cosim.reporting.shapes import polygon_parts
@@ -101,7 +101,11 @@ def write_run(
         write_text_atomic(
             out_dir / SETS, "".join(json.dumps(line) + "\n" for line in recorder.set_lines)
         )
-        write_text_atomic(out_dir / REGIONS, "".join(map(region_line, recorder.regions)))
+        regions = recorder.regions.sink
+        if not isinstance(regions, RegionFile) or regions.path != out_dir / REGIONS:
+            regions = RegionFile(out_dir / REGIONS)  # a recorder that kept its regions
+            regions.add(recorder.regions.records)
+        regions.finish()
         if recorder.replay is not None:
             page = replay.replay_page(recorder.replay, scenario, roadmap, label(scenario),
                                       replay.opening_s(summary))
@@ -130,6 +134,27 @@ def portable_scenario(scenario: Scenario, out_dir: Path) -> dict:
             network[key] = os.path.relpath(network[key], out_dir)
     network["route_files"] = [os.path.relpath(f, out_dir) for f in network["route_files"]]
     return data
+
+
+class RegionFile:
+    """``regions.jsonl.gz`` written step by step while the run goes (a
+    :class:`~sse_cosim.reporting.recorder.RegionSink`): one :func:`region_line` per record,
+    gzipped as it comes (:class:`~sse_cosim.files.AtomicGzip`: the same bytes as the whole
+    file at once), in place once :meth:`finish` is called (by :func:`write_run`, before
+    ``summary.json``); :meth:`discard` drops it if the run stops first."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self._file = AtomicGzip(path)
+
+    def add(self, records: Sequence[RegionRecord]) -> None:
+        self._file.write("".join(map(region_line, records)))
+
+    def finish(self) -> None:
+        self._file.finish()
+
+    def discard(self) -> None:
+        self._file.discard()
 
 
 def region_line(record: RegionRecord) -> str:

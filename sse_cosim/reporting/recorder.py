@@ -37,7 +37,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import pairwise
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 import shapely
@@ -204,6 +204,31 @@ class RegionRecord:
     outside: frozenset[str] = frozenset()
 
 
+class RegionSink(Protocol):
+    """Where each step's region records go as they come (``regions.jsonl.gz``, written while
+    the run goes: :class:`~sse_cosim.reporting.outputs.RegionFile`)."""
+
+    def add(self, records: Sequence[RegionRecord]) -> None: ...
+
+
+@dataclass
+class RegionLog:
+    """The regions the automated vehicles' controllers used, step by step: handed to
+    ``sink`` as they come, and kept in ``records`` only with ``keep`` (the margins that
+    re-check them after the run). A long run on a town's bus line holds thousands of steps of
+    an unobserved area of ten thousand vertices: kept, they would outgrow the memory."""
+
+    sink: RegionSink | None = None
+    keep: bool = True
+    records: list[RegionRecord] = field(default_factory=list)
+
+    def add(self, records: Sequence[RegionRecord]) -> None:
+        if self.sink is not None:
+            self.sink.add(records)
+        if self.keep:
+            self.records.extend(records)
+
+
 @dataclass(frozen=True)
 class SceneFrame:
     """What a scene plot at one time needs (position sets, geometries)."""
@@ -279,7 +304,7 @@ class RunRecorder:
     # position set's own read-only arrays: nothing for the garbage collector to walk while the
     # run goes (:attr:`set_lines` makes the lines)
     set_records: list[tuple[Any, ...]] = field(default_factory=list)
-    regions: list[RegionRecord] = field(default_factory=list)  # serialised only when written
+    regions: RegionLog = field(default_factory=RegionLog)
     scenes: list[SceneFrame] = field(default_factory=list)
     key_moments: KeyMoments = field(default_factory=KeyMoments)
     violations: list[dict[str, Any]] = field(default_factory=list)
@@ -602,11 +627,11 @@ class RunRecorder:
     def _note_regions(self, t: float, vehicle: str, held: _HeldRegions) -> None:
         """Keep the regions ``vehicle``'s controller used this step: every known pedestrian's
         refined region (by id) and the unobserved area, so that anyone can re-check them."""
-        self.regions.extend(RegionRecord(t, REFINED, pid, region, vehicle)
-                            for pid, region in sorted(held.refined.items()))
-        self.regions.append(RegionRecord(
-            t, UNOBSERVED, None, held.unobserved, vehicle,
-            outside=frozenset(pid for pid, out in held.outside.items() if out)))
+        self.regions.add([
+            *(RegionRecord(t, REFINED, pid, region, vehicle)
+              for pid, region in sorted(held.refined.items())),
+            RegionRecord(t, UNOBSERVED, None, held.unobserved, vehicle,
+                         outside=frozenset(pid for pid, out in held.outside.items() if out))])
 
     def _set_line(self, t: float, vehicle: str, node: str, track: str, kind: str,
                   position: PositionSet) -> None:

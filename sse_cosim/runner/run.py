@@ -11,9 +11,9 @@ from tqdm import tqdm
 
 from sse_cosim.files import portable_path
 from sse_cosim.pipeline.result import StepResult
-from sse_cosim.reporting.margins import MARGINS, check_margins
-from sse_cosim.reporting.outputs import write_run
-from sse_cosim.reporting.recorder import RunRecorder
+from sse_cosim.reporting.margins import MARGINS, Margin, check_margins
+from sse_cosim.reporting.outputs import REGIONS, RegionFile, write_run
+from sse_cosim.reporting.recorder import RegionLog, RunRecorder
 from sse_cosim.reporting.replay import ReplayLog
 from sse_cosim.runner.simulation import simulate
 from sse_cosim.scenario.loader import load_scenario
@@ -54,10 +54,24 @@ def run_scenario(
     error while it runs, where that is a terminal."""
     source = portable_path(source)
     check_margins(margins, scenario, source)
-    recorder = RunRecorder(scenario, tuple(scene_times),
-                           replay=None if summary_only else ReplayLog())
     watchers = [MARGINS[name](scenario) for name in margins]
+    region_file = None if summary_only else RegionFile(out_dir / REGIONS)
+    recorder = RunRecorder(scenario, tuple(scene_times),
+                           replay=None if summary_only else ReplayLog(),
+                           regions=RegionLog(region_file,
+                                             keep=any(w.reads_regions for w in watchers)))
+    try:
+        return _simulate_and_write(scenario, source, out_dir, recorder, watchers, plots,
+                                   summary_only, progress)
+    finally:  # a run that stopped leaves no regions file (one that finished put it in place)
+        if region_file is not None:
+            region_file.discard()
 
+
+def _simulate_and_write(scenario: Scenario, source: str, out_dir: Path, recorder: RunRecorder,
+                        watchers: Sequence[Margin], plots: bool, summary_only: bool,
+                        progress: bool) -> dict:
+    """:func:`run_scenario`'s run, its ``recorder`` and margin ``watchers`` fed every step."""
     bar = tqdm(total=scenario.simulation.duration_s, desc=scenario.name, unit="s",
                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:g} s simulated "
                "[{elapsed}<{remaining}]", disable=None if progress else True,

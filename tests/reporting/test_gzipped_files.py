@@ -11,7 +11,13 @@ from pathlib import Path
 import pytest
 
 from sse_cosim.errors import UserError
-from sse_cosim.files import read_plan, read_text, write_json_atomic, write_text_atomic
+from sse_cosim.files import (
+    AtomicGzip,
+    read_plan,
+    read_text,
+    write_json_atomic,
+    write_text_atomic,
+)
 from sse_cosim.reporting.falsify_report import EVALUATIONS
 from sse_cosim.reporting.safety_report import SAFETY_PLAN
 
@@ -25,6 +31,27 @@ def test_a_gz_file_is_gzipped_the_same_bytes_every_time_and_reads_back(tmp_path:
     assert read_text(tmp_path / "a" / EVALUATIONS) == text
     plain = write_text_atomic(tmp_path / "plain.csv", text)
     assert plain.read_text() == text == read_text(plain)
+
+
+def test_a_gz_file_written_in_pieces_is_the_file_written_whole(tmp_path: Path):
+    """A file written piece by piece (a run's regions, step by step) has the bytes of the whole
+    text written at once, which are gzip's own (time 0, level 9); it is in place only once
+    finished, and a discarded one leaves nothing."""
+    pieces = [f'{{"t":{k / 10},"polygons":[[[{k},0],[1,{k}]]]}}\n' * (k % 7) for k in range(3000)]
+    text = "".join(pieces)
+    whole = write_text_atomic(tmp_path / "whole.jsonl.gz", text).read_bytes()
+    assert whole == gzip.compress(text.encode(), compresslevel=9, mtime=0)
+    streamed = AtomicGzip(tmp_path / "streamed.jsonl.gz")
+    for piece in pieces:
+        streamed.write(piece)
+    assert not (tmp_path / "streamed.jsonl.gz").exists()
+    assert streamed.finish().read_bytes() == whole
+    streamed.discard()  # after finish: nothing to remove
+    assert (tmp_path / "streamed.jsonl.gz").read_bytes() == whole
+    dropped = AtomicGzip(tmp_path / "dropped" / "r.jsonl.gz")
+    dropped.write(text)
+    dropped.discard()
+    assert list((tmp_path / "dropped").iterdir()) == []
 
 
 def test_a_plan_reads_back_and_an_older_plain_one_is_refused_in_one_line(tmp_path: Path):

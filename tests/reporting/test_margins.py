@@ -23,7 +23,7 @@ from sse_cosim.reporting.margins import (
     TimeToCollision,
     time_to_contact,
 )
-from sse_cosim.reporting.recorder import REFINED, UNOBSERVED, RegionRecord
+from sse_cosim.reporting.recorder import REFINED, UNOBSERVED, RegionLog, RegionRecord
 from sse_cosim.runner.run import run_scenario_file
 from sse_cosim.scenario.loader import load_scenario
 from sse_cosim.sets.zonotope import Zonotope
@@ -86,12 +86,13 @@ def test_the_depth_is_the_distance_to_the_boundary_inside_and_minus_it_outside()
         set_records=[(0.0, "bus", "rsu1", "p", "local", *square),
                      (0.1, "bus", "rsu1", "p", "local", *square),
                      (0.1, "bus", "bus", "someone else", "fused", *square)],
-        regions=[RegionRecord(0.0, REFINED, "p", shapely.box(-1, -1, 1, 1), "bus"),
-                 RegionRecord(0.0, UNOBSERVED, None, shapely.box(0.5, -3, 3, 3), "bus"),
-                 # outside the window the regions claim nothing: not a depth
-                 RegionRecord(0.1, REFINED, "p", shapely.box(-1, -1, 1, 1), "bus"),
-                 RegionRecord(0.1, UNOBSERVED, None, shapely.box(0.5, -3, 3, 3), "bus",
-                              outside=frozenset({"p"}))])
+        regions=RegionLog(records=[
+            RegionRecord(0.0, REFINED, "p", shapely.box(-1, -1, 1, 1), "bus"),
+            RegionRecord(0.0, UNOBSERVED, None, shapely.box(0.5, -3, 3, 3), "bus"),
+            # outside the window the regions claim nothing: not a depth
+            RegionRecord(0.1, REFINED, "p", shapely.box(-1, -1, 1, 1), "bus"),
+            RegionRecord(0.1, UNOBSERVED, None, shapely.box(0.5, -3, 3, 3), "bus",
+                         outside=frozenset({"p"}))]))
     depth = ContainmentDepth(load_scenario(S3)).value(recorder)
     hexagon = shapely.Polygon(Zonotope.unchecked(*square).vertices())
     expected = -hexagon.boundary.distance(shapely.Point(2.0, 0.0))

@@ -12,8 +12,16 @@ import pytest
 import shapely
 
 from sse_cosim.files import portable_path, read_text
-from sse_cosim.reporting.outputs import REGIONS, SETS, SUMMARY, TRACE, TRUTH, write_run
-from sse_cosim.reporting.recorder import REFINED, UNOBSERVED, RegionRecord, RunRecorder
+from sse_cosim.reporting.outputs import (
+    REGIONS,
+    SETS,
+    SUMMARY,
+    TRACE,
+    TRUTH,
+    RegionFile,
+    write_run,
+)
+from sse_cosim.reporting.recorder import REFINED, UNOBSERVED, RegionLog, RegionRecord, RunRecorder
 from sse_cosim.scenario.loader import load_scenario
 
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "s3_pedestrian.toml"
@@ -144,11 +152,11 @@ def test_route_completed_comes_from_the_caller():
 
 def test_run_folder_holds_regions_and_the_summary_figures(tmp_path):
     recorder = recorder_with([20.0, 0.0], [False, True])
-    recorder.regions = [
+    recorder.regions.add([
         RegionRecord(0.0, UNOBSERVED, None, shapely.box(0, 0, 2, 1), "bus"),
         RegionRecord(0.1, REFINED, "pedestrian", shapely.Polygon(), "bus"),
         RegionRecord(0.1, UNOBSERVED, None, shapely.box(0, 0, 1, 1), "bus"),
-    ]
+    ])
     summary = write_run(tmp_path, recorder.scenario, recorder, None, "test", DONE,
                         plots_wanted=False)
     lines = [json.loads(line) for line in read_text(tmp_path / REGIONS).splitlines()]
@@ -161,6 +169,35 @@ def test_run_folder_holds_regions_and_the_summary_figures(tmp_path):
     assert on_disk == summary
     assert (summary["route_completed"], summary["collisions"], summary["time_stopped_s"]) == (
         True, 1, 0.1)
+
+
+def test_regions_streamed_while_the_run_goes_are_the_same_file(tmp_path):
+    """A run's regions go to regions.jsonl.gz step by step and are not kept: the file is byte
+    for byte the one written from kept regions at the end, and it is not in place (nor is
+    anything but its hidden part) until write_run puts it there; a run that stops leaves
+    nothing."""
+    steps = [[RegionRecord(0.1 * k, UNOBSERVED, None, shapely.box(0, 0, 1 + k, 1), "bus"),
+              RegionRecord(0.1 * k, REFINED, "p", shapely.box(k, 0, k + 0.5, 0.5), "bus")]
+             for k in range(300)]
+    kept = recorder_with([20.0], [False])
+    for records in steps:
+        kept.regions.add(records)
+    write_run(tmp_path / "kept", kept.scenario, kept, None, "test", DONE, plots_wanted=False)
+    out = tmp_path / "streamed"
+    streamed = recorder_with([20.0], [False])
+    streamed.regions = RegionLog(RegionFile(out / REGIONS), keep=False)
+    for records in steps:
+        streamed.regions.add(records)
+    assert streamed.regions.records == [] and not (out / REGIONS).exists()
+    write_run(out, streamed.scenario, streamed, None, "test", DONE, plots_wanted=False)
+    assert (out / REGIONS).read_bytes() == (tmp_path / "kept" / REGIONS).read_bytes()
+    assert len(read_text(out / REGIONS).splitlines()) == 600
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        p.name for p in (tmp_path / "kept").iterdir())
+    stopped = RegionFile(tmp_path / "stopped" / REGIONS)
+    stopped.add(steps[0])
+    stopped.discard()
+    assert list((tmp_path / "stopped").iterdir()) == []
 
 
 def test_trace_positions_keep_a_micrometre(tmp_path):
@@ -176,7 +213,7 @@ def test_trace_positions_keep_a_micrometre(tmp_path):
 
 def test_summary_only_writes_no_trace_sets_or_regions(tmp_path):
     recorder = recorder_with([20.0], [False])
-    recorder.regions = [RegionRecord(0.0, UNOBSERVED, None, shapely.box(0, 0, 1, 1), "bus")]
+    recorder.regions.add([RegionRecord(0.0, UNOBSERVED, None, shapely.box(0, 0, 1, 1), "bus")])
     write_run(tmp_path, recorder.scenario, recorder, None, "test", NOT_DONE, plots_wanted=False,
               summary_only=True)
     assert not any((tmp_path / name).exists() for name in (TRACE, SETS, REGIONS))
