@@ -62,7 +62,7 @@ arrives (:class:`~sse_cosim.estimation.v2x.V2XLink`).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from sse_cosim.estimation.motion import MotionModel
 from sse_cosim.regions import Region, RegionKind
@@ -234,7 +234,18 @@ class TrackedWindow:
 
 class UnobservedArea:
     """Walkable area where an undetected pedestrian may be, as the bus knows it: all of it, or
-    (with a ``window``) at least every such place inside the window."""
+    (with a ``window``) at least every such place inside the window.
+
+    Groups. A long route's window is many pieces far apart (one per crossing of a town's bus
+    line), and a step moves a path region by a few decimetres: pieces more than
+    :data:`GROUP_GAP_M` apart are tracked as separate groups, each with the walkable ground,
+    the inflow and the views near it (a view that does not come near a group cuts nothing
+    there), and the path region is the union of theirs. A group that no view comes near and
+    no hand-over reaches is moved by the same computation on its path region alone, so its
+    steps at rest are looked up once they come back to a region they started from
+    (:class:`_Rest`; :meth:`~sse_cosim.regions.Region.same`: the same representation, so the
+    same result again). With one group (the paper's road, the junction, the town's street)
+    every step is computed as for the whole window at once."""
 
     def __init__(self, walkable: Region, model: MotionModel, latency_steps: int,
                  kind: RegionKind, window: Region | None = None) -> None:
@@ -245,12 +256,44 @@ class UnobservedArea:
         if self._window is not None:
             walkable = walkable.intersection(self._window.tracked.dilate(model.jitter))
         self.walkable = walkable  # the walkable ground whose views matter
-        self._base = self._clip(walkable.dilate(model.jitter))  # path region at self._base_step
+        self._groups = self._grouped()
+        # path regions at self._base_step, one per group
+        self._base = tuple(g.clip(g.walkable.dilate(model.jitter)) for g in self._groups)
         self._base_step: int | None = None
         self._own: dict[int, Region] = {}  # the bus's views not yet in the base
         self._ended: dict[int, list[Region]] = {}  # step -> path sets handed over
-        self._base_moved: tuple[Region, Region] | None = None  # (base, moved)
-        self.path: Region = self._base  # where an undetected pedestrian's path may be now
+        self._base_moved: dict[int, tuple[Region, Region]] = {}  # group -> (base, moved)
+        self._paths = self._base  # where an undetected pedestrian's path may be now
+        self.path: Region = self._union(self._paths)
+
+    def _grouped(self) -> list[_Group]:
+        """The window's pieces, those closer than :data:`GROUP_GAP_M` together, each group
+        with its walkable ground and inflow (class docstring); one group without a window."""
+        window = self._window
+        if window is None:
+            return [_Group(self.walkable, None, None)]
+        parts = self._window_parts(window.tracked)
+        if len(parts) == 1:
+            return [_Group(self.walkable, window.tracked, window.inflow())]
+        eps = self.model.jitter
+        groups = []
+        for tracked in parts:
+            ground = self.walkable.intersection(tracked.dilate(eps))
+            groups.append(_Group(ground, tracked, window.inflow().intersection(tracked),
+                                 self.kind.reach_of(eps)))
+        return groups
+
+    def _window_parts(self, tracked: Region) -> list[Region]:
+        """B's pieces, those within :data:`GROUP_GAP_M` of each other as one (B itself if
+        they all are)."""
+        groups: list[list[Region]] = []
+        for piece in tracked.parts():
+            near = [g for g in groups if any(piece.distance(o) <= GROUP_GAP_M for o in g)]
+            groups = [g for g in groups if all(g is not n for n in near)]
+            groups.append([piece, *(o for g in near for o in g)])
+        if len(groups) <= 1:
+            return [tracked]
+        return [self.kind.union_all(group) for group in groups]
 
     def update(
         self, step: int, own_view: Region, shared_views: Sequence[Region],
@@ -281,8 +324,16 @@ class UnobservedArea:
         for later in range(target + 1, step + 1):
             current = self._advance(current, [self._own.get(later, nothing)],
                                     self._ended.get(later, []))
-        self.path = current
-        return current.dilate(self.model.jitter).intersection(self.walkable).difference(own_view)
+        if any(now is not before for now, before in zip(current, self._paths, strict=True)):
+            self.path = self._union(current)
+        self._paths = current
+        eps = self.model.jitter
+        return self._union([g.shown(path, own_view, eps)
+                            for g, path in zip(self._groups, current, strict=True)])
+
+    def _union(self, regions: Sequence[Region]) -> Region:
+        """The union of one region per group (the groups lie apart)."""
+        return regions[0] if len(regions) == 1 else self.kind.union_apart(regions)
 
     def _hand_over(self, track: EndedTrack, step: int) -> None:
         """Add ``track``'s path set, moved to ``step`` (>= its own), to that step's path region
@@ -294,35 +345,116 @@ class UnobservedArea:
         moved = path.dilate(self.model.reach_m(step - track.step))
         self._ended.setdefault(step, []).append(moved)
 
-    def _advance(self, path: Region, views: Sequence[Region],
-                 ended: Sequence[Region] = ()) -> Region:
-        """One step of the path region: move, add the path sets handed over at this step, then
-        keep what is near unseen walkable ground."""
+    def _advance(self, paths: tuple[Region, ...], views: Sequence[Region],
+                 ended: Sequence[Region] = ()) -> tuple[Region, ...]:
+        """One step of every group's path region (:meth:`_advance_group`)."""
         seen = [v for v in views if not v.is_empty]
-        unseen = self.walkable.difference(self.kind.union_all(seen)) if seen else self.walkable
-        moved = self._moved(path)
+        return tuple(self._advance_group(k, group, path, group.near(seen), group.near(ended))
+                     for k, (group, path) in enumerate(zip(self._groups, paths, strict=True)))
+
+    def _advance_group(self, k: int, group: _Group, path: Region, seen: Sequence[Region],
+                       ended: Sequence[Region]) -> Region:
+        """One step of group ``k``'s path region: move, add the path sets handed over at this
+        step, then keep what is near unseen walkable ground; a group at rest stays as it is
+        (class docstring)."""
+        at_rest = not seen and not ended and len(self._groups) > 1
+        if at_rest and (known := group.rest.get(path)) is not None:
+            return known
+        unseen = group.walkable.difference(self.kind.union_all(seen)) if seen \
+            else group.walkable
+        moved = self._moved(k, group, path)
         if ended:
             moved = self.kind.union_all([moved, *ended])
-        return self._clip(moved.intersection(unseen.dilate(self.model.jitter))).coarsen(COARSEN_M)
+        after = group.clip(moved.intersection(unseen.dilate(self.model.jitter))).coarsen(
+            COARSEN_M)
+        return group.rest.put(path, after) if at_rest else after
 
-    def _moved(self, path: Region) -> Region:
+    def _moved(self, k: int, group: _Group, path: Region) -> Region:
         """The path region one step later before any view: moved by the model's one-step reach,
         plus the inflow.
 
         The base's is kept: with a latency, one step carries the base forward with the bus's
         newest view and the next advances the base itself, from the same region.
         """
-        if self._base_moved is not None and self._base_moved[0] is path:
-            return self._base_moved[1]
+        kept = self._base_moved.get(k)
+        if kept is not None and kept[0] is path:
+            return kept[1]
         moved = path.dilate(self.model.reach_m())
-        if self._window is not None:  # O's rim moved one step: paths entering B from outside
-            moved = moved.union(self._window.inflow())
-        if path is self._base:
-            self._base_moved = (path, moved)
+        if group.inflow is not None:  # O's rim moved one step: paths entering B from outside
+            moved = moved.union(group.inflow)
+        if path is self._base[k]:
+            self._base_moved[k] = (path, moved)
         return moved
 
-    def _clip(self, region: Region) -> Region:
-        return region if self._window is None else self._window.clip(region)
+
+GROUP_GAP_M = 50.0
+"""Pieces of the tracked window farther apart than this are tracked as separate groups of the
+unobserved area (:class:`UnobservedArea`): far beyond a step's reach plus twice the jitter, so
+no path region crosses from one to another in a step but through the inflow."""
+
+
+class _Rest:
+    """A group's latest steps at rest (no view near it, no hand-over): each path region and
+    the next one. Such a step depends on the path region alone, so the same region in gives
+    the same one out, looked up, not computed. GEOS's overlays settle into a cycle of two
+    representations of one set: a step that gives a region represented as one that went in
+    before returns that earlier region, which closes the cycle, and from then on every step
+    at rest is looked up."""
+
+    def __init__(self) -> None:
+        self._steps: list[tuple[Region, Region]] = []  # (path region, its next), oldest first
+
+    def get(self, path: Region) -> Region | None:
+        """The next path region after ``path`` at rest (None: not known)."""
+        return next((after for before, after in self._steps if before is path), None)
+
+    def put(self, path: Region, after: Region) -> Region:
+        """Keep the step at rest ``path`` -> ``after``; return ``after``, or the earlier
+        region represented exactly as it is."""
+        after = next((before for before, _ in self._steps if after.same(before)), after)
+        self._steps = [*self._steps[1 - REST_KEPT:], (path, after)]
+        return after
+
+
+REST_KEPT = 4  # the steps at rest a group keeps to find its cycle (GEOS's is of two)
+
+
+@dataclass(eq=False)
+class _Group:
+    """One group of the tracked window's pieces (:class:`UnobservedArea`): the walkable
+    ground whose views matter there, its part of B (None: no window), the inflow into it, how
+    far beyond its part's bounds a view or a hand-over may change something there (the reach
+    of a dilation by the jitter; None: one group, which every one may), its steps at rest
+    (``rest``), and the areas shown for its latest path regions without the bus's view
+    (``resting``)."""
+
+    walkable: Region
+    tracked: Region | None
+    inflow: Region | None
+    reach: float | None = None
+    rest: _Rest = field(default_factory=_Rest)
+    resting: list[tuple[Region, Region]] = field(default_factory=list)
+
+    def clip(self, region: Region) -> Region:
+        """``region`` ∩ its part of B."""
+        return region if self.tracked is None else region.intersection(self.tracked)
+
+    def near(self, regions: Sequence[Region]) -> list[Region]:
+        """The ``regions`` within :attr:`reach` of its part's bounds (all with one group)."""
+        if self.reach is None or self.tracked is None:
+            return list(regions)
+        return [r for r in regions if not _apart(self.tracked, r, self.reach)]
+
+    def shown(self, path: Region, own_view: Region, eps: float) -> Region:
+        """Where an undetected pedestrian of this group may be: ``path`` grown by the jitter,
+        on walkable ground, less what the bus sees now (``own_view``, when it comes near)."""
+        if self.reach is not None and not self.near([own_view]):
+            shown = next((area for before, area in self.resting if before is path), None)
+            if shown is None:
+                shown = path.dilate(eps).intersection(self.walkable)
+                self.resting = [*self.resting[-1:], (path, shown)]
+            return shown
+        return path.dilate(eps).intersection(self.walkable).difference(own_view)
 
 
 def _apart(first: Region, second: Region, margin: float) -> bool:

@@ -97,6 +97,15 @@ class Region(Protocol):
         region for an approximating representation."""
         ...
 
+    def parts(self) -> list[Region]:
+        """Its connected pieces (none if empty), whose union is the region."""
+        ...
+
+    def same(self, other: Region) -> bool:
+        """Whether ``other`` is represented exactly as self is (every coordinate or cell the
+        same): then every operation gives both the same result."""
+        ...
+
 
 class RegionKind(Protocol):
     """How one representation makes regions."""
@@ -120,6 +129,12 @@ class RegionKind(Protocol):
 
     def union_all(self, regions: Iterable[Region]) -> Region:
         """The union of ``regions`` (empty if none)."""
+        ...
+
+    def union_apart(self, regions: Sequence[Region]) -> Region:
+        """The union of ``regions`` that share no point (each apart from the others): the
+        same set as :meth:`union_all`, made without an overlay where the representation
+        allows."""
         ...
 
     def convex_outer(self, points: np.ndarray) -> Region:

@@ -138,6 +138,13 @@ class PolygonRegion:
     def geometry(self) -> shapely.Geometry:
         return self.shape
 
+    def parts(self) -> list[PolygonRegion]:
+        return [PolygonRegion(part) for part in shapely.get_parts(self.shape)
+                if not part.is_empty]
+
+    def same(self, other: PolygonRegion) -> bool:
+        return bool(shapely.equals_exact(self.shape, other.shape, tolerance=0.0))
+
     @property
     def prepared(self) -> shapely.Geometry:
         """The shape, prepared for repeated predicates (shapely prepares it in place)."""
@@ -231,6 +238,12 @@ class PolygonKind:
     def union_all(self, regions: Iterable[PolygonRegion]) -> PolygonRegion:
         shapes = [r.shape for r in regions if not r.shape.is_empty]
         return PolygonRegion(shapely.union_all(shapes)) if shapes else self.empty()
+
+    def union_apart(self, regions: Sequence[PolygonRegion]) -> PolygonRegion:
+        """Their polygons as one multipolygon: apart, they make a valid one as they are."""
+        parts = [p for r in regions for p in shapely.get_parts(r.shape)
+                 if isinstance(p, shapely.Polygon) and not p.is_empty]
+        return PolygonRegion(shapely.MultiPolygon(parts)) if parts else self.empty()
 
     def convex_outer(self, points: np.ndarray) -> PolygonRegion:
         xy = np.asarray(points, dtype=float).reshape(-1, 2)

@@ -202,6 +202,18 @@ class RasterRegion:
         for them)."""
         return self._polygons
 
+    def parts(self) -> list[RasterRegion]:
+        """The groups of set cells joined by an edge or a corner (a closed cell touches the
+        ones at its corners)."""
+        from scipy import ndimage
+
+        labels, count = ndimage.label(self.mask, structure=np.ones((3, 3), dtype=bool))
+        return [_cropped(self.cell, labels == k, *self.offset) for k in range(1, count + 1)]
+
+    def same(self, other: RasterRegion) -> bool:
+        return (self.cell == other.cell and self.offset == other.offset
+                and np.array_equal(self.mask, other.mask))
+
     @cached_property
     def _polygons(self) -> shapely.Geometry:
         """The coverage union of the set cells' boxes (each row's runs, merged down the rows),
@@ -261,6 +273,10 @@ class RasterKind:
         """distance + a cell's diagonal + the slack: an added cell's square lies within
         distance + slack of a set one."""
         return 0.0 if distance <= 0 else distance + SLACK_M + math.sqrt(2.0) * self.cell_m
+
+    def union_apart(self, regions: Sequence[RasterRegion]) -> RasterRegion:
+        """:meth:`union_all`: cells combine without an overlay anyway."""
+        return self.union_all(regions)
 
     def union_all(self, regions: Iterable[RasterRegion]) -> RasterRegion:
         empty = self.empty()

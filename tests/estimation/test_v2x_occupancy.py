@@ -8,17 +8,20 @@ import numpy as np
 import pytest
 import shapely
 
+from sse_cosim.estimation import occupancy
 from sse_cosim.estimation.motion import MODELS, motion_model
 from sse_cosim.estimation.occupancy import (
     COARSEN_M,
+    GROUP_GAP_M,
     ClearRegion,
+    EndedTrack,
     OccupancyTracker,
     TrackedWindow,
     UnobservedArea,
 )
 from sse_cosim.estimation.settings import EstimatorSettings, coast
 from sse_cosim.estimation.v2x import Message, V2XLink
-from sse_cosim.regions import PolygonRegion, kind
+from sse_cosim.regions import PolygonRegion, kind, polygon
 from sse_cosim.scenario.model import V2X, Estimator
 from sse_cosim.sets import Strips, Zonotope
 
@@ -205,10 +208,45 @@ def test_the_kept_move_of_the_base_is_the_move_computed_afresh():
             x, y = rng.uniform(0, 60), rng.uniform(-8, 10)
             own = R(shapely.box(x, y, x + rng.uniform(2, 30), y + rng.uniform(2, 15)))
             shared = [R(shapely.box(20, -10, 40, 12))] if rng.random() < 0.5 else []
-            afresh._base_moved = None
+            afresh._base_moved = {}
             assert kept.update(step, own, shared).shape.equals_exact(
                 afresh.update(step, own, shared).shape, 0.0), (latency, step)
-        assert kept._base_moved is not None
+        assert kept._base_moved
+
+
+def test_a_window_in_pieces_far_apart_is_tracked_in_groups_as_it_is_whole(monkeypatch):
+    """A long route's window: three crossings along 400 m of sidewalk, far apart. Tracked in
+    groups, with steps at rest looked up, the unobserved area and its path region are, at
+    every step, the sets tracked for the whole window at once, under random
+    views near one crossing or another, shared views with latency and a track handed over;
+    and the crossings out of view are looked up, not computed. (Without coarsening: a region
+    of more vertices, as the whole window's is, is coarsened where a group's alone is not, and
+    each grows from there.)"""
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
+    crossings = [shapely.box(x - 2, -8, x + 2, 10) for x in (50.0, 200.0, 350.0)]
+    walkable = shapely.union_all([shapely.box(0, 0, 400, 2), *crossings])
+    window = shapely.union_all([c.buffer(6.0) for c in crossings])
+    track = EndedTrack(12, Zonotope(np.array([200.0, 1.0]), np.eye(2) * 0.5))
+    monkeypatch.setattr(polygon, "COARSEN_ABOVE", 10**9)
+    for latency in (1, 2):
+        rng = np.random.default_rng(3 + latency)
+        grouped = UnobservedArea(R(walkable), model, latency, K, window=R(window))
+        monkeypatch.setattr(occupancy, "GROUP_GAP_M", 1e9)
+        whole = UnobservedArea(R(walkable), model, latency, K, window=R(window))
+        monkeypatch.setattr(occupancy, "GROUP_GAP_M", GROUP_GAP_M)
+        assert (len(grouped._groups), len(whole._groups)) == (3, 1)
+        for step in range(40):
+            x = rng.choice([50.0, 200.0]) + rng.uniform(-10, 10)
+            own = R(shapely.box(x, -6, x + rng.uniform(2, 12), rng.uniform(0, 9)))
+            shared = [R(shapely.box(195, -10, 205, 12))] if rng.random() < 0.3 else []
+            ended = [track] if step == 12 + latency else []
+            got = grouped.update(step, own, shared, ended).shape
+            expected = whole.update(step, own, shared, ended).shape
+            assert got.symmetric_difference(expected).area < 1e-7, (latency, step)
+            assert grouped.path.shape.symmetric_difference(whole.path.shape).area < 1e-7
+        far = next(k for k, g in enumerate(grouped._groups) if g.tracked.bounds[0] > 300.0)
+        # the crossing nobody looks at rests: its next step is looked up
+        assert grouped._groups[far].rest.get(grouped._paths[far]) is not None
 
 
 def test_a_known_region_kept_in_the_window_holds_the_pedestrian_who_leaves_and_comes_back():

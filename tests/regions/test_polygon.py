@@ -454,3 +454,23 @@ def test_offsets_hold_the_exact_ones_where_geos_takes_its_shortcuts():
                                         region.erode(distance).shape))
     assert geos_worst > 1e-8  # the shortcuts still stand
     assert worst == 0.0
+
+
+@KIND_NAMES
+@SETTINGS
+@given(shapes(), st.integers(0, 2**32 - 1))
+def test_parts_make_the_region_and_apart_they_are_its_union(name, shape, seed):
+    """A region's pieces hold it all, each within it; pieces moved apart make, unioned without
+    an overlay, the set their overlay makes; a region is represented as itself, not as the
+    region of a shape moved a little."""
+    kind, rng = KINDS[name], np.random.default_rng(seed)
+    region = kind.outer(shape)
+    pieces = region.parts()
+    assert all(region.covers(piece) for piece in pieces)
+    assert_contains(kind.union_all(pieces), shape, rng)
+    far = kind.outer(shapely.affinity.translate(shape, 1000.0, 0.0))
+    apart = kind.union_apart([region, far])
+    assert apart.geometry().symmetric_difference(
+        kind.union_all([region, far]).geometry()).area <= 1e-9 * (1.0 + apart.area)
+    assert region.same(region) and region.same(kind.outer(shape))
+    assert region.is_empty or not (region.same(far) or region.same(region.dilate(0.5)))
