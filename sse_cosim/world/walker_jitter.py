@@ -81,6 +81,7 @@ written atomically; only the junctions not measured yet are walked.
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import json
 import os
@@ -205,14 +206,19 @@ class NetworkJitter:
 
 class JitterCache:
     """The measured junctions of one network (see the module docstring), read once, written
-    after every measurement."""
+    after every measurement. Runs in parallel (a sweep's workers) measure different
+    junctions of one network: each adds its own to what the file holds when it writes, under
+    a lock, so none is lost."""
 
     def __init__(self, net_path: Path) -> None:
         self.path = cache_path(net_path)
+        self.entries = self._read()
+
+    def _read(self) -> dict[str, dict[str, dict]]:
         try:
-            self.entries: dict[str, dict[str, dict]] = json.loads(self.path.read_text("utf-8"))
+            return json.loads(self.path.read_text("utf-8"))
         except (OSError, ValueError):
-            self.entries = {}
+            return {}
 
     def junctions(self, key: str) -> dict[str, JunctionJitter]:
         return {jid: JunctionJitter(jid, e["jitter_m"], tuple(e["walk"]), tuple(e["step_lanes"]),
@@ -220,10 +226,15 @@ class JitterCache:
                 for jid, e in self.entries.get(key, {}).items()}
 
     def add(self, key: str, found: Iterable[JunctionJitter]) -> None:
-        entry = self.entries.setdefault(key, {})
-        entry.update({j.junction: j.as_dict() for j in found})
+        """Add the ``found`` junctions under ``key`` to the file as it is now (class
+        docstring)."""
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        write_text_atomic(self.path, json.dumps(self.entries, indent=1, sort_keys=True) + "\n")
+        with open(self.path.with_name(self.path.name + ".lock"), "a") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+            self.entries = self._read()
+            self.entries.setdefault(key, {}).update({j.junction: j.as_dict() for j in found})
+            write_text_atomic(self.path,
+                              json.dumps(self.entries, indent=1, sort_keys=True) + "\n")
 
 
 def cache_path(net_path: Path) -> Path:

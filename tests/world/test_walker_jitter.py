@@ -101,6 +101,19 @@ def test_a_measurement_is_cached_with_its_settings(paper, monkeypatch) -> None:
         _measure(net_path, 2.0)
 
 
+def test_runs_in_parallel_that_measure_different_junctions_lose_none(paper) -> None:
+    """Two runs on one network open its cache before either has written, measure different
+    junctions (their scopes differ) and write one after the other: the file keeps both."""
+    net_path, _ = paper
+    first, second = walker_jitter.JitterCache(net_path), walker_jitter.JitterCache(net_path)
+    found = [walker_jitter.JunctionJitter(name, 0.5, ("WC",), ("WC_0", "WC_0"), 0.3,
+                                          shapely.Point(0, 0)) for name in ("W", "E")]
+    first.add("key", found[:1])
+    second.add("key", found[1:])
+    assert set(walker_jitter.JitterCache(net_path).junctions("key")) == {"W", "E"}
+    assert set(second.junctions("key")) == {"W", "E"}
+
+
 def test_a_cache_entry_without_its_walk_off_the_ground_is_measured_again(paper,
                                                                         monkeypatch) -> None:
     """Entries written before the walks' pieces off the ground were kept lack them (they kept
