@@ -144,8 +144,12 @@ class RegionFile:
     ``summary.json``); :meth:`discard` drops it if the run stops first."""
 
     def __init__(self, path: Path) -> None:
-        self.path = path
         self._file = AtomicGzip(path)
+
+    @property
+    def path(self) -> Path:
+        """Where it is put in place."""
+        return self._file.target
 
     def add(self, records: Sequence[RegionRecord]) -> None:
         self._file.write("".join(map(region_line, records)))

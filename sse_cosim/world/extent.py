@@ -179,6 +179,7 @@ def jitter_scope(scenario: Scenario, roadmap: RoadMap,
     sweeps = [roadmap.route_line(av.route_edges).buffer(av.length_m + av.width_m)
               for av in present(scenario.automated).values()]
     swept = shapely.union_all(sweeps)
-    crossings = [c.area for c in roadmap.crossings if swept.intersects(c.area)]
+    met = set(roadmap.crossings_meeting(swept))
+    crossings = [c.area for c in roadmap.crossings if c.id in met]
     reach = scenario.controller.interest_radius_m + 2.0 * scene_jitter(scenario) + SLACK_M
     return JitterScope(shapely.union_all([swept, *crossings]), reach, walked_edges)
