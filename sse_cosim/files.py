@@ -72,9 +72,12 @@ GZIP_SUFFIX = ".gz"
 """A file whose name ends so is written and read gzipped."""
 
 
-_GZIP_HEADER = b"\x1f\x8b\x08\x00" + bytes(4) + b"\x02\x03"
-"""The header of every gzip file written here: deflate, no name, time 0, level 9 (XFL 2),
-Unix (the bytes ``gzip.compress(data, 9, mtime=0)`` of Python 3.11 writes)."""
+def _gzip_header(level: int) -> bytes:
+    """The header of a gzip file written here at ``level``: deflate, no name, time 0, the
+    level's flag (XFL 2 at 9, 4 at 1, else 0) and Unix: the bytes ``gzip.compress(data, level,
+    mtime=0)`` of Python 3.11 writes."""
+    flag = {9: 2, 1: 4}.get(level, 0)
+    return b"\x1f\x8b\x08\x00" + bytes(4) + bytes([flag, 3])
 
 
 class AtomicGzip:
@@ -82,14 +85,15 @@ class AtomicGzip:
     :meth:`finish` alone, as :func:`atomic_path` does: only the compressed text is held, and
     the bytes are those of the whole text at once (deflate's output does not depend on how
     its input is cut). A run that stops before :meth:`finish` calls :meth:`discard`, which
-    removes the part written."""
+    removes the part written. ``level``: deflate's, 9 (the smallest file) unless a file
+    written while a run goes has its reason to trade size for speed."""
 
-    def __init__(self, target: str | os.PathLike[str]) -> None:
+    def __init__(self, target: str | os.PathLike[str], level: int = 9) -> None:
         self.target = Path(target)
         self._tmp = _part_beside(self.target)
         self._file = open(self._tmp, "wb")  # noqa: SIM115 -- closed by finish or discard
-        self._file.write(_GZIP_HEADER)
-        self._deflate = zlib.compressobj(9, zlib.DEFLATED, -zlib.MAX_WBITS)
+        self._file.write(_gzip_header(level))
+        self._deflate = zlib.compressobj(level, zlib.DEFLATED, -zlib.MAX_WBITS)
         self._crc = 0
         self._size = 0
 

@@ -136,15 +136,25 @@ def portable_scenario(scenario: Scenario, out_dir: Path) -> dict:
     return data
 
 
+REGIONS_LEVEL = 1
+"""deflate's level for ``regions.jsonl.gz``: the regions are most of what a long run writes
+(line 300 on the whole town: 354 kB of text a step), and deflate at level 1 packs them 17
+times as fast as at 9, for 16% more bytes (22% on S3; docs/own_network.md)."""
+
+
 class RegionFile:
     """``regions.jsonl.gz`` written step by step while the run goes (a
     :class:`~sse_cosim.reporting.recorder.RegionSink`): one :func:`region_line` per record,
-    gzipped as it comes (:class:`~sse_cosim.files.AtomicGzip`: the same bytes as the whole
-    file at once), in place once :meth:`finish` is called (by :func:`write_run`, before
-    ``summary.json``); :meth:`discard` drops it if the run stops first."""
+    gzipped as it comes (:class:`~sse_cosim.files.AtomicGzip` at :data:`REGIONS_LEVEL`: the
+    same bytes as the whole file at once), in place once :meth:`finish` is called (by
+    :func:`write_run`, before ``summary.json``); :meth:`discard` drops it if the run stops
+    first. A polygon written at the step before, the same to the bit (its WKB), is written
+    as the text it had (a group of the unobserved area at rest is the same region step after
+    step): the file's bytes do not change, only the work of writing them."""
 
     def __init__(self, path: Path) -> None:
-        self._file = AtomicGzip(path)
+        self._file = AtomicGzip(path, REGIONS_LEVEL)
+        self._texts: dict[bytes, str] = {}  # the latest step's polygons' text, by their WKB
 
     @property
     def path(self) -> Path:
@@ -152,7 +162,17 @@ class RegionFile:
         return self._file.target
 
     def add(self, records: Sequence[RegionRecord]) -> None:
-        self._file.write("".join(map(region_line, records)))
+        before, self._texts = self._texts, {}
+        lines = []
+        for record in records:
+            parts = polygon_parts(record.region)
+            texts = []
+            for key, polygon in zip(shapely.to_wkb(parts), parts, strict=True):
+                text = self._texts.get(key) or before.get(key) or polygon_text(polygon)
+                self._texts[key] = text
+                texts.append(text)
+            lines.append(region_line(record, texts))
+        self._file.write("".join(lines))
 
     def finish(self) -> None:
         self._file.finish()
@@ -161,12 +181,20 @@ class RegionFile:
         self._file.discard()
 
 
-def region_line(record: RegionRecord) -> str:
+def region_line(record: RegionRecord, texts: Sequence[str] | None = None) -> str:
     """One line of ``regions.jsonl.gz``: ``{"t", "vehicle", "kind", "track", "polygons"}``
-    (compact JSON: the regions are most of the file)."""
-    line = {"t": record.time, "vehicle": record.vehicle, "kind": record.kind,
-            "track": record.track, "polygons": region_polygons(record.region)}
-    return json.dumps(line, separators=(",", ":")) + "\n"
+    (compact JSON: the regions are most of the file). ``texts``: its polygons'
+    :func:`polygon_text`, if known."""
+    if texts is None:
+        texts = [polygon_text(polygon) for polygon in polygon_parts(record.region)]
+    head = json.dumps({"t": record.time, "vehicle": record.vehicle, "kind": record.kind,
+                       "track": record.track}, separators=(",", ":"))
+    return f'{head[:-1]},"polygons":[{",".join(texts)}]}}\n'
+
+
+def polygon_text(polygon: shapely.Polygon) -> str:
+    """One polygon of a ``polygons`` field as compact JSON (:func:`region_polygons`)."""
+    return json.dumps(_rings(polygon), separators=(",", ":"))
 
 
 def region_polygons(region: shapely.Geometry) -> list[list[list[list[float]]]]:
@@ -176,14 +204,16 @@ def region_polygons(region: shapely.Geometry) -> list[list[list[list[float]]]]:
     Multi-part geometries and collections are flattened; their lines and points are left out
     (they hold no area, and a region is where a pedestrian may be).
     """
-    return [
-        [_ring(polygon.exterior), *(_ring(hole) for hole in polygon.interiors)]
-        for polygon in polygon_parts(region)
-    ]
+    return [_rings(polygon) for polygon in polygon_parts(region)]
 
 
-def _ring(ring: shapely.LinearRing) -> list[list[float]]:
-    return np.round(shapely.get_coordinates(ring), DECIMALS).tolist()
+def _rings(polygon: shapely.Polygon) -> list[list[list[float]]]:
+    """``polygon``'s rings (exterior first, then holes), each a list of [x, y] rounded to
+    ``DECIMALS``."""
+    rings = [polygon.exterior, *polygon.interiors]
+    coordinates = np.round(shapely.get_coordinates(rings), DECIMALS).tolist()  # (n, 2)
+    ends = np.cumsum(shapely.get_num_coordinates(rings)).tolist()
+    return [coordinates[start:end] for start, end in zip([0, *ends[:-1]], ends, strict=True)]
 
 
 def _write_trace(path: Path, trace: pd.DataFrame) -> None:

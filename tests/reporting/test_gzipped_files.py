@@ -54,6 +54,17 @@ def test_a_gz_file_written_in_pieces_is_the_file_written_whole(tmp_path: Path):
     assert list((tmp_path / "dropped").iterdir()) == []
 
 
+@pytest.mark.parametrize("level", [1, 6])
+def test_a_gz_file_at_another_level_is_gzip_s_own_at_that_level(tmp_path: Path, level: int):
+    """A file written faster (a run's regions, at level 1) has gzip's own bytes at its level,
+    header flag included."""
+    text = "".join(f'{{"t":{k / 10},"polygons":[[[{k},0],[1,{k}]]]}}\n' for k in range(3000))
+    written = AtomicGzip(tmp_path / "r.jsonl.gz", level)
+    for start in range(0, len(text), 777):
+        written.write(text[start:start + 777])
+    assert written.finish().read_bytes() == gzip.compress(text.encode(), level, mtime=0)
+
+
 def test_a_plan_reads_back_and_an_older_plain_one_is_refused_in_one_line(tmp_path: Path):
     write_json_atomic(tmp_path / "new" / SAFETY_PLAN, {"runs": [1, 2]})
     assert read_plan(tmp_path / "new" / SAFETY_PLAN, "sse-cosim safety") == {"runs": [1, 2]}

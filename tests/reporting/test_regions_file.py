@@ -15,7 +15,15 @@ import pandas as pd
 import pytest
 import shapely
 
-from sse_cosim.reporting.outputs import REGIONS, TRACE, TRUTH, region_polygons
+from sse_cosim.reporting.outputs import (
+    REGIONS,
+    TRACE,
+    TRUTH,
+    RegionFile,
+    region_line,
+    region_polygons,
+)
+from sse_cosim.reporting.recorder import RegionRecord
 from sse_cosim.runner.run import run_scenario_file
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
@@ -76,6 +84,28 @@ def test_coordinates_are_rounded_to_a_micrometre():
     assert ring[0] == [0.123457, 0.0]
     assert ring[2] == [1.0, 2.0]
     assert ring[0] == ring[-1]  # closed
+
+
+def test_a_polygon_written_at_the_step_before_is_written_as_it_was(tmp_path: Path):
+    """The file writes a polygon it wrote at the step before from that step's text: the lines
+    are each record's own, whatever repeats, comes back later, or moves by a rounding."""
+    a, b = shapely.box(0, 0, 1, 1), shapely.box(5, 0, 6.25, 2)
+    moved = shapely.box(5, 0, 6.25 + 1e-9, 2)  # the same once written to 1e-6 m
+    steps = [[("unobserved", None, shapely.MultiPolygon([a, b]))],
+             [("unobserved", None, shapely.MultiPolygon([a, moved])), ("refined", "p1", b)],
+             [("unobserved", None, shapely.MultiPolygon([b, a])), ("refined", "p1", a)],
+             [("unobserved", None, shapely.Polygon())]]
+    records = [[RegionRecord(k / 10, kind, track, region, "bus") for kind, track, region in step]
+               for k, step in enumerate(steps)]
+    written = RegionFile(tmp_path / REGIONS)
+    for step in records:
+        written.add(step)
+    written.finish()
+    text = gzip.decompress((tmp_path / REGIONS).read_bytes()).decode()
+    assert text == "".join(region_line(r) for step in records for r in step)
+    lines = [json.loads(line) for line in text.splitlines()]
+    assert [len(line["polygons"]) for line in lines] == [2, 2, 1, 2, 1, 0]
+    assert lines[1]["polygons"][1] == lines[0]["polygons"][1]
 
 
 @pytest.mark.sumo
