@@ -244,8 +244,14 @@ class UnobservedArea:
     no hand-over reaches is moved by the same computation on its path region alone, so its
     steps at rest are looked up once they come back to a region they started from
     (:class:`_Rest`; :meth:`~sse_cosim.regions.Region.same`: the same representation, so the
-    same result again). With one group (the paper's road, the junction, the town's street)
-    every step is computed as for the whole window at once."""
+    same result again). A group whose path region is still its whole ground (its part of B
+    within the jitter of walkable ground, where it starts: every path a pedestrian there may
+    have) keeps it while at rest, as it is: a step at rest from the whole ground gives the
+    whole ground again (nothing is seen there), and it holds every path the group can. Such a
+    group, one far ahead of the bus, costs nothing until a view comes near; GEOS's overlays
+    of a large one need not settle into a cycle (line 300's town centre did not in 80 steps).
+    With one group (the paper's road, the junction, the town's street) every step is computed
+    as for the whole window at once."""
 
     def __init__(self, walkable: Region, model: MotionModel, latency_steps: int,
                  kind: RegionKind, window: Region | None = None) -> None:
@@ -259,6 +265,7 @@ class UnobservedArea:
         self._groups = self._grouped()
         # path regions at self._base_step, one per group
         self._base = tuple(g.clip(g.walkable.dilate(model.jitter)) for g in self._groups)
+        self._whole = self._base  # each group's whole ground (class docstring)
         self._base_step: int | None = None
         self._own: dict[int, Region] = {}  # the bus's views not yet in the base
         self._ended: dict[int, list[Region]] = {}  # step -> path sets handed over
@@ -358,6 +365,8 @@ class UnobservedArea:
         step, then keep what is near unseen walkable ground; a group at rest stays as it is
         (class docstring)."""
         at_rest = not seen and not ended and len(self._groups) > 1
+        if at_rest and path is self._whole[k]:
+            return path
         if at_rest and (known := group.rest.get(path)) is not None:
             return known
         unseen = group.walkable.difference(self.kind.union_all(seen)) if seen \

@@ -219,7 +219,8 @@ def test_a_window_in_pieces_far_apart_is_tracked_in_groups_as_it_is_whole(monkey
     groups, with steps at rest looked up, the unobserved area and its path region are, at
     every step, the sets tracked for the whole window at once, under random
     views near one crossing or another, shared views with latency and a track handed over;
-    and the crossings out of view are looked up, not computed. (Without coarsening: a region
+    and the crossing no view comes near keeps its whole ground as it is, not computed.
+    (Without coarsening: a region
     of more vertices, as the whole window's is, is coarsened where a group's alone is not, and
     each grows from there.)"""
     model = motion_model(Estimator(position_jitter_m=0.3), DT)
@@ -245,8 +246,28 @@ def test_a_window_in_pieces_far_apart_is_tracked_in_groups_as_it_is_whole(monkey
             assert got.symmetric_difference(expected).area < 1e-7, (latency, step)
             assert grouped.path.shape.symmetric_difference(whole.path.shape).area < 1e-7
         far = next(k for k, g in enumerate(grouped._groups) if g.tracked.bounds[0] > 300.0)
-        # the crossing nobody looks at rests: its next step is looked up
-        assert grouped._groups[far].rest.get(grouped._paths[far]) is not None
+        assert grouped._paths[far] is grouped._whole[far]  # whole, as it was made
+
+
+def test_a_crossing_seen_and_left_alone_fills_again_and_its_steps_at_rest_are_looked_up():
+    """A group cleared by a view and then left alone (no view, no hand-over) grows back over
+    its ground, step by step, and once GEOS's overlays repeat a region its steps are looked
+    up (the group's rest), the region staying the ground it grew back to."""
+    model = motion_model(Estimator(position_jitter_m=0.3), DT)
+    crossings = [shapely.box(x - 2, -8, x + 2, 10) for x in (50.0, 200.0, 350.0)]
+    walkable = shapely.union_all([shapely.box(0, 0, 400, 2), *crossings])
+    window = shapely.union_all([c.buffer(6.0) for c in crossings])
+    area = UnobservedArea(R(walkable), model, 1, K, window=R(window))
+    view = R(shapely.box(190, -10, 210, 12))
+    middle = next(k for k, g in enumerate(area._groups) if 150.0 < g.tracked.bounds[0] < 250.0)
+    areas = [area.update(step, view, []).area for step in range(2)]
+    step = 2
+    while area._groups[middle].rest.get(area._paths[middle]) is None:
+        areas.append(area.update(step, K.empty(), []).area)
+        step += 1
+        assert step < 200
+    assert np.all(np.diff(areas[1:]) > -1e-9) and areas[-1] > areas[1] + 50.0
+    assert area._paths[middle].area == pytest.approx(area._whole[middle].area, rel=1e-6)
 
 
 def test_a_known_region_kept_in_the_window_holds_the_pedestrian_who_leaves_and_comes_back():
