@@ -77,7 +77,7 @@ from sse_cosim.control.swept import (
     ahead_cover,
     body_sweep,
     swept_region,
-    touch_extent,
+    touch_intervals,
 )
 from sse_cosim.estimation.motion import MotionModel, Separation, unit_fan
 from sse_cosim.regions import Region, RegionKind
@@ -209,20 +209,21 @@ class SceneContext:
         corridor = _with_sweep(corridor, _from_start(planned, route_line), walkable)
         crossings = _route_crossings(route_line, corridor, [c.area for c in roadmap.crossings],
                                      kind)
-        swept = [(piece, kind.outer(piece), *_touched(sweep, piece, start, end, bus.length_m))
-                 for piece, start, end in _swept_walkable(route_line, corridor, walkable)]
+        swept = [(piece, region, *touched)
+                 for piece, start, end in _swept_walkable(route_line, corridor, walkable)
+                 for region in [kind.outer(piece)]
+                 for touched in _touched(sweep, piece, start, end, bus.length_m)]
         swept.sort(key=lambda piece: piece[2])
         ground = kind.outer(walkable)
-        window = _window(crossings, [(region, start, end) for _, region, start, end in swept],
+        window = _window(crossings, [(region, start, end) for _, region, start, end, _ in swept],
                          config.interest_radius_m, kind)
         beyond = Source(ground.difference(window))
         lit = _lit_crossings(roadmap, [piece for piece, *_ in swept], beyond.region,
                              pedestrian_radius, kind)
         zones = tuple(
             ConflictZone(region, start, end, _arrival(beyond, region, pedestrians, kind), piece,
-                         _meeting(sweep, piece),
-                         tuple(k for k, c in enumerate(lit) if _meets(piece, c.own)))
-            for piece, region, start, end in swept)
+                         meeting, tuple(k for k, c in enumerate(lit) if _meets(piece, c.own)))
+            for piece, region, start, end, meeting in swept)
         return cls(route_line, ground, crossings, bus, config, pedestrians,
                    BusDynamics.of(bus, config, step_length), window, zones, kind,
                    bus.width_m + 2.0 * pedestrian_radius,
@@ -807,11 +808,15 @@ def _cut_along(part: shapely.Geometry, route_line: shapely.LineString,
     each with its extent (:func:`_extent`): ``part`` ∩ the route's stretch [a - d, b + d]
     widened by ``reach`` (farther than any point of the corridor; flat ends), for consecutive
     [a, b] of that length (d = :data:`_CUT_OVERLAP_M`: overlapping stretches leave no gap at a
-    bend). The pieces must cover ``part`` (checked: else ``part`` stays whole), so every place
+    gentle bend). Outside a sharper bend near a stretch's end, the flat ends of consecutive
+    stretches leave a wedge of ``part`` that neither holds: each such wedge is a piece of its
+    own. The pieces must cover ``part`` (checked: else ``part`` stays whole), so every place
     of it is in a zone; they may overlap, which only repeats a place.
 
     Why: a long strip of kerb inside the corridor (sidewalk slivers joined at a walking area)
-    would be one zone the bus has to clear whole before anyone could reach any of it."""
+    would be one zone the bus has to clear whole before anyone could reach any of it (line 300
+    of Bad Hersfeld stood for good before 256 m of sidewalk along a bending street, kept whole
+    for three wedges of 0.1 m² together)."""
     first, last = _extent(part, route_line)
     if last - first <= ZONE_PIECE_M + _PIECE_TOL_M:
         return [(part, first, last)]
@@ -824,8 +829,11 @@ def _cut_along(part: shapely.Geometry, route_line: shapely.LineString,
         cuts.extend(shapely.get_parts(shapely.intersection(
             part, stretch.buffer(reach, cap_style="flat"))))
     cuts = [c for c in cuts if c.area > 0.0]
-    if shapely.difference(part, shapely.union_all(cuts)).area > _CUT_COVER_M2:
-        return [(part, first, last)]
+    wedges = shapely.difference(part, shapely.union_all(cuts))
+    if wedges.area > _CUT_COVER_M2:
+        cuts.extend(w for w in shapely.get_parts(wedges) if w.area > 0.0)
+        if shapely.difference(part, shapely.union_all(cuts)).area > _CUT_COVER_M2:
+            return [(part, first, last)]
     return [(cut, *_extent(cut, route_line)) for cut in cuts]
 
 
@@ -890,16 +898,24 @@ def _from_start(region: shapely.Geometry, route_line: shapely.LineString) -> sha
 
 
 def _touched(sweep: Sequence[SweepPiece], piece: shapely.Geometry, start: float, end: float,
-             length: float) -> tuple[float, float]:
-    """``piece``'s extent along the route: from the projections of its vertices (``start``,
-    ``end``), widened to every front station at which the sweep touches it (a corner's body
-    reaches ground that does not project where the front is). Within 1e-9 m the projections
-    stand, so a straight route keeps the same numbers."""
-    touched = touch_extent(sweep, piece, length)
-    if touched is None:
-        return start, end
-    first, last = touched
-    return (start if first >= start - 1e-9 else first), (end if last <= end + 1e-9 else last)
+             length: float) -> list[tuple[float, float, tuple[SweepPiece, ...]]]:
+    """``piece``'s extents along the route, each with the pieces of the sweep that meet it
+    there: one per stretch along which the body touches it (a route that passes the same
+    ground twice gives two zones of that ground, each to clear on its own pass, and not one
+    to clear over the whole way between; :func:`~sse_cosim.control.swept.touch_intervals`).
+    With one stretch, the projections of its vertices (``start``, ``end``) widened to every
+    front station at which the sweep touches it (a corner's body reaches ground that does not
+    project where the front is); within 1e-9 m the projections stand, so a straight route
+    keeps the same numbers."""
+    meeting = _meeting(sweep, piece)
+    intervals = touch_intervals(meeting, piece, length)
+    if len(intervals) > 1:
+        return [(first, last, tuple(p for p in meeting
+                                    if p.end_m >= first and p.start_m <= last + length))
+                for first, last in intervals]
+    first, last = intervals[0] if intervals else (start, end)
+    return [((start if first >= start - 1e-9 else first), (end if last <= end + 1e-9 else last),
+             meeting)]
 
 
 def _widened(line: shapely.LineString, half_width: float) -> shapely.Geometry:

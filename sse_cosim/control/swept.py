@@ -30,7 +30,7 @@ whose ends do not meet, the hull of the footprints before and after the jump cov
 
 The union of the covers is therefore a sound over-approximation of every footprint the vehicle
 takes along the route (:func:`body_sweep`), and a piece of ground is touched only while the
-front is within the pieces whose cover meets it (:func:`touch_extent`).
+front is within the pieces whose cover meets it (:func:`touch_intervals`).
 
 Shapes: points are (2,) arrays, polygons shapely geometries; no SUMO here.
 """
@@ -238,26 +238,38 @@ def ahead_cover(pieces: Sequence[SweepPiece], front_m: float, length: float,
     return shapely.union_all(covers)
 
 
-def touch_extent(pieces: Sequence[SweepPiece], area: shapely.Geometry,
-                 length: float) -> tuple[float, float] | None:
-    """``(start, end)`` (m): the body touches ``area`` only while its front is between
-    stations ``start`` and ``end + length`` (None if it never does). A straight piece gives
-    the exact first and last station (the area's extent along the body's axis), a turning
-    one its own ends."""
-    start, end = math.inf, -math.inf
+def touch_intervals(pieces: Sequence[SweepPiece], area: shapely.Geometry,
+                    length: float) -> list[tuple[float, float]]:
+    """Each stretch of the route along which the body touches ``area``, in route order:
+    ``(start, end)`` (m), the body touching it while its front is between stations ``start``
+    and ``end + length``, and not between two stretches (a route that passes the same ground
+    twice, out along a street and back along its other side, touches it twice). A straight
+    piece gives the exact first and last station (the area's extent along the body's axis), a
+    turning one its own ends; stretches that meet or overlap are one."""
     touching = shapely.intersects(np.array([p.cover for p in pieces], dtype=object), area)
+    spans: list[tuple[float, float]] = []
     for piece in (p for p, touches in zip(pieces, touching, strict=True) if touches):
         if piece.straight:
             inside = shapely.intersection(piece.cover, area)
             if inside.is_empty:
                 continue
             along = _along(shapely.get_coordinates(inside), piece.front, piece.axis)
-            first = piece.start_m + max(0.0, float(along.min()))
-            last = min(piece.end_m, piece.start_m + float(along.max()) + length)
+            spans.append((piece.start_m + max(0.0, float(along.min())),
+                          min(piece.end_m, piece.start_m + float(along.max()) + length)))
         else:
-            first, last = piece.start_m, piece.end_m
-        start, end = min(start, first), max(end, last)
-    return None if start > end else (start, end - length)
+            spans.append((piece.start_m, piece.end_m))
+    merged: list[list[float]] = []
+    for first, last in sorted(spans):
+        if merged and first <= merged[-1][1] + TOUCH_GAP_M:
+            merged[-1][1] = max(merged[-1][1], last)
+        else:
+            merged.append([first, last])
+    return [(first, last - length) for first, last in merged]
+
+
+TOUCH_GAP_M = 1e-6
+"""Two stretches along which the body touches an area are one unless this far apart (m): the
+ends of consecutive pieces of the sweep, worked out on each, differ by a rounding."""
 
 
 def _along(points: np.ndarray, origin: np.ndarray, axis: np.ndarray) -> np.ndarray:

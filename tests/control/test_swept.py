@@ -24,7 +24,7 @@ from sse_cosim.control.swept import (
     chord_footprint,
     footprint,
     swept_region,
-    touch_extent,
+    touch_intervals,
 )
 from sse_cosim.estimation.motion import motion_model
 from sse_cosim.regions import kind
@@ -69,7 +69,8 @@ def test_a_straight_route_sweeps_the_centre_line_widened_by_half_the_width() -> 
     assert shapely.symmetric_difference(region, shapely.union(corridor, behind)).area < 1e-9
     assert all(p.straight for p in pieces)
     zebra = shapely.box(198.0, -6.0, 202.0, 6.0)
-    assert touch_extent(pieces, zebra, LENGTH) == pytest.approx((198.0, 202.0), abs=1e-12)
+    [touched] = touch_intervals(pieces, zebra, LENGTH)
+    assert touched == pytest.approx((198.0, 202.0), abs=1e-12)
     assert chord_footprint(path, 150.0, LENGTH, WIDTH) == pytest.approx(
         footprint(np.array([150.0, -1.75]), np.array([1.0, 0.0]), LENGTH, WIDTH))
     # from a front at 150 m on, the body covers the band from its rear (138 m) to the end
@@ -105,7 +106,8 @@ def test_a_straight_route_anywhere_at_any_heading_keeps_its_exact_zone(
     assert all(p.straight or p.end_m - p.start_m <= MAX_PIECE_M + 1e-9 for p in pieces)
     assert sum(p.end_m - p.start_m for p in pieces if p.straight) > 280.0  # all but joints
     zebra = placed(shapely.box(198.0, -6.0, 202.0, 6.0))
-    assert touch_extent(pieces, zebra, LENGTH) == pytest.approx((198.0, 202.0), abs=1e-6)
+    [touched] = touch_intervals(pieces, zebra, LENGTH)
+    assert touched == pytest.approx((198.0, 202.0), abs=1e-6)
     ahead = ahead_cover(pieces, 150.0, LENGTH, WIDTH)
     band = placed(shapely.box(150.0 - LENGTH, -1.75 - 0.5 * WIDTH, 300.0,
                               -1.75 + 0.5 * WIDTH))
@@ -185,3 +187,18 @@ def test_on_the_right_turn_the_side_cutting_in_reaches_the_corner(roadmap: RoadM
     assert any(z.polygon.shape.intersects(corner)
                and not z.polygon.shape.within(roadmap.crossing_area)
                for z in context.zones)
+
+
+def test_ground_the_route_passes_twice_is_touched_along_two_stretches():
+    """Out along a street and back along its other side, around a block: a median between both
+    directions is touched on the way out and on the way back, and not in between (the body is
+    around the block); each stretch is exact on the straight pieces."""
+    out = np.array([[0.0, -1.75], [100.0, -1.75]])
+    around = np.array([[100.0, -1.75], [100.0, -40.0], [140.0, -40.0], [140.0, 1.75]])
+    back = np.array([[140.0, 1.75], [0.0, 1.75]])
+    path = RoutePath.of_lanes([(out, 100.0), (around, 120.0), (back, 140.0)])
+    pieces = body_sweep(path, LENGTH, WIDTH)
+    median = shapely.box(40.0, -0.6, 44.0, 0.6)  # within half the width of both passes
+    first, second = touch_intervals(pieces, median, LENGTH)
+    assert first == pytest.approx((40.0, 44.0), abs=1e-9)
+    assert second == pytest.approx((220.0 + 96.0, 220.0 + 100.0), abs=1e-9)
