@@ -197,3 +197,26 @@ def test_the_jitter_is_measured_near_the_route_and_where_walkers_walk(town: Path
     ends = {far.getFromNode().getID(), far.getToNode().getID()}
     assert with_far.junctions(net, areas) == held | ends
     assert jitter_scope(sc, roadmap, None) is None  # a walk SUMO routes: the whole extent
+
+
+@pytest.mark.sumo
+def test_a_bus_along_a_bending_street_it_passes_twice_drives_on(town: Path,
+                                                                 tmp_path: Path) -> None:
+    """Issue "live on real streets": on bus line 300 the bus stood for good 81 m before a
+    crossing with nobody in the scene. The sidewalk along the bending street before it was one
+    256 m zone (the cuts along the route left three wedges outside its bends, 0.1 m² in all,
+    and a strip not covered by its cuts stayed whole); cut, its pieces near the junction were
+    still zones of 200 m, for the line comes back along the street's other side and passes
+    them again. It drives on now, waiting only at its red light."""
+    from sse_cosim.runner.run import run_scenario_file
+
+    overrides = {"network.net_file": str(town), "parked.truck.present": False,
+                 "automated.bus.route_edges": ["23979550", "240561445", "887793169",
+                                               "23979552#0", "240561427#1"],
+                 "automated.bus.depart_pos_m": 150.0, "automated.bus.nominal_speed_mps": 13.89,
+                 "simulation.duration_s": 150.0}
+    summary = run_scenario_file(REPO / "scenarios" / "s1_no_pedestrian.toml", tmp_path,
+                                overrides, plots=False)
+    bus = summary["vehicles"]["bus"]
+    assert bus["route_completed"]
+    assert bus["longest_needless_hold_s"] <= 3.0
