@@ -56,6 +56,13 @@ MAX_PIECE_M = 0.5
 """Longest turning piece of the sweep along the route (m): how finely the front stations at
 which a piece of ground is touched are known on a corner (a straight piece knows them exactly,
 whatever its length)."""
+POSITION_EPS_M = 0.1
+"""SUMO's ``POSITION_EPS``: a lane's shape counts as at least this long when SUMO maps lane
+positions onto it (``MSLane``'s length-geometry factor, max(POSITION_EPS, shape length) /
+length); along a shorter shape the front reaches the shape's end before the lane's end and
+stands there (``PositionVector::positionAtOffset`` stops at its last point). Line 300 of Bad
+Hersfeld crosses a junction lane of 0.10 m drawn 0.089 m long: the front stood 6 mm from a
+plain stretch's point, and the world's odometer check stopped the run."""
 STRAIGHT_RAD = 1e-12
 """A piece whose body turns by no more is straight (its footprints stray at most 1e-11 m from
 the rectangles of a body that does not turn)."""
@@ -84,7 +91,8 @@ class RoutePath:
         a point that repeats the previous one at the same lane position is dropped (a lane's
         start at the previous lane's end), one that SUMO reaches further on is kept (after a
         lane drawn without length, such as a junction passage of a point: SUMO's front stands
-        there while its lane position runs over the passage's ``length``)."""
+        there while its lane position runs over the passage's ``length``; along a lane drawn
+        shorter than :data:`POSITION_EPS_M`, it reaches the shape's end early and stands)."""
         points: list[np.ndarray] = []
         sigma: list[float] = []
         offset = 0.0
@@ -93,7 +101,7 @@ class RoutePath:
             steps = np.sqrt(((shape[1:] - shape[:-1]) ** 2).sum(axis=1))  # (k - 1,)
             along = np.concatenate([[0.0], np.cumsum(steps)])  # (k,)
             geometric = float(along[-1])
-            scale = length / geometric if geometric > 0.0 else 0.0
+            scale = length / max(geometric, POSITION_EPS_M) if geometric > 0.0 else 0.0
             for point, at in zip(shape, along, strict=True):
                 lane_position = offset + float(at) * scale
                 if points and float(np.max(np.abs(point - points[-1]))) <= 1e-9 \
@@ -101,6 +109,9 @@ class RoutePath:
                     continue
                 points.append(point)
                 sigma.append(lane_position)
+            if 0.0 < geometric < POSITION_EPS_M:  # the front stands at its end (POSITION_EPS_M)
+                points.append(shape[-1])
+                sigma.append(offset + length)
             offset += length
         pts = np.array(points)  # (n, 2)
         station = [0.0]

@@ -202,3 +202,21 @@ def test_ground_the_route_passes_twice_is_touched_along_two_stretches():
     first, second = touch_intervals(pieces, median, LENGTH)
     assert first == pytest.approx((40.0, 44.0), abs=1e-9)
     assert second == pytest.approx((220.0 + 96.0, 220.0 + 100.0), abs=1e-9)
+
+
+def test_a_lane_drawn_shorter_than_sumos_position_eps_is_walked_as_sumo_does():
+    """SUMO maps lane positions onto a lane's shape with the factor max(0.1 m, shape length) /
+    length (``MSLane``), stopping at the shape's end: on line 300's junction lane of 0.10 m
+    drawn 0.089 m long, the front at 0.055 m into it is 0.055 m along the shape (not 0.049 m,
+    as a plain stretch has it: 6 mm off, which stopped the run), and from 0.089 m on it stands
+    at the shape's end until the next lane."""
+    before = np.array([[7067.15, 7899.82], [7067.33, 7899.92]])
+    short = np.array([[7067.33, 7899.92], [7067.41, 7899.96]])
+    after = np.array([[7067.41, 7899.96], [7088.19, 7909.77]])
+    path = RoutePath.of_lanes([(before, 0.21), (short, 0.10), (after, 22.98)])
+    heading = (short[1] - short[0]) / np.hypot(*(short[1] - short[0]))
+    assert path.point_at(0.21 + 0.055)[0] == pytest.approx(short[0] + 0.055 * heading, abs=1e-12)
+    for into in (0.0895, 0.095, 0.0999):
+        assert path.point_at(0.21 + into)[0] == pytest.approx(short[1], abs=1e-12)
+    stretch = (after[1] - after[0]) / 22.98  # a lane drawn longer: a plain stretch
+    assert path.point_at(0.31 + 1.0)[0] == pytest.approx(after[0] + stretch, abs=1e-9)
