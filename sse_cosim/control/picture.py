@@ -209,10 +209,11 @@ class SceneContext:
         corridor = _with_sweep(corridor, _from_start(planned, route_line), walkable)
         crossings = _route_crossings(route_line, corridor, [c.area for c in roadmap.crossings],
                                      kind)
-        swept = [(piece, region, *touched)
-                 for piece, start, end in _swept_walkable(route_line, corridor, walkable)
-                 for region in [kind.outer(piece)]
-                 for touched in _touched(sweep, piece, start, end, bus.length_m)]
+        swept = []
+        for piece, start, end in _swept_walkable(route_line, corridor, walkable):
+            region = kind.outer(piece)  # one region for each pass over the piece
+            swept.extend((piece, region, *touched)
+                         for touched in _touched(sweep, piece, start, end, bus.length_m))
         swept.sort(key=lambda piece: piece[2])
         ground = kind.outer(walkable)
         window = _window(crossings, [(region, start, end) for _, region, start, end, _ in swept],

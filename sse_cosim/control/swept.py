@@ -63,6 +63,9 @@ length); along a shorter shape the front reaches the shape's end before the lane
 stands there (``PositionVector::positionAtOffset`` stops at its last point). Line 300 of Bad
 Hersfeld crosses a junction lane of 0.10 m drawn 0.089 m long: the front stood 6 mm from a
 plain stretch's point, and the world's odometer check stopped the run."""
+TOUCH_GAP_M = 1e-6
+"""Two stretches along which the body touches an area are one unless this far apart (m): the
+ends of consecutive pieces of the sweep, worked out on each, differ by a rounding."""
 STRAIGHT_RAD = 1e-12
 """A piece whose body turns by no more is straight (its footprints stray at most 1e-11 m from
 the rectangles of a body that does not turn)."""
@@ -276,11 +279,6 @@ def touch_intervals(pieces: Sequence[SweepPiece], area: shapely.Geometry,
         else:
             merged.append([first, last])
     return [(first, last - length) for first, last in merged]
-
-
-TOUCH_GAP_M = 1e-6
-"""Two stretches along which the body touches an area are one unless this far apart (m): the
-ends of consecutive pieces of the sweep, worked out on each, differ by a rounding."""
 
 
 def _along(points: np.ndarray, origin: np.ndarray, axis: np.ndarray) -> np.ndarray:

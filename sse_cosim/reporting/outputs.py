@@ -193,18 +193,12 @@ def region_line(record: RegionRecord, texts: Sequence[str] | None = None) -> str
 
 
 def polygon_text(polygon: shapely.Polygon) -> str:
-    """One polygon of a ``polygons`` field as compact JSON (:func:`region_polygons`)."""
+    """One polygon of a ``polygons`` field as compact JSON: its rings (exterior first, then
+    holes), each a list of [x, y] rounded to ``DECIMALS``. A region's polygons are its
+    non-empty polygons at any depth of nesting (:func:`~sse_cosim.reporting.shapes.polygon_parts`:
+    lines and points hold no area, and a region is where a pedestrian may be); ``[]`` if it
+    has none."""
     return json.dumps(_rings(polygon), separators=(",", ":"))
-
-
-def region_polygons(region: shapely.Geometry) -> list[list[list[list[float]]]]:
-    """``region``'s polygons, each a list of rings (exterior first, then holes), each ring a
-    list of [x, y] rounded to ``DECIMALS``; ``[]`` if it is empty.
-
-    Multi-part geometries and collections are flattened; their lines and points are left out
-    (they hold no area, and a region is where a pedestrian may be).
-    """
-    return [_rings(polygon) for polygon in polygon_parts(region)]
 
 
 def _rings(polygon: shapely.Polygon) -> list[list[list[float]]]:

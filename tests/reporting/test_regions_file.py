@@ -21,7 +21,6 @@ from sse_cosim.reporting.outputs import (
     TRUTH,
     RegionFile,
     region_line,
-    region_polygons,
 )
 from sse_cosim.reporting.recorder import RegionRecord
 from sse_cosim.runner.run import run_scenario_file
@@ -40,8 +39,14 @@ def distance(polygons: list[shapely.Polygon], point: shapely.Point) -> float:
     return float(np.min(shapely.distance(polygons, point))) if polygons else np.inf
 
 
+def region_polygons(geometry: shapely.Geometry) -> list:
+    """The ``polygons`` field of the line written for ``geometry``, read back."""
+    return json.loads(region_line(RegionRecord(0.0, "unobserved", None, geometry, "bus")))[
+        "polygons"]
+
+
 def round_trip(geometry: shapely.Geometry) -> shapely.Geometry:
-    polygons = json.loads(json.dumps(region_polygons(geometry)))
+    polygons = region_polygons(geometry)
     return shapely.union_all(polygons_of(polygons))
 
 
