@@ -11,12 +11,13 @@ the vehicle at its speed (:meth:`sse_cosim.control.swept.RoutePath.drive`).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from sse_cosim.world.roadmap import LaneGeometry
+from sse_cosim.world.roadmap import LaneChange, LaneGeometry
 
 
 @dataclass(frozen=True)
@@ -30,10 +31,19 @@ class RouteLimits:
     speeds_mps: np.ndarray
 
     @classmethod
-    def of_lanes(cls, lanes: Sequence[LaneGeometry]) -> RouteLimits:
-        """The limits of ``lanes``, the route's lanes in order (``RoadMap.route_lanes``)."""
+    def of_lanes(cls, lanes: Sequence[LaneGeometry],
+                 changes: Sequence[LaneChange] = ()) -> RouteLimits:
+        """The limits of ``lanes``, the route's lanes in order, with its lane changes
+        (``RoadMap.route_plan``): on the edge of a change, the least limit of the lanes the
+        vehicle may be on there."""
+        least = {}
+        for change in changes:
+            for route in change.detours:
+                least[change.edge_id] = min(least.get(change.edge_id, math.inf),
+                                            route[-1].speed_mps)
         return cls(np.cumsum([lane.length for lane in lanes]),
-                   np.array([lane.speed_mps for lane in lanes]))
+                   np.array([min(lane.speed_mps, least.get(lane.edge_id, math.inf))
+                             for lane in lanes]))
 
     def at(self, s: float) -> float:
         """The limit (m/s) at ``s`` m along the route."""

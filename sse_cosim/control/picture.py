@@ -200,10 +200,10 @@ class SceneContext:
         """Prepare the static geometry for a bus driving ``route_edges`` (regions of
         ``kind``)."""
         route_line = roadmap.route_line(route_edges)
-        lanes = roadmap.route_lanes(route_edges)
+        lanes, changes = roadmap.route_plan(route_edges)
         walkable = roadmap.walkable
         corridor = _widened(route_line, 0.5 * bus.width_m + pedestrian_radius)
-        path = RoutePath.of_route(lanes)
+        path = RoutePath.of_route(lanes, changes)
         sweep = body_sweep(path, bus.length_m, bus.width_m + 2.0 * pedestrian_radius)
         planned = swept_region(sweep)
         corridor = _with_sweep(corridor, _from_start(planned, route_line), walkable)
@@ -228,7 +228,7 @@ class SceneContext:
         return cls(route_line, ground, crossings, bus, config, pedestrians,
                    BusDynamics.of(bus, config, step_length), window, zones, kind,
                    bus.width_m + 2.0 * pedestrian_radius,
-                   RouteLimits.of_lanes(lanes), path,
+                   RouteLimits.of_lanes(lanes, changes), path,
                    _stop_lines(roadmap, route_edges, route_line), lit)
 
     def releases(self, signals: Mapping[str, SignalState]) -> list[float]:

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import pairwise
 from typing import TYPE_CHECKING
 
@@ -47,7 +47,7 @@ import numpy as np
 import shapely
 
 if TYPE_CHECKING:
-    from sse_cosim.world.roadmap import LaneGeometry
+    from sse_cosim.world.roadmap import LaneChange, LaneGeometry
 
 MAX_TURN_RAD = 0.01
 """Largest turn of the body within one piece of the sweep (the cover's rounding: a 12 m bus's
@@ -77,16 +77,37 @@ _OCTAGON_ANGLES = np.array([(k + 0.5) * math.pi / 4.0 for k in range(8)])
 class RoutePath:
     """A route's centre line as SUMO drives it: ``points`` (n, 2), their lane positions
     ``sigma`` (n,) (m, each lane's ``length`` attribute) and their stations ``station`` (n,)
-    (m, geometric distance along the line, as ``shapely``'s ``project`` measures it)."""
+    (m, geometric distance along the line, as ``shapely``'s ``project`` measures it).
+    ``detours``: where a lane change makes the vehicle's lane uncertain, the other paths its
+    body may take meanwhile (:class:`Detour`; the sweep covers them too)."""
 
     points: np.ndarray
     sigma: np.ndarray
     station: np.ndarray
+    detours: tuple[Detour, ...] = ()
 
     @classmethod
-    def of_route(cls, lanes: Sequence[LaneGeometry]) -> RoutePath:
-        """The path along a route's lanes in order (``RoadMap.route_lanes``)."""
-        return cls.of_lanes([(lane.shape, lane.length) for lane in lanes])
+    def of_route(cls, lanes: Sequence[LaneGeometry],
+                 changes: Sequence[LaneChange] = ()) -> RoutePath:
+        """The path along a route's lanes in order, with its lane changes
+        (``RoadMap.route_plan``): for each lane the vehicle may drive on while it changes, a
+        detour over the whole edge of the change (SUMO moves a vehicle to the next lane within
+        a step, at the lane position it had: lanes of an edge are equally long)."""
+        main = cls.of_lanes([(lane.shape, lane.length) for lane in lanes])
+        detours = []
+        for change in changes:
+            for route in change.detours:
+                start = float(sum(lane.length for lane in route[:-1]))
+                detours.append(Detour(cls.of_lanes([(lane.shape, lane.length)
+                                                    for lane in route]),
+                                      start, start + route[-1].length))
+        return replace(main, detours=tuple(detours))
+
+    def points_at(self, sigma: float) -> list[np.ndarray]:
+        """Every point (2,) where SUMO may put a front at lane position ``sigma``: the path's
+        (:meth:`point_at`) and each detour's whose stretch holds it."""
+        return [self.point_at(sigma)[0], *(d.path.point_at(sigma)[0] for d in self.detours
+                                           if d.start_m <= sigma <= d.end_m)]
 
     @classmethod
     def of_lanes(cls, lanes: Sequence[tuple[np.ndarray, float]]) -> RoutePath:
@@ -167,11 +188,24 @@ class RoutePath:
 
 
 @dataclass(frozen=True)
+class Detour:
+    """While its front is between lane positions ``start_m`` and ``end_m`` (m, SUMO's distance
+    along the route), a vehicle's body may lie as along ``path`` instead of its route's path:
+    before a lane change, on the lane it entered the edge on, or on a lane it crosses."""
+
+    path: RoutePath
+    start_m: float
+    end_m: float
+
+
+@dataclass(frozen=True)
 class SweepPiece:
     """The body's cover while its front is between stations ``start_m`` and ``end_m`` (m):
     ``cover`` holds every footprint with its front there; ``straight``: the body does not turn
     and its front moves along its axis ``axis`` (2,) from ``front`` (2,), so each footprint is
-    the rectangle behind the front and the stations at which it touches a point are exact."""
+    the rectangle behind the front and the stations at which it touches a point are exact;
+    ``scale``: stations per metre the front moves (1, but on a detour: its lane's drawn length
+    against the route's, :class:`Detour`)."""
 
     cover: shapely.Polygon
     start_m: float
@@ -179,6 +213,7 @@ class SweepPiece:
     straight: bool
     front: np.ndarray
     axis: np.ndarray
+    scale: float = 1.0
 
 
 def footprint(front: np.ndarray, heading: np.ndarray, length: float,
@@ -202,9 +237,22 @@ def chord_footprint(path: RoutePath, sigma: float, length: float,
 
 def body_sweep(path: RoutePath, length: float, width: float) -> list[SweepPiece]:
     """The covers of every footprint of a body ``length`` x ``width`` (m) whose front runs the
-    whole ``path``, in route order (module docstring)."""
+    whole ``path``, and along each of its detours while the front is on the detour's stretch,
+    in route order (module docstring); stations are the path's."""
+    pieces = _sweep(path, length, width, path, -math.inf, math.inf)
+    for detour in path.detours:
+        pieces.extend(_sweep(detour.path, length, width, path, detour.start_m, detour.end_m))
+    return sorted(pieces, key=lambda p: p.start_m)
+
+
+def _sweep(path: RoutePath, length: float, width: float, frame: RoutePath, start: float,
+           end: float) -> list[SweepPiece]:
+    """:func:`body_sweep`'s covers along ``path`` with the front between lane positions
+    ``start`` and ``end``, at ``frame``'s stations."""
     cuts = np.unique(np.concatenate([path.sigma, path.sigma + length]))
     cuts = cuts[cuts <= path.sigma[-1]]
+    if math.isfinite(start):
+        cuts = np.unique(np.r_[start, cuts[(cuts > start) & (cuts < end)], end])
     pieces = []
     for a, b in pairwise(cuts):
         middle = 0.5 * (a + b)
@@ -215,14 +263,24 @@ def body_sweep(path: RoutePath, length: float, width: float) -> list[SweepPiece]
                                               math.ceil((b - a) / MAX_PIECE_M))
         edges = [a + (b - a) * k / parts for k in range(parts)] + [b]
         for lo, hi in pairwise(edges):
-            pieces.append(_piece(path, lo, hi, front_segment, back_segment, length, width))
+            pieces.append(_piece(path, lo, hi, front_segment, back_segment, length, width,
+                                 frame))
     for i in np.flatnonzero(np.diff(path.sigma) <= 0.0):  # the front jumps a gap
+        if not start < path.sigma[i] <= end:
+            continue
         before = chord_footprint(path, float(path.sigma[i]) - 1e-12, length, width)
         after = chord_footprint(path, float(path.sigma[i]), length, width)
         cover = shapely.convex_hull(shapely.multipoints(np.vstack([before, after])))
-        pieces.append(SweepPiece(cover, float(path.station[i]), float(path.station[i + 1]),
+        pieces.append(SweepPiece(cover, _station(frame, path, i), _station(frame, path, i + 1),
                                  False, path.points[i], np.zeros(2)))
-    return sorted(pieces, key=lambda p: p.start_m)
+    return pieces
+
+
+def _station(frame: RoutePath, path: RoutePath, i: int) -> float:
+    """Point ``i`` of ``path``'s station on ``frame`` (the same path: its own)."""
+    if frame is path:
+        return float(path.station[i])
+    return frame.point_at(float(path.sigma[i]))[1]
 
 
 def swept_region(pieces: Sequence[SweepPiece]) -> shapely.Geometry:
@@ -243,7 +301,7 @@ def ahead_cover(pieces: Sequence[SweepPiece], front_m: float, length: float,
         if piece.end_m < front_m:
             continue
         if piece.straight and piece.start_m < front_m:
-            ends = [piece.front + (at - piece.start_m) * piece.axis
+            ends = [piece.front + (at - piece.start_m) / piece.scale * piece.axis
                     for at in (front_m, piece.end_m)]
             covers.append(shapely.convex_hull(shapely.multipoints(np.vstack(
                 [footprint(end, piece.axis, length, width) for end in ends]))))
@@ -268,8 +326,9 @@ def touch_intervals(pieces: Sequence[SweepPiece], area: shapely.Geometry,
             if inside.is_empty:
                 continue
             along = _along(shapely.get_coordinates(inside), piece.front, piece.axis)
-            spans.append((piece.start_m + max(0.0, float(along.min())),
-                          min(piece.end_m, piece.start_m + float(along.max()) + length)))
+            spans.append((piece.start_m + piece.scale * max(0.0, float(along.min())),
+                          min(piece.end_m,
+                              piece.start_m + piece.scale * (float(along.max()) + length))))
         else:
             spans.append((piece.start_m, piece.end_m))
     merged: list[list[float]] = []
@@ -354,12 +413,19 @@ def _chords(path: RoutePath, a: float, b: float, front_segment: int, back_segmen
 
 
 def _piece(path: RoutePath, a: float, b: float, front_segment: int, back_segment: int,
-           length: float, width: float) -> SweepPiece:
+           length: float, width: float, frame: RoutePath) -> SweepPiece:
     """The cover of the footprints with the front between lane positions ``a`` and ``b``
-    (made about the front segment's first point, then moved to it)."""
+    (made about the front segment's first point, then moved to it), at ``frame``'s
+    stations."""
     chords = _chords(path, a, b, front_segment, back_segment, length)
     _, start = path.at(a, front_segment)
     _, end = path.at(b, front_segment)
+    scale = 1.0
+    if frame is not path:
+        moved = end - start
+        _, start = frame.point_at(a)
+        _, end = frame.point_at(b)
+        scale = (end - start) / moved if moved > 0.0 else 1.0
     corners = np.vstack([footprint(f, u, length, width) for f in (chords.front_a, chords.front_b)
                          for u in (chords.u_a, chords.u_b)])  # (16, 2)
     cover = shapely.convex_hull(shapely.multipoints(corners))
@@ -369,7 +435,7 @@ def _piece(path: RoutePath, a: float, b: float, front_segment: int, back_segment
         cover = _widen(cover, reach * (1.0 - math.cos(0.5 * turn)) + 1e-12, chords.u_a)
     cover = shapely.transform(cover, lambda xy: xy + chords.origin)
     return SweepPiece(cover, start, end, chords.straight, chords.origin + chords.front_a,
-                      chords.u_a)
+                      chords.u_a, scale)
 
 
 def _widen(polygon: shapely.Geometry, margin: float, axis: np.ndarray) -> shapely.Polygon:

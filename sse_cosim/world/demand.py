@@ -414,15 +414,25 @@ def _check_lane(net: sumolib.net.Net, edge_id: str, index: int, vclass: str, fie
 
 def _check_automated(net: sumolib.net.Net, roadmap: RoadMap, vid: str, av: AutomatedVehicle,
                      source: str) -> LaneGeometry:
-    """Check an automated vehicle's route, speed and departure; its departure lane: the first
-    of the lanes its controller plans on (``RoadMap.route_lanes``), one that leads on along
-    the route."""
+    """Check an automated vehicle's route, speed, departure and lane changes (each on an edge
+    longer than the vehicle); its departure lane: the first of the lanes its controller plans
+    on (``RoadMap.route_lanes``), one that leads on along the route."""
     field, vclass = f"automated.{vid}", av.vehicle_class
     _check_route(net, av.route_edges, vclass, f"{field}.route_edges", source)
     _check_driving_lanes(net, av.route_edges, f"{field}.route_edges", source)
     _check_nominal(net, av.route_edges, vclass, av.nominal_speed_mps,
                    f"{field}.nominal_speed_mps", source)
     _check_pos(net, av.route_edges[0], av.depart_pos_m, f"{field}.depart_pos_m", source)
+    for change in roadmap.route_changes(av.route_edges):
+        length = roadmap.edge_lengths[change.edge_id]
+        if length <= av.length_m:
+            raise UserError(source, f"{field}.route_edges", f"the vehicle has to change from "
+                            f"lane {change.from_index} to lane {change.to_index} on edge "
+                            f"{change.edge_id!r} to follow its route, but the edge "
+                            f"({length:.2f} m) is not longer than the vehicle "
+                            f"({av.length_m:g} m): it changes lanes once its body is on it",
+                            "route it over edges it can drive lane to lane, or add the "
+                            "connection to the network (docs/own_network.md)")
     return roadmap.route_lanes(av.route_edges)[0]
 
 

@@ -21,6 +21,7 @@ that each pedestrian is on it), with the junctions' ground grown by the scenario
 from __future__ import annotations
 
 import functools
+import math
 import os
 import sys
 import time
@@ -93,6 +94,19 @@ class LaneGeometry:
     def polygon(self) -> shapely.Polygon:
         """The lane's area: the centreline widened by half the width to each side."""
         return lane_area(self.shape, self.width)
+
+
+@dataclass(frozen=True)
+class LaneChange:
+    """A change of lanes a vehicle makes on edge ``edge_id``: from lane index ``from_index``,
+    on which it enters the edge, to ``to_index``, by which it leaves it, once its body is
+    on the edge (:meth:`RoadMap.route_plan`). ``detours``: for each lane it may be on
+    meanwhile but the last, the route's lanes up to and including that lane of the edge."""
+
+    edge_id: str
+    from_index: int
+    to_index: int
+    detours: tuple[tuple[LaneGeometry, ...], ...]
 
 
 @dataclass(frozen=True)
@@ -270,10 +284,22 @@ class RoadMap:
         return shapely.LineString(coords[keep])
 
     def route_lanes(self, edge_ids: Sequence[str]) -> list[LaneGeometry]:
-        """The lanes a vehicle drives along a route, in order: on each edge the rightmost
-        driving lane from which the rest of the route can be driven lane to lane
-        (:func:`lane_chain`: where SUMO keeps a vehicle on an empty road, keeping right on
-        a lane that leads on), and the junction passages between them."""
+        """The lanes a vehicle drives along a route, in order (:meth:`route_plan`): on each
+        edge the lane it leaves by, and the junction passages between them."""
+        return self.route_plan(edge_ids)[0]
+
+    def route_changes(self, edge_ids: Sequence[str]) -> tuple[LaneChange, ...]:
+        """The lane changes a vehicle makes along a route (:meth:`route_plan`), in order."""
+        return self.route_plan(edge_ids)[1]
+
+    def route_plan(self, edge_ids: Sequence[str]
+                   ) -> tuple[list[LaneGeometry], tuple[LaneChange, ...]]:
+        """The lanes a vehicle drives along a route and the lane changes it makes
+        (:func:`lane_plan`): where the route can be driven lane to lane, on each edge the
+        rightmost driving lane that leads on (where SUMO keeps a vehicle on an empty road)
+        and no change; where it cannot, on an edge entered on a lane that does not lead on,
+        a change to the nearest one that does, made on that edge. The lanes are those left
+        by (an edge of a change: its lane after it), with the junction passages between."""
         for edge_id in edge_ids:
             if not self._edge_lanes.get(edge_id):
                 raise self._missing(edge_id, "normal edge" if edge_id in self.edge_lengths
@@ -281,20 +307,30 @@ class RoadMap:
         def indices(edge_id: str) -> list[int]:
             return [g.index for g in self._edge_lanes[edge_id]]
 
-        chain = lane_chain(edge_ids, indices, self.lane_links)
-        if chain is None:
-            first, second = chain_break(edge_ids, indices, self.lane_links)  # a pair: no chain
+        try:
+            plan = lane_plan(edge_ids, indices, self.lane_links)
+        except NoLanePlan as stuck:
             raise UserError(str(self.net_path), f"route {' '.join(edge_ids)!r}",
-                            f"cannot be driven lane to lane: no lane of edge {first!r} leads "
-                            f"onto a lane of {second!r} that leads on along the route (the "
-                            "automated vehicle changes no lanes)",
-                            "route it over edges it can drive lane to lane, or add the "
-                            "connection to the network (docs/own_network.md)")
-        lanes = []
-        for edge_id, (index, via) in zip(edge_ids, chain, strict=True):
-            lanes.append(next(g for g in self._edge_lanes[edge_id] if g.index == index))
+                            f"cannot be driven: no lane of edge {stuck.edges[0]!r} that the "
+                            f"vehicle reaches leads onto edge {stuck.edges[1]!r}, even with "
+                            "lane changes (to neighbouring driving lanes, on one edge)",
+                            "route it over edges that connect, or add the connection to the "
+                            "network (docs/own_network.md)") from None
+        lanes: list[LaneGeometry] = []
+        changes = []
+        for edge_id, (entry, leave, via) in zip(edge_ids, plan, strict=True):
+            if entry != leave:
+                step = 1 if leave > entry else -1
+                changes.append(LaneChange(edge_id, entry, leave, tuple(
+                    (*lanes, self._edge_lane(edge_id, index))
+                    for index in range(entry, leave, step))))
+            lanes.append(self._edge_lane(edge_id, leave))
             lanes.extend(self._internal(lane) for lane in self._passage(via))
-        return lanes
+        return lanes, tuple(changes)
+
+    def _edge_lane(self, edge_id: str, index: int) -> LaneGeometry:
+        """Driving lane ``index`` of normal edge ``edge_id``."""
+        return next(g for g in self._edge_lanes[edge_id] if g.index == index)
 
     @functools.cached_property
     def _edge_lanes(self) -> dict[str, list[LaneGeometry]]:
@@ -577,8 +613,8 @@ def lane_chain(edges: Sequence[str], lanes: Callable[[str], Sequence[int]],
     """Per edge of a route its lane index and the internal lane into the next edge ("" for
     the last edge, or a connection without one): on each edge the rightmost lane (the least
     index of ``lanes(edge)``) from which the rest of the route can be driven lane to lane
-    over ``links``; None if none can (:func:`chain_break` names where). Pure: no network
-    here."""
+    over ``links``; None if none can (:func:`lane_plan` then plans lane changes). Pure: no
+    network here."""
     able = _able_lanes(edges, lanes, links)
     if not able[0]:
         return None
@@ -591,14 +627,69 @@ def lane_chain(edges: Sequence[str], lanes: Callable[[str], Sequence[int]],
     return [*chain, (lane, "")]
 
 
-def chain_break(edges: Sequence[str], lanes: Callable[[str], Sequence[int]],
-                links: Mapping[tuple[str, str], Sequence[LaneLink]]) -> tuple[str, str] | None:
-    """The two consecutive edges of a route, the last such pair, where no lane of the first
-    leads onto a lane of the second from which the rest of the route can be driven lane to
-    lane (None if :func:`lane_chain` finds a chain)."""
-    able = _able_lanes(edges, lanes, links)
-    empty = [k for k in range(len(edges) - 1) if not able[k]]
-    return (edges[empty[-1]], edges[empty[-1] + 1]) if empty else None
+class NoLanePlan(ValueError):
+    """No lane of the first of ``edges`` (a pair of consecutive route edges) that a vehicle
+    reaches leads onto the second, even with lane changes (:func:`lane_plan`)."""
+
+    def __init__(self, edges: tuple[str, str]) -> None:
+        super().__init__(f"no lane of {edges[0]!r} leads onto {edges[1]!r}")
+        self.edges = edges
+
+
+def lane_plan(edges: Sequence[str], lanes: Callable[[str], Sequence[int]],
+              links: Mapping[tuple[str, str], Sequence[LaneLink]]
+              ) -> list[tuple[int, int, str]]:
+    """Per edge of a route the lane index it is entered on, the one it is left by, and the
+    internal lane into the next edge ("" for the last edge, or a connection without one).
+
+    Where :func:`lane_chain` finds a chain, that one, with no change. Otherwise the plan with
+    the fewest lane changes, each to a neighbouring driving lane (``lanes``: an edge's driving
+    lanes; a change crosses none that is not one) on the edge it is needed on; of plans as
+    good, the one on the rightmost lanes, edge by edge. The first edge is left by the lane it
+    is entered on (the departure lane). Raises :class:`NoLanePlan` naming the last pair of
+    edges where no lane reached leads on. Pure: no network here."""
+    chain = lane_chain(edges, lanes, links)
+    if chain is not None:
+        return [(index, index, via) for index, via in chain]
+    last = len(edges) - 1
+    # per edge, per lane it is entered on: (changes from there on, lane it is left by, next
+    # edge's entry lane, internal lane into it), from the last edge back
+    best: list[dict[int, tuple[float, int, int, str]]] = [{}] * len(edges)
+    best[last] = {entry: (0.0, entry, entry, "") for entry in lanes(edges[last])}
+    for k in range(last - 1, -1, -1):
+        best[k] = {}
+        for entry in lanes(edges[k]):
+            options = [(abs(leave - entry) + best[k + 1][target][0], leave, target, via)
+                       for leave in ([entry] if k == 0
+                                     else sorted(_neighbours(lanes(edges[k]), entry)))
+                       for link_from, target, via in links.get((edges[k], edges[k + 1]), ())
+                       if link_from == leave and target in best[k + 1]]
+            best[k][entry] = min(options, default=(math.inf, entry, entry, ""))
+    broken = [k for k in range(last) if not any(math.isfinite(option[0])
+                                                for option in best[k].values())]
+    if broken:  # the last edge whose lanes lead onto none that leads on from the next
+        raise NoLanePlan((edges[broken[-1]], edges[broken[-1] + 1]))
+    entry = min(best[0], key=lambda index: (best[0][index][0], index))
+    plan = []
+    for k in range(len(edges)):
+        _, leave, target, via = best[k][entry]
+        plan.append((entry, leave, via))
+        entry = target
+    return plan
+
+
+def _neighbours(lanes: Sequence[int], index: int | None) -> set[int]:
+    """The lanes of ``lanes`` (an edge's driving lanes' indices) reached from ``index`` by
+    changes to neighbouring ones: the unbroken run of indices that holds it (none for
+    None)."""
+    if index is None or index not in lanes:
+        return set()
+    own, low, high = set(lanes), index, index
+    while low - 1 in own:
+        low -= 1
+    while high + 1 in own:
+        high += 1
+    return set(range(low, high + 1))
 
 
 def _able_lanes(edges: Sequence[str], lanes: Callable[[str], Sequence[int]],

@@ -37,8 +37,10 @@ when SUMO held it up or let it on early -- never a silent mismatch.
 
 Lane change mode. Every automated vehicle drives under lane change mode 512: SUMO changes
 none of its lanes of its own accord (no overtaking, no keeping right), and keeps its safety
-checks. Its lanes are its controller's plan (``RoadMap.route_lanes``: on each edge the
-rightmost lane that leads on, so no change is needed to follow the route).
+checks. Its lanes are its controller's plan (``RoadMap.route_plan``: on each edge the
+rightmost lane that leads on; where the route cannot be driven lane to lane, a change on the
+edge entered on a lane that does not lead on), and the world asks SUMO for each planned
+change once the body is on its edge (``changeLane``).
 
 Speed mode. Every automated vehicle drives under speed mode 31 (SUMO's default, set
 explicitly): SUMO keeps the safe speed towards leaders, the vehicle's maximum acceleration and
@@ -147,6 +149,7 @@ from sse_cosim.world.extent import (
 )
 from sse_cosim.world.network import NetworkBuildError, scenario_net_path
 from sse_cosim.world.roadmap import (
+    LaneChange,
     RoadMap,
     load_scene_roadmap,
     require_pedestrian_ground,
@@ -176,7 +179,8 @@ log = logging.getLogger(__name__)
 AUTOMATED_SPEED_MODE = 31
 AUTOMATED_LANE_CHANGE_MODE = 512  # no lane change of SUMO's own; safety checks kept
 _VEHICLE_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED)
-_AUTOMATED_VARS = (*_VEHICLE_VARS, libsumo.VAR_DISTANCE)
+_AUTOMATED_VARS = (*_VEHICLE_VARS, libsumo.VAR_DISTANCE, libsumo.VAR_LANE_ID,
+                   libsumo.VAR_LANEPOSITION)
 _PERSON_VARS = (libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_SPEED, libsumo.VAR_ROAD_ID,
                 libsumo.VAR_LANE_ID)
 
@@ -222,6 +226,7 @@ class _Automated:
     acting: tuple[float, bool] | None = None
     distance: float = 0.0
     arrived: bool = False
+    changes: deque[LaneChange] = field(default_factory=deque)  # those still to make
 
     def command(self, speed: float, emergency: bool) -> None:
         """A new command: it is acted on once ``actuation_delay_steps`` later ones came."""
@@ -318,6 +323,8 @@ class SumoWorld:
             raise SimulationError(self.scenario_name, "the road network does not build: "
                                   f"{exc.one_line()}") from exc
         self._roadmap = load_scene_roadmap(self._net_path, self.scenario)
+        for state in self._automated.values():
+            state.changes.extend(self._roadmap.route_changes(state.config.route_edges))
         if present(self.scenario.pedestrians):
             require_pedestrian_ground(
                 self._roadmap, self.scenario_name,
@@ -565,6 +572,24 @@ class SumoWorld:
             raise SimulationError(self.scenario_name, f"setting the speed of {vehicle_id!r} "
                                   f"failed: {message(exc)}") from exc
 
+    def _change_lanes(self, vehicle_id: str, lane_id: str, lane_pos: float) -> None:
+        """Ask SUMO for automated vehicle ``vehicle_id``'s next planned lane change
+        (``RoadMap.route_plan``) once its body is on the change's edge (its front on lane
+        ``lane_id`` at ``lane_pos`` m, more than its length): SUMO moves it to the next lane
+        within the step where the gaps allow (lane change mode 512), a lane at a time, until
+        it is on the planned one. Its sweep covers each lane it may be on meanwhile."""
+        state = self._automated[vehicle_id]
+        if not state.changes or lane_id.startswith(":") or not lane_id:
+            return
+        change = state.changes[0]
+        lane = self.roadmap.lane(lane_id)
+        if lane.edge_id != change.edge_id:
+            return
+        if lane.index == change.to_index:
+            state.changes.popleft()
+        elif lane_pos > state.config.length_m:
+            libsumo.vehicle.changeLane(vehicle_id, change.to_index, self._dt)
+
     def _apply_command(self, vehicle_id: str) -> None:
         state = self._automated[vehicle_id]
         if state.acting is None:
@@ -771,6 +796,8 @@ class SumoWorld:
                                   length, width)
             if vid in self._automated:
                 self._automated[vid].distance = float(values[libsumo.VAR_DISTANCE])
+                self._change_lanes(vid, str(values[libsumo.VAR_LANE_ID]),
+                                   float(values[libsumo.VAR_LANEPOSITION]))
             vehicles[vid] = VehicleState(
                 id=vid, kind=self._kinds.get(vid, "other"), footprint=footprint,
                 speed=float(values[libsumo.VAR_SPEED]), type_id=type_id,

@@ -1,10 +1,13 @@
-"""The lanes a route is planned on (world/roadmap.py, ``lane_chain``): on each edge the
-rightmost lane from which the rest of the route can be driven lane to lane, with the internal
-lane into the next edge; pure, on hand-made links."""
+"""The lanes a route is planned on (world/roadmap.py, ``lane_chain``, ``lane_plan``): on each
+edge the rightmost lane from which the rest of the route can be driven lane to lane, with the
+internal lane into the next edge; where none can, the fewest lane changes; pure, on hand-made
+links."""
 
 from __future__ import annotations
 
-from sse_cosim.world.roadmap import chain_break, lane_chain
+import pytest
+
+from sse_cosim.world.roadmap import NoLanePlan, lane_chain, lane_plan
 
 LANES = {"A": [1, 2], "B": [1, 2], "C": [1]}.__getitem__
 
@@ -31,11 +34,36 @@ def test_a_route_no_lane_leads_along_has_no_chain() -> None:
     assert lane_chain(["A"], LANES, {}) == [(1, "")]
 
 
-def test_the_break_named_is_the_pair_where_no_lane_leads_on() -> None:
-    """A leads onto B's right lane only, and only B's left lane leads into C: a bus that
-    changes no lanes cannot drive it, and the pair to mend is (A, B), not (B, C)."""
-    links = {("A", "B"): ((1, 1, ""), (2, 1, "")), ("B", "C"): ((2, 1, ""),)}
-    assert lane_chain(["A", "B", "C"], LANES, links) is None
-    assert chain_break(["A", "B", "C"], LANES, links) == ("A", "B")
-    assert chain_break(["A", "C"], LANES, {}) == ("A", "C")
-    assert chain_break(["A", "B"], LANES, links) is None
+def test_a_route_that_lane_to_lane_cannot_be_driven_plans_the_fewest_changes() -> None:
+    """A leads onto B's left lane only, and only B's right lane leads into C: the bus departs
+    on A's left lane (the one that leads on) and changes from B's left lane to its right."""
+    links = {("A", "B"): ((2, 2, ":J_0_1"),), ("B", "C"): ((1, 1, ":K_0_0"),)}
+    assert lane_plan(["A", "B", "C"], LANES, links) == [(2, 2, ":J_0_1"), (2, 1, ":K_0_0"),
+                                                        (1, 1, "")]
+
+
+def test_a_route_driven_lane_to_lane_keeps_its_chain() -> None:
+    links = {("A", "B"): ((1, 1, ":J_0_0"), (2, 2, ":J_0_1")), ("B", "C"): ((2, 1, ":K_1_0"),)}
+    assert lane_plan(["A", "B", "C"], LANES, links) == [
+        (index, index, via) for index, via in lane_chain(["A", "B", "C"], LANES, links)]
+
+
+def test_of_two_plans_with_one_change_the_one_on_the_right() -> None:
+    """From A's right lane the bus reaches B's right lane, from its left lane B's left; C
+    takes either from B's middle lane only: one change each way, the right one is taken."""
+    lanes = {"A": [1, 2], "B": [1, 2, 3], "C": [1]}.__getitem__
+    links = {("A", "B"): ((1, 1, ""), (2, 3, "")), ("B", "C"): ((2, 1, ""),)}
+    assert lane_plan(["A", "B", "C"], lanes, links) == [(1, 1, ""), (1, 2, ""), (1, 1, "")]
+
+
+def test_a_change_crosses_no_lane_the_vehicle_may_not_drive() -> None:
+    """B's driving lanes are 1 and 3 (2 is another kind): from 1 the bus cannot reach 3, the
+    only one that leads into C, so the plan names the pair it breaks at."""
+    lanes = {"A": [1], "B": [1, 3], "C": [1]}.__getitem__
+    links = {("A", "B"): ((1, 1, ""),), ("B", "C"): ((3, 1, ""),)}
+    with pytest.raises(NoLanePlan) as info:
+        lane_plan(["A", "B", "C"], lanes, links)
+    assert info.value.edges == ("A", "B")
+    with pytest.raises(NoLanePlan) as info:
+        lane_plan(["A", "B", "C"], LANES, {("A", "B"): ((1, 1, ""),)})
+    assert info.value.edges == ("B", "C")

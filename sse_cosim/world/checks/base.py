@@ -59,8 +59,9 @@ class CheckSetup:
     @cached_property
     def route_paths(self) -> dict[str, RoutePath]:
         """Each automated vehicle's route as SUMO drives it (its lanes, each its ``length``
-        along its shape), by vehicle id: built once for every check that reads it."""
-        return {vid: RoutePath.of_route(self.roadmap.route_lanes(vehicle.route_edges))
+        along its shape, and its lane changes' detours), by vehicle id: built once for every
+        check that reads it."""
+        return {vid: RoutePath.of_route(*self.roadmap.route_plan(vehicle.route_edges))
                 for vid, vehicle in self.scenario.automated.items()}
 
     def declares(self, name: str) -> bool:

@@ -1,13 +1,14 @@
 """``planned_lanes``: each automated vehicle drives on the lanes its controller plans on.
 
-The controller plans on each route edge's rightmost driving lane that leads on
-(``RoadMap.route_lanes``): its zones, arrivals and position along the route all assume the
-body within the ground its sweep covers there (:mod:`sse_cosim.control.swept`, widened by a
-pedestrian's radius as the controller's is). SUMO changes none of an automated vehicle's
-lanes of its own accord (lane change mode 512), so a body elsewhere means a lane change that
-came from elsewhere, another departure lane, or a junction passage drawn otherwise: checked
-every step, to :data:`OFF_PLAN_TOL_M`, once the body's back is on the route. Not an
-assumption a study can list: a break stops the run.
+The controller plans on each route edge's rightmost driving lane that leads on, with a lane
+change where the route cannot be driven lane to lane (``RoadMap.route_plan``): its zones,
+arrivals and position along the route all assume the body within the ground its sweep covers
+there, on either lane while a change is under way (:mod:`sse_cosim.control.swept`, widened by
+a pedestrian's radius as the controller's is). SUMO changes none of an automated vehicle's
+lanes of its own accord (lane change mode 512) but those the world asks for, so a body
+elsewhere means a lane change that came from elsewhere, another departure lane, or a junction
+passage drawn otherwise: checked every step, to :data:`OFF_PLAN_TOL_M`, once the body's back
+is on the route. Not an assumption a study can list: a break stops the run.
 """
 
 from __future__ import annotations
@@ -93,10 +94,11 @@ class PlannedLanesCheck(WorldCheck):
     def _break(self, vid: str, time: float, off: float) -> Break:
         return Break(
             f"automated vehicle {vid!r} at t={time:.2f} s has its body {off:.3f} m outside the "
-            "lanes its controller plans on (the route's edges, each on one driving lane); the "
-            "run stops before it decides on a picture of other lanes",
+            "lanes its controller plans on (the route's edges, each on its planned driving "
+            "lane, either lane of a planned change); the run stops before it decides on a "
+            "picture of other lanes",
             "the controller plans on each edge's rightmost driving lane that leads on "
-            "(RoadMap.route_lanes) and SUMO changes none of its lanes of its own accord, so "
+            "(RoadMap.route_plan) and SUMO changes none of its lanes of its own accord, so "
             "SUMO drives it where the planned sweep does not reach (a junction passage drawn "
             "otherwise): route the vehicle over other edges, and report the network with this "
             "line (docs/own_network.md)",

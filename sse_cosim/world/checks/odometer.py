@@ -6,7 +6,8 @@ departure position plus ``vehicle.getDistance``, ``VehicleState.route_m``), and 
 passes and speed limits in that distance, while its zones lie on the drawn route
 (docs/controller.md, "SUMO's distance"). The two agree only if SUMO draws the front where the
 route's lanes, each its ``length`` stretched over its shape, put that distance
-(:meth:`~sse_cosim.control.swept.RoutePath.point_at`): checked every step, to
+(:meth:`~sse_cosim.control.swept.RoutePath.point_at`; while a lane change is under way, on
+either lane, :meth:`~sse_cosim.control.swept.RoutePath.points_at`): checked every step, to
 :data:`ODOMETER_TOL_M`. Not an assumption a study can list: a break stops the run.
 """
 
@@ -47,8 +48,8 @@ class OdometerCheck(WorldCheck):
             if vehicle is None or vehicle.route_m is None:
                 continue
             front = vehicle.footprint.front.position
-            expected, _ = path.point_at(vehicle.route_m)
-            off = float(portable.hypot(*(front - expected)))
+            off = min(float(portable.hypot(*(front - expected)))
+                      for expected in path.points_at(vehicle.route_m))
             if off > ODOMETER_TOL_M:
                 found.append(self._break(vid, snapshot.time, vehicle.route_m, off))
         return found
