@@ -80,7 +80,7 @@ from sse_cosim.control.swept import (
     touch_intervals,
 )
 from sse_cosim.estimation.motion import MotionModel, Separation, unit_fan
-from sse_cosim.regions import Region, RegionKind
+from sse_cosim.regions import Region, RegionKind, apart
 from sse_cosim.regions.polygon import OFFSET_MARGIN
 from sse_cosim.scenario.model import AutomatedVehicle, Controller
 from sse_cosim.sets import Zonotope
@@ -585,11 +585,12 @@ def _outlook(context: SceneContext, front_s: float, front: float, speed: float,
     arrivals = np.minimum(beyond, _arrivals(sources, zones, context.pedestrians, context.kind))
     in_view_arrivals = np.minimum(beyond if in_view_beyond else math.inf, _arrivals(
         in_view, zones, context.pedestrians, context.kind))
+    every, seen = HeldSplits(sources, context.kind), HeldSplits(in_view, context.kind)
     for k, zone in enumerate(zones):
         held = [(context.lit[i], releases[i]) for i in zone.lit if releases[i] > 0.0]
         if held and zone.ground is not None:
-            arrivals[k] = _lit_arrival(context, zone, held, sources, True)
-            in_view_arrivals[k] = _lit_arrival(context, zone, held, in_view, in_view_beyond)
+            arrivals[k] = _lit_arrival(context, zone, held, every, True)
+            in_view_arrivals[k] = _lit_arrival(context, zone, held, seen, in_view_beyond)
     limits = [context.limit_on(front, to_clear) for _, _, to_clear in ahead]
     return tuple(
         ZoneOutlook(index, drives[index][0] - front, to_clear,
@@ -601,8 +602,31 @@ def _outlook(context: SceneContext, front_s: float, front: float, speed: float,
         in zip(ahead, arrivals, in_view_arrivals, limits, strict=True))
 
 
+class HeldSplits:
+    """Sources split at signalised crossings, each split made once a step: ``sources`` (those
+    not empty), and per crossing their parts near its area and off it (:func:`_held_arrivals`;
+    the zones on one crossing share them)."""
+
+    def __init__(self, sources: Sequence[Source], kind: RegionKind) -> None:
+        self.sources = [s for s in sources if not s.region.is_empty]
+        self.kind = kind
+        self._splits: dict[int, tuple[list[Source], list[Source]]] = {}
+
+    def split(self, index: int, crossing: LitCrossing) -> tuple[list[Source], list[Source]]:
+        """The sources' parts near ``crossing``'s area and off it (``SceneContext.lit[index]``;
+        a source whose bounding box misses the area's is wholly off it, with no overlay)."""
+        if index not in self._splits:
+            near, within = crossing.near, crossing.within
+            self._splits[index] = (
+                [Source(self.kind.empty() if apart(s.region, near)
+                        else s.region.intersection(near), s.state) for s in self.sources],
+                [Source(s.region if apart(s.region, within) else s.region.difference(within),
+                        s.state) for s in self.sources])
+        return self._splits[index]
+
+
 def _lit_arrival(context: SceneContext, zone: ConflictZone,
-                 held: Sequence[tuple[LitCrossing, float]], sources: Sequence[Source],
+                 held: Sequence[tuple[LitCrossing, float]], sources: HeldSplits,
                  with_beyond: bool) -> float:
     """The earliest arrival in ``zone`` from ``sources`` (and from beyond the window if
     ``with_beyond``) where its lights hold the walkers of some signalised crossings it lies
@@ -622,8 +646,8 @@ def _lit_arrival(context: SceneContext, zone: ConflictZone,
     beyond = zone.beyond_arrival_s if with_beyond else math.inf
     best = math.inf
     if rest.area > LIT_AREA_M2:  # less: the overlay's rounding along the own ground's edge
-        best = min(beyond, float(_arrivals(sources, [_target(rest, kind)], context.pedestrians,
-                                           kind)[0]))
+        best = min(beyond, float(_arrivals(sources.sources, [_target(rest, kind)],
+                                           context.pedestrians, kind)[0]))
     for crossing, release in held:
         piece = shapely.intersection(ground, crossing.own)
         if piece.area <= 0.0:
@@ -635,7 +659,7 @@ def _lit_arrival(context: SceneContext, zone: ConflictZone,
     return best
 
 
-def _held_arrivals(sources: Sequence[Source], target: ConflictZone, index: int,
+def _held_arrivals(sources: HeldSplits, target: ConflictZone, index: int,
                    crossing: LitCrossing, release: float, pedestrians: MotionModel,
                    kind: RegionKind) -> float:
     """The earliest arrival at ``target`` (on ``crossing``, ``SceneContext.lit[index]``'s
@@ -644,14 +668,13 @@ def _held_arrivals(sources: Sequence[Source], target: ConflictZone, index: int,
     near the crossing's area and (no sooner than the release) its part off it -- or, for a
     pedestrian known to stay off the crossing a while (``Source.off_s``), no sooner than that
     and the release."""
-    parts = [s for s in sources if not s.region.is_empty]
+    parts = sources.sources
     if not parts:
         return math.inf
+    near, away = sources.split(index, crossing)
     usual = _source_matrix(parts, [target], pedestrians, kind)[:, 0]  # (n,)
-    on = _source_matrix([Source(s.region.intersection(crossing.near), s.state) for s in parts],
-                        [target], pedestrians, kind)[:, 0]
-    off = _source_matrix([Source(s.region.difference(crossing.within), s.state)
-                          for s in parts], [target], pedestrians, kind)[:, 0]
+    on = _source_matrix(near, [target], pedestrians, kind)[:, 0]
+    off = _source_matrix(away, [target], pedestrians, kind)[:, 0]
     held = np.array([s.off_s[index] if s.off_s else 0.0 for s in parts])  # (n,)
     split = np.where(held > 0.0, np.maximum(release, held), np.minimum(on, np.maximum(release,
                                                                                      off)))

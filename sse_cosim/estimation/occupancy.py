@@ -65,7 +65,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 from sse_cosim.estimation.motion import MotionModel
-from sse_cosim.regions import Region, RegionKind
+from sse_cosim.regions import Region, RegionKind, apart
 from sse_cosim.sets import Zonotope
 
 COARSEN_M = 0.01  # regions are kept at most this much larger, in few pieces
@@ -173,7 +173,7 @@ class OccupancyTracker:
                 # eps + reach(age) of s now (so ground nobody saw off the walkable, such as a
                 # vehicle's shadow on the road, keeps no path alive)
                 slack = eps + self.model.reach_m(item.age)
-                if _apart(path, item.region, slack) or path.distance(item.region) > slack:
+                if apart(path, item.region, slack) or path.distance(item.region) > slack:
                     # the region misses path (+) disc(slack): a point of path within eps of
                     # walkable ground has such ground, unseen, within slack of path, and the
                     # cut keeps it; left uncut, the rest stays too (a larger region)
@@ -452,7 +452,7 @@ class _Group:
         """The ``regions`` within :attr:`reach` of its part's bounds (all with one group)."""
         if self.reach is None or self.tracked is None:
             return list(regions)
-        return [r for r in regions if not _apart(self.tracked, r, self.reach)]
+        return [r for r in regions if not apart(self.tracked, r, self.reach)]
 
     def shown(self, path: Region, own_view: Region, eps: float) -> Region:
         """Where an undetected pedestrian of this group may be: ``path`` grown by the jitter,
@@ -465,12 +465,3 @@ class _Group:
             return shown
         return path.dilate(eps).intersection(self.walkable).difference(own_view)
 
-
-def _apart(first: Region, second: Region, margin: float) -> bool:
-    """Whether the bounding boxes of two regions are more than ``margin`` apart (or one is
-    empty): then ``second`` misses ``first`` dilated by anything up to ``margin``."""
-    if first.is_empty or second.is_empty:
-        return True
-    a, b = first.bounds, second.bounds
-    return (a[0] - margin > b[2] or b[0] > a[2] + margin
-            or a[1] - margin > b[3] or b[1] > a[3] + margin)

@@ -8,7 +8,7 @@ A representation is one module here, registered by one entry in :data:`KINDS`:
 
 from __future__ import annotations
 
-from sse_cosim.regions.base import Region, RegionKind
+from sse_cosim.regions.base import Region, RegionKind, apart
 from sse_cosim.regions.polygon import PolygonKind, PolygonRegion
 from sse_cosim.regions.raster import RasterKind
 
@@ -24,4 +24,4 @@ def kind(name: str = DEFAULT_KIND) -> RegionKind:
 
 
 __all__ = ["DEFAULT_KIND", "KINDS", "PolygonKind", "PolygonRegion", "Region", "RegionKind",
-           "kind"]
+           "apart", "kind"]

@@ -144,3 +144,14 @@ class RegionKind(Protocol):
     def distances(self, sources: Sequence[Region], targets: Sequence[Region]) -> np.ndarray:
         """Least distance of each source to each target, shape (s, t) (inf for empty ones)."""
         ...
+
+
+def apart(first: Region, second: Region, margin: float = 0.0) -> bool:
+    """Whether the bounding boxes of two regions are more than ``margin`` apart (or one is
+    empty): then ``second`` misses ``first`` dilated by anything up to ``margin`` (with none,
+    their intersection is empty and their difference ``first``)."""
+    if first.is_empty or second.is_empty:
+        return True
+    a, b = first.bounds, second.bounds
+    return (a[0] - margin > b[2] or b[0] > a[2] + margin
+            or a[1] - margin > b[3] or b[1] > a[3] + margin)
