@@ -323,8 +323,6 @@ class SumoWorld:
             raise SimulationError(self.scenario_name, "the road network does not build: "
                                   f"{exc.one_line()}") from exc
         self._roadmap = load_scene_roadmap(self._net_path, self.scenario)
-        for state in self._automated.values():
-            state.changes.extend(self._roadmap.route_changes(state.config.route_edges))
         if present(self.scenario.pedestrians):
             require_pedestrian_ground(
                 self._roadmap, self.scenario_name,
@@ -337,6 +335,8 @@ class SumoWorld:
                                             source=self.scenario_name,
                                             timer=ProbeTimer(self._net_path,
                                                              accel_mps2=self._accel))
+            for state in self._automated.values():  # routes checked: plan their changes
+                state.changes.extend(self._roadmap.route_changes(state.config.route_edges))
             measured = self._measure()
             self.scenario = self._with_jitter(measured)
         estimator = self.scenario.estimator
